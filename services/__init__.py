@@ -1,0 +1,1 @@
+"""The handsfree-pbd services, each its own process."""

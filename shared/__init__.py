@@ -1,0 +1,1 @@
+"""Common code every handsfree-pbd process uses: session config, keys, codec, bus."""

@@ -1,0 +1,254 @@
+"""The project's bus: typed pub/sub, request/reply and presence over Zenoh.
+
+Why a wrapper: every service needs the same few guarantees — messages are
+validated before user code sees them, a bad message is logged and counted
+instead of crashing the receiver, Zenoh's threads are never blocked by user
+code, every query is finalised, requests time out cleanly, and closing leaves
+no thread behind. Handlers run on one worker thread per subscription.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections import Counter
+from collections.abc import Callable
+from typing import Any
+
+import zenoh
+import zenoh.ext as zext
+
+from shared.codec import MessageError, decode, encode
+from shared.config import SessionOptions, zenoh_config
+from shared.keys import Keys
+from shared.mailbox import CLOSED, Mailbox
+from shared.messages import validate
+
+log = logging.getLogger("hfpbd.bus")
+
+Message = dict[str, Any]
+Handler = Callable[[Message], None]
+
+
+class BusTimeout(TimeoutError):
+    """No reply arrived in time: the service is probably not running."""
+
+
+class RemoteError(RuntimeError):
+    """The service answered the request with an error message."""
+
+
+class Publisher:
+    """Publishes message maps on one key."""
+
+    def __init__(self, raw: Any, key: str) -> None:
+        self._raw = raw
+        self.key = key
+
+    def put(self, message: Message) -> None:
+        self._raw.put(encode(message))
+
+    def undeclare(self) -> None:
+        self._raw.undeclare()
+
+
+class _Worker:
+    """A mailbox drained by one daemon thread that runs a handler per item."""
+
+    def __init__(self, name: str, capacity: int, run: Callable[[Any], None]) -> None:
+        self.mailbox = Mailbox(capacity)
+        self._run = run
+        self.thread = threading.Thread(target=self._loop, name=name, daemon=True)
+        self.thread.start()
+
+    def _loop(self) -> None:
+        while (item := self.mailbox.pop()) is not CLOSED:
+            try:
+                self._run(item)
+            except Exception:  # a handler bug must not kill the subscription
+                log.exception("handler on %s failed", self.thread.name)
+
+    def stop(self, timeout: float = 2.0) -> None:
+        self.mailbox.close()
+        if threading.current_thread() is not self.thread:
+            self.thread.join(timeout)
+
+
+class Bus:
+    """One Zenoh session with the project's conventions.
+
+    Use as a context manager (``with Bus(options) as bus:``) so the session is
+    always closed; an unclosed Zenoh session can hang interpreter exit.
+    """
+
+    def __init__(self, options: SessionOptions) -> None:
+        self.options = options
+        self.keys = Keys(options.namespace)
+        self.session = zenoh.open(zenoh_config(options))
+        self.rejected: Counter[str] = Counter()
+        self._declared: list[Any] = []
+        self._workers: list[_Worker] = []
+        self._lock = threading.Lock()
+        self._closed = False
+
+    # -- lifecycle ---------------------------------------------------------
+    def __enter__(self) -> Bus:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Undeclare everything, stop the workers, close the session."""
+        with self._lock:
+            if self._closed:
+                return
+            self._closed = True
+            declared, self._declared = self._declared, []
+            workers, self._workers = self._workers, []
+        for entity in reversed(declared):
+            try:
+                entity.undeclare()
+            except Exception:  # already gone with its session
+                log.debug("undeclare failed", exc_info=True)
+        for worker in workers:
+            worker.stop()
+        self.session.close()
+
+    def _keep(self, entity: Any) -> Any:
+        with self._lock:
+            self._declared.append(entity)
+        return entity
+
+    def _worker(self, name: str, capacity: int, run: Callable[[Any], None]) -> _Worker:
+        worker = _Worker(name, capacity, run)
+        with self._lock:
+            self._workers.append(worker)
+        return worker
+
+    # -- publish -----------------------------------------------------------
+    def publisher(self, key: str, *, cached: bool = False, large: bool = False) -> Publisher:
+        """Declare a publisher.
+
+        ``cached`` keeps the last sample for late joiners (subscribers with
+        ``history=True`` get it at once). ``large`` blocks instead of dropping
+        under congestion: multi-megabyte fragmented samples can otherwise
+        vanish silently.
+        """
+        congestion = zenoh.CongestionControl.BLOCK if large else zenoh.CongestionControl.DROP
+        if cached:
+            raw = zext.declare_advanced_publisher(
+                self.session, key, congestion_control=congestion,
+                cache=zext.CacheConfig(max_samples=1), publisher_detection=True)
+        else:
+            raw = self.session.declare_publisher(key, congestion_control=congestion)
+        return Publisher(self._keep(raw), key)
+
+    def publish(self, key: str, message: Message) -> None:
+        """Publish once without declaring a publisher (dialog lines, events)."""
+        self.session.put(key, encode(message))
+
+    # -- subscribe ---------------------------------------------------------
+    def subscribe(self, key: str, handler: Handler, *, schema: str | None = None,
+                  latest_only: bool = False, history: bool = False, capacity: int = 1024) -> None:
+        """Call ``handler(message)`` on a worker thread for each valid sample.
+
+        ``latest_only`` keeps just the newest pending sample (streams where
+        only the present matters); ``history`` also receives the last cached
+        sample of each cached publisher, now and when one appears later.
+        """
+        def run(item: tuple[str, bytes]) -> None:
+            sample_key, payload = item
+            try:
+                message = decode(payload)
+                if schema is not None:
+                    validate(schema, message)
+            except MessageError as exc:
+                self.rejected[key] += 1
+                log.warning("rejected message on %s: %s", sample_key, exc)
+                return
+            message.setdefault("_key", sample_key)
+            handler(message)
+
+        worker = self._worker(f"sub:{key}", 1 if latest_only else capacity, run)
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            if sample.kind == zenoh.SampleKind.PUT:
+                worker.mailbox.push((str(sample.key_expr), sample.payload.to_bytes()))
+
+        if history:
+            sub = zext.declare_advanced_subscriber(
+                self.session, key, on_sample,
+                history=zext.HistoryConfig(detect_late_publishers=True, max_samples=1))
+        else:
+            sub = self.session.declare_subscriber(key, on_sample)
+        self._keep(sub)
+
+    # -- request / reply ---------------------------------------------------
+    def serve(self, key: str, handler: Callable[[Message], Message], *, capacity: int = 64) -> None:
+        """Answer queries on ``key`` with ``handler(request) -> reply``.
+
+        Runs on a worker thread; every query is finalised, and a handler
+        exception becomes an error reply carrying its message, so the asker
+        gets a reason rather than a timeout.
+        """
+        def run(query: zenoh.Query) -> None:
+            try:
+                try:
+                    request = decode(query.payload.to_bytes()) if query.payload is not None else {}
+                    reply = handler(request)
+                except MessageError as exc:
+                    self.rejected[key] += 1
+                    log.warning("rejected request on %s: %s", key, exc)
+                    query.reply_err(encode({"error": f"malformed request: {exc}"}))
+                    return
+                except Exception as exc:
+                    log.exception("request handler on %s failed", key)
+                    query.reply_err(encode({"error": str(exc) or type(exc).__name__}))
+                    return
+                query.reply(query.key_expr, encode(reply))
+            finally:
+                query.drop()
+
+        worker = self._worker(f"serve:{key}", capacity, run)
+
+        def on_query(query: zenoh.Query) -> None:
+            worker.mailbox.push(query)
+
+        self._keep(self.session.declare_queryable(key, on_query))
+
+    def request(self, key: str, message: Message | None = None, *, timeout: float = 5.0) -> Message:
+        """Send a query and return the first reply; raise on error or timeout."""
+        replies = self.session.get(key, payload=encode(message or {}), timeout=timeout)
+        for reply in replies:
+            if reply.ok is not None:
+                return decode(reply.ok.payload.to_bytes())
+            try:
+                error = decode(reply.err.payload.to_bytes()).get("error", "unknown error")
+            except MessageError:
+                error = reply.err.payload.to_string()
+            raise RemoteError(str(error))
+        raise BusTimeout(f"no reply on {key} within {timeout:g} s (is the service running?)")
+
+    # -- presence ----------------------------------------------------------
+    def declare_alive(self, service: str) -> None:
+        """Announce that ``service`` is up; the token vanishes when the process dies."""
+        self._keep(self.session.liveliness().declare_token(self.keys.alive(service)))
+
+    def watch_alive(self, handler: Callable[[str, bool], None]) -> None:
+        """Call ``handler(service, alive)`` for every service appearing or vanishing."""
+        def run(item: tuple[str, bool]) -> None:
+            handler(*item)
+
+        worker = self._worker("alive", 256, run)
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            alive = sample.kind == zenoh.SampleKind.PUT
+            worker.mailbox.push((self.keys.service_of(str(sample.key_expr)), alive))
+
+        self._keep(self.session.liveliness().declare_subscriber(self.keys.alive_all, on_sample, history=True))
+
+    def alive_services(self, timeout: float = 1.0) -> set[str]:
+        """The services whose liveliness token is up right now."""
+        replies = self.session.liveliness().get(self.keys.alive_all, timeout=timeout)
+        return {self.keys.service_of(str(r.ok.key_expr)) for r in replies if r.ok is not None}

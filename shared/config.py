@@ -1,0 +1,131 @@
+"""One Zenoh session configuration shared by every entry point.
+
+Every service, tool and test builds its session from the same flags
+(``--connect``, ``--listen``, ``--mode``, ``--no-multicast-scouting``,
+``--namespace``, ``--config`` and ``--cfg KEY:VALUE``), in the style of
+zenoh-python's own examples, so that running one service per machine is only a
+matter of passing the right endpoints.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+from dataclasses import dataclass, field
+
+import zenoh
+
+DEFAULT_NAMESPACE = "default"
+ENV_PREFIX = "HFPBD_"
+
+
+@dataclass(frozen=True)
+class SessionOptions:
+    """Everything needed to open the project's Zenoh session."""
+
+    namespace: str = DEFAULT_NAMESPACE
+    mode: str = "peer"
+    connect: tuple[str, ...] = ()
+    listen: tuple[str, ...] = ()
+    multicast_scouting: bool = True
+    config_file: str | None = None
+    overrides: tuple[tuple[str, str], ...] = field(default_factory=tuple)
+
+    def to_argv(self) -> list[str]:
+        """Flags that reproduce these options in a child process."""
+        argv = ["--namespace", self.namespace, "--mode", self.mode]
+        for endpoint in self.connect:
+            argv += ["--connect", endpoint]
+        for endpoint in self.listen:
+            argv += ["--listen", endpoint]
+        if not self.multicast_scouting:
+            argv.append("--no-multicast-scouting")
+        if self.config_file:
+            argv += ["--config", self.config_file]
+        for key, value in self.overrides:
+            argv += ["--cfg", f"{key}:{value}"]
+        return argv
+
+
+def add_session_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the session flags every entry point accepts.
+
+    Defaults may come from ``HFPBD_NAMESPACE``, ``HFPBD_CONNECT`` (comma
+    separated), ``HFPBD_LISTEN``, ``HFPBD_MODE`` and ``HFPBD_ZENOH_CONFIG``, so a
+    whole machine can be pointed at a remote robot once.
+    """
+    group = parser.add_argument_group("zenoh session")
+    group.add_argument("--namespace", "-n", default=os.environ.get(ENV_PREFIX + "NAMESPACE", DEFAULT_NAMESPACE),
+                       help="key prefix pbd/<namespace>/ shared by one robot's services (default: %(default)s)")
+    group.add_argument("--mode", "-m", choices=("peer", "client"), default=os.environ.get(ENV_PREFIX + "MODE", "peer"),
+                       help="zenoh session mode (default: %(default)s)")
+    group.add_argument("--connect", "-e", action="append", default=None, metavar="ENDPOINT",
+                       help="endpoint to connect to, e.g. tcp/robot-host:7447 (repeatable)")
+    group.add_argument("--listen", "-l", action="append", default=None, metavar="ENDPOINT",
+                       help="endpoint to listen on, e.g. tcp/0.0.0.0:7447 (repeatable)")
+    group.add_argument("--no-multicast-scouting", action="store_true",
+                       help="do not discover peers by UDP multicast")
+    group.add_argument("--config", "-c", default=os.environ.get(ENV_PREFIX + "ZENOH_CONFIG"), metavar="FILE",
+                       help="zenoh JSON5 configuration file (TLS, authentication, access control, ...)")
+    group.add_argument("--cfg", action="append", default=[], metavar="KEY:VALUE",
+                       help="set one zenoh config key to a JSON5 value, e.g. --cfg 'transport/shared_memory/enabled:false'")
+
+
+def _env_list(name: str) -> tuple[str, ...]:
+    raw = os.environ.get(ENV_PREFIX + name, "")
+    return tuple(item.strip() for item in raw.split(",") if item.strip())
+
+
+def options_from_args(args: argparse.Namespace) -> SessionOptions:
+    """Turn parsed flags into :class:`SessionOptions`, validating ``--cfg`` items."""
+    overrides = []
+    for item in args.cfg:
+        key, sep, value = item.partition(":")
+        if not sep or not key:
+            raise ValueError(f"--cfg expects KEY:VALUE, got {item!r}")
+        overrides.append((key, value))
+    if not args.namespace or "/" in args.namespace or any(c in args.namespace for c in "*$?#"):
+        raise ValueError(f"--namespace must be one key chunk without '/', '*', '$', '?' or '#': {args.namespace!r}")
+    return SessionOptions(
+        namespace=args.namespace,
+        mode=args.mode,
+        connect=tuple(args.connect) if args.connect else _env_list("CONNECT"),
+        listen=tuple(args.listen) if args.listen else _env_list("LISTEN"),
+        multicast_scouting=not args.no_multicast_scouting,
+        config_file=args.config,
+        overrides=tuple(overrides),
+    )
+
+
+def zenoh_config(options: SessionOptions) -> zenoh.Config:
+    """Build the zenoh configuration: file first, then flags, then ``--cfg`` overrides."""
+    config = zenoh.Config.from_file(options.config_file) if options.config_file else zenoh.Config()
+    config.insert_json5("mode", json.dumps(options.mode))
+    if options.connect:
+        config.insert_json5("connect/endpoints", json.dumps(list(options.connect)))
+    if options.listen:
+        config.insert_json5("listen/endpoints", json.dumps(list(options.listen)))
+    if not options.multicast_scouting:
+        config.insert_json5("scouting/multicast/enabled", "false")
+    # Advanced publishers keep a one-sample cache for late joiners; their
+    # replies are matched on timestamps, so every session stamps its samples.
+    config.insert_json5("timestamping/enabled", "true")
+    for key, value in options.overrides:
+        config.insert_json5(key, value)
+    return config
+
+
+def loopback_options(namespace: str, port: int, *, listen: bool) -> SessionOptions:
+    """Options for a session on loopback with multicast off: tests and ``hfpbd up``.
+
+    The hub session listens on ``tcp/127.0.0.1:<port>``; every other session
+    connects to it and Zenoh's gossip introduces the peers to each other.
+    """
+    endpoint = f"tcp/127.0.0.1:{port}"
+    return SessionOptions(
+        namespace=namespace,
+        listen=(endpoint,) if listen else (),
+        connect=() if listen else (endpoint,),
+        multicast_scouting=False,
+    )

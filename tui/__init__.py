@@ -1,0 +1,1 @@
+"""Textual terminal UI for the hands-free programming dialog."""
