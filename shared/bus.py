@@ -4,7 +4,9 @@ Why a wrapper: every service needs the same few guarantees — messages are
 validated before user code sees them, a bad message is logged and counted
 instead of crashing the receiver, Zenoh's threads are never blocked by user
 code, every query is finalised, requests time out cleanly, and closing leaves
-no thread behind. Handlers run on one worker thread per subscription.
+no thread behind. Samples wait in zenoh's own channels (ring channels for
+streams where only the newest matters) and handlers run on one worker thread
+per subscription.
 """
 
 from __future__ import annotations
@@ -21,7 +23,6 @@ import zenoh.ext as zext
 from shared.codec import MessageError, decode, encode
 from shared.config import SessionOptions, zenoh_config
 from shared.keys import Keys
-from shared.mailbox import CLOSED, Mailbox
 from shared.messages import validate
 
 log = logging.getLogger("hfpbd.bus")
@@ -53,25 +54,36 @@ class Publisher:
 
 
 class _Worker:
-    """A mailbox drained by one daemon thread that runs a handler per item."""
+    """Drains one zenoh channel on a daemon thread, running a handler per item.
 
-    def __init__(self, name: str, capacity: int, run: Callable[[Any], None]) -> None:
-        self.mailbox = Mailbox(capacity)
+    The channel lives in zenoh (Rust), so zenoh's threads never run Python
+    user code; undeclaring the entity closes the channel and ends the loop.
+    """
+
+    def __init__(self, name: str, run: Callable[[Any], None]) -> None:
         self._run = run
-        self.thread = threading.Thread(target=self._loop, name=name, daemon=True)
+        self._name = name
+        self.thread: threading.Thread | None = None
+
+    def start(self, source: Any) -> None:
+        self.thread = threading.Thread(target=self._loop, args=(source,), name=self._name, daemon=True)
         self.thread.start()
 
-    def _loop(self) -> None:
-        while (item := self.mailbox.pop()) is not CLOSED:
+    def _loop(self, source: Any) -> None:
+        for item in source:
             try:
                 self._run(item)
             except Exception:  # a handler bug must not kill the subscription
-                log.exception("handler on %s failed", self.thread.name)
+                log.exception("handler on %s failed", self._name)
 
-    def stop(self, timeout: float = 2.0) -> None:
-        self.mailbox.close()
-        if threading.current_thread() is not self.thread:
+    def join(self, timeout: float = 2.0) -> None:
+        if self.thread is not None and threading.current_thread() is not self.thread:
             self.thread.join(timeout)
+
+
+def _channel(latest_only: bool, capacity: int) -> Any:
+    """Ring channels keep only the newest items (clouds, state); FIFO ones keep all, applying back-pressure."""
+    return zenoh.handlers.RingChannel(1) if latest_only else zenoh.handlers.FifoChannel(capacity)
 
 
 class Bus:
@@ -112,7 +124,7 @@ class Bus:
             except Exception:  # already gone with its session
                 log.debug("undeclare failed", exc_info=True)
         for worker in workers:
-            worker.stop()
+            worker.join()
         self.session.close()
 
     def _keep(self, entity: Any) -> Any:
@@ -120,11 +132,13 @@ class Bus:
             self._declared.append(entity)
         return entity
 
-    def _worker(self, name: str, capacity: int, run: Callable[[Any], None]) -> _Worker:
-        worker = _Worker(name, capacity, run)
+    def _drain(self, name: str, entity: Any, run: Callable[[Any], None]) -> None:
+        """Keep ``entity`` (a declared zenoh object with a channel) and drain it on a worker."""
+        worker = _Worker(name, run)
+        self._keep(entity)
         with self._lock:
             self._workers.append(worker)
-        return worker
+        worker.start(entity)
 
     # -- publish -----------------------------------------------------------
     def publisher(self, key: str, *, cached: bool = False, large: bool = False) -> Publisher:
@@ -157,10 +171,12 @@ class Bus:
         only the present matters); ``history`` also receives the last cached
         sample of each cached publisher, now and when one appears later.
         """
-        def run(item: tuple[str, bytes]) -> None:
-            sample_key, payload = item
+        def run(sample: zenoh.Sample) -> None:
+            if sample.kind != zenoh.SampleKind.PUT:
+                return
+            sample_key = str(sample.key_expr)
             try:
-                message = decode(payload)
+                message = decode(sample.payload.to_bytes())
                 if schema is not None:
                     validate(schema, message)
             except MessageError as exc:
@@ -170,19 +186,14 @@ class Bus:
             message.setdefault("_key", sample_key)
             handler(message)
 
-        worker = self._worker(f"sub:{key}", 1 if latest_only else capacity, run)
-
-        def on_sample(sample: zenoh.Sample) -> None:
-            if sample.kind == zenoh.SampleKind.PUT:
-                worker.mailbox.push((str(sample.key_expr), sample.payload.to_bytes()))
-
+        channel = _channel(latest_only, capacity)
         if history:
             sub = zext.declare_advanced_subscriber(
-                self.session, key, on_sample,
+                self.session, key, channel,
                 history=zext.HistoryConfig(detect_late_publishers=True, max_samples=1))
         else:
-            sub = self.session.declare_subscriber(key, on_sample)
-        self._keep(sub)
+            sub = self.session.declare_subscriber(key, channel)
+        self._drain(f"sub:{key}", sub, run)
 
     # -- request / reply ---------------------------------------------------
     def serve(self, key: str, handler: Callable[[Message], Message], *, capacity: int = 64) -> None:
@@ -210,12 +221,7 @@ class Bus:
             finally:
                 query.drop()
 
-        worker = self._worker(f"serve:{key}", capacity, run)
-
-        def on_query(query: zenoh.Query) -> None:
-            worker.mailbox.push(query)
-
-        self._keep(self.session.declare_queryable(key, on_query))
+        self._drain(f"serve:{key}", self.session.declare_queryable(key, _channel(False, capacity)), run)
 
     def request(self, key: str, message: Message | None = None, *, timeout: float = 5.0) -> Message:
         """Send a query and return the first reply; raise on error or timeout."""
@@ -237,16 +243,11 @@ class Bus:
 
     def watch_alive(self, handler: Callable[[str, bool], None]) -> None:
         """Call ``handler(service, alive)`` for every service appearing or vanishing."""
-        def run(item: tuple[str, bool]) -> None:
-            handler(*item)
+        def run(sample: zenoh.Sample) -> None:
+            handler(self.keys.service_of(str(sample.key_expr)), sample.kind == zenoh.SampleKind.PUT)
 
-        worker = self._worker("alive", 256, run)
-
-        def on_sample(sample: zenoh.Sample) -> None:
-            alive = sample.kind == zenoh.SampleKind.PUT
-            worker.mailbox.push((self.keys.service_of(str(sample.key_expr)), alive))
-
-        self._keep(self.session.liveliness().declare_subscriber(self.keys.alive_all, on_sample, history=True))
+        subscriber = self.session.liveliness().declare_subscriber(self.keys.alive_all, _channel(False, 256), history=True)
+        self._drain("alive", subscriber, run)
 
     def alive_services(self, timeout: float = 1.0) -> set[str]:
         """The services whose liveliness token is up right now."""

@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import socket
 from dataclasses import dataclass, field
 
 import zenoh
@@ -129,3 +130,10 @@ def loopback_options(namespace: str, port: int, *, listen: bool) -> SessionOptio
         connect=() if listen else (endpoint,),
         multicast_scouting=False,
     )
+
+
+def free_port() -> int:
+    """A TCP port on loopback that is free right now."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]

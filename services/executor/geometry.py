@@ -1,0 +1,310 @@
+"""Where the gripper should go for each spatial word.
+
+A relative position is a *set* of tool-frame poses around a landmark (paper
+§III-A): several gripper orientations per relation, each with the gripper's
+opening facing the landmark, tried in order until one is reachable. All poses
+are ``[x, y, z, qw, qx, qy, qz]`` in the robot base frame; the tool frame's
++x axis is the gripper's approach direction (it points out between the
+fingers), its y axis runs between the finger pads.
+
+Fixed distances (chosen like the paper's: big enough to be visible, small
+enough to keep the object in view of the gripper):
+
+* relative destinations stand the fingertips ``GAP`` (5 cm) off the
+  landmark's side, ``ABOVE`` (10 cm) over its top, ``ON_TOP`` (5 cm) for on-top;
+* directional moves step ``STEP`` (10 cm);
+* pointing holds the fingertips ``POINT_DISTANCE`` (14 cm) from the centre.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+STEP = 0.10
+GAP = 0.05
+ABOVE = 0.10
+ON_TOP = 0.05
+POINT_DISTANCE = 0.14
+RELEASE_CLEARANCE = 0.015  # a placed object's bottom is released this far above its support
+ROTATE_STEP = 1.6  # rad, the paper's wrist-roll increment
+MAX_GRIP_WIDTH = 0.085  # widest object the open gripper can close around, with margin
+
+RELATIONS = ("above", "next_to", "left_of", "right_of", "in_front_of", "behind", "on_top_of", "near")
+DIRECTIONS = {
+    "up": (0.0, 0.0, 1.0), "down": (0.0, 0.0, -1.0),
+    "left": (0.0, 1.0, 0.0), "right": (0.0, -1.0, 0.0),
+    "forward": (1.0, 0.0, 0.0), "backward": (-1.0, 0.0, 0.0),
+}
+# Relations that are unions of others, tried in this order.
+COMPOSITE = {"next_to": ("left_of", "right_of"), "near": ("left_of", "right_of", "in_front_of", "behind")}
+
+DOWN = np.array([0.0, 0.0, -1.0])
+
+
+@dataclass(frozen=True)
+class Box:
+    """An axis-aligned object extent: centre and size (x, y, z), metres."""
+
+    center: np.ndarray
+    size: np.ndarray
+
+    @staticmethod
+    def of(obj: dict) -> Box:
+        return Box(np.asarray(obj["position"], float), np.asarray(obj["size"], float))
+
+    @property
+    def top(self) -> float:
+        return float(self.center[2] + self.size[2] / 2)
+
+    @property
+    def bottom(self) -> float:
+        return float(self.center[2] - self.size[2] / 2)
+
+    @property
+    def half(self) -> np.ndarray:
+        return self.size / 2
+
+
+# -- orientation helpers -------------------------------------------------------
+
+def quat_wxyz(rotation: Rotation) -> np.ndarray:
+    x, y, z, w = rotation.as_quat()
+    return np.array([w, x, y, z])
+
+
+def rotation_of(pose: np.ndarray | list[float]) -> Rotation:
+    w, x, y, z = pose[3:7]
+    return Rotation.from_quat([x, y, z, w])
+
+
+def make_pose(position: np.ndarray, rotation: Rotation) -> np.ndarray:
+    return np.concatenate([np.asarray(position, float), quat_wxyz(rotation)])
+
+
+def facing(approach: np.ndarray, roll: float = 0.0) -> Rotation:
+    """A gripper orientation whose approach (+x) axis is ``approach``, rolled by ``roll`` about it.
+
+    Roll 0 keeps the finger axis (y) horizontal, so closing fingers squeeze
+    an upright object from its sides.
+    """
+    x = np.asarray(approach, float)
+    x = x / np.linalg.norm(x)
+    helper = np.array([0.0, 0.0, 1.0]) if abs(x[2]) < 0.95 else np.array([0.0, 1.0, 0.0])
+    y = np.cross(helper, x)
+    y /= np.linalg.norm(y)
+    z = np.cross(x, y)
+    base = Rotation.from_matrix(np.column_stack([x, y, z]))
+    return base * Rotation.from_rotvec([roll, 0.0, 0.0])
+
+
+def approach_axis(pose: np.ndarray | list[float]) -> np.ndarray:
+    return rotation_of(pose).apply([1.0, 0.0, 0.0])
+
+
+def tilted(approach: np.ndarray, towards: np.ndarray, angle: float) -> np.ndarray:
+    """``approach`` turned by ``angle`` rad towards ``towards`` (a candidate variation)."""
+    a = np.asarray(approach, float) / np.linalg.norm(approach)
+    t = np.asarray(towards, float) - np.dot(towards, a) * a
+    if np.linalg.norm(t) < 1e-9:
+        return a
+    t /= np.linalg.norm(t)
+    return np.cos(angle) * a + np.sin(angle) * t
+
+
+# -- relative destinations -----------------------------------------------------
+
+def _side_point(box: Box, relation: str, clearance: float) -> tuple[np.ndarray, np.ndarray]:
+    """Target point and the gripper's approach direction (towards the landmark) for a side relation."""
+    c, h = box.center, box.half
+    if relation == "left_of":
+        return c + [0.0, h[1] + clearance, 0.0], np.array([0.0, -1.0, 0.0])
+    if relation == "right_of":
+        return c + [0.0, -h[1] - clearance, 0.0], np.array([0.0, 1.0, 0.0])
+    if relation == "in_front_of":
+        return c + [-h[0] - clearance, 0.0, 0.0], np.array([1.0, 0.0, 0.0])
+    if relation == "behind":
+        return c + [h[0] + clearance, 0.0, 0.0], np.array([-1.0, 0.0, 0.0])
+    raise ValueError(f"not a side relation: {relation}")
+
+
+def _toward_robot(point: np.ndarray) -> np.ndarray:
+    """Horizontal unit vector from the robot (base origin) to ``point``."""
+    v = np.array([point[0], point[1], 0.0])
+    n = np.linalg.norm(v)
+    return v / n if n > 1e-9 else np.array([1.0, 0.0, 0.0])
+
+
+def _down_candidates(point: np.ndarray) -> list[np.ndarray]:
+    """Top-down poses: fingers across the robot's view first, then rolled, then tilted a little."""
+    outward = _toward_robot(point)
+    yaw = float(np.arctan2(outward[1], outward[0]))
+    poses = []
+    for roll in (0.0, np.pi / 2, np.pi / 4, -np.pi / 4):
+        rot = Rotation.from_euler("z", yaw) * Rotation.from_euler("y", np.pi / 2) * Rotation.from_rotvec([roll, 0, 0])
+        poses.append(make_pose(point, rot))
+    for angle in (0.35, -0.35):
+        poses.append(make_pose(point, facing(tilted(DOWN, outward, angle))))
+    return poses
+
+
+def _side_candidates(point: np.ndarray, approach: np.ndarray) -> list[np.ndarray]:
+    """Poses facing the landmark from its side: level, then tilted down, then rolled."""
+    return [
+        make_pose(point, facing(approach)),
+        make_pose(point, facing(tilted(approach, DOWN, 0.5))),
+        make_pose(point, facing(approach, np.pi / 2)),
+        make_pose(point, facing(tilted(approach, DOWN, 1.0))),
+    ]
+
+
+def relation_candidates(relation: str, box: Box) -> list[np.ndarray]:
+    """Candidate tool poses for moving the empty gripper to ``relation`` of ``box``."""
+    if relation in COMPOSITE:
+        return [p for part in COMPOSITE[relation] for p in relation_candidates(part, box)]
+    c = box.center
+    if relation == "above":
+        return _down_candidates(np.array([c[0], c[1], box.top + ABOVE]))
+    if relation == "on_top_of":
+        return _down_candidates(np.array([c[0], c[1], box.top + ON_TOP]))
+    if relation in ("left_of", "right_of", "in_front_of", "behind"):
+        point, approach = _side_point(box, relation, GAP)
+        return _side_candidates(point, approach)
+    raise ValueError(f"unknown relation {relation!r}")
+
+
+# -- placing a held object -------------------------------------------------------
+
+def placement_centers(relation: str, landmark: Box, held_size: np.ndarray, table_z: float) -> list[np.ndarray]:
+    """Where the held object's centre should be released for ``relation`` of ``landmark``.
+
+    The held object's own size decides the release point: a tall object is
+    released higher, a wide one further to the side.
+    """
+    if relation in COMPOSITE:
+        return [p for part in COMPOSITE[relation] for p in placement_centers(part, landmark, held_size, table_z)]
+    half = np.asarray(held_size, float) / 2
+    c, lh = landmark.center, landmark.half
+    if relation in ("above", "on_top_of"):
+        extra = ABOVE if relation == "above" else RELEASE_CLEARANCE
+        return [np.array([c[0], c[1], landmark.top + extra + half[2]])]
+    z = table_z + RELEASE_CLEARANCE + half[2]
+    offsets = {
+        "left_of": [0.0, lh[1] + GAP + half[1], 0.0],
+        "right_of": [0.0, -lh[1] - GAP - half[1], 0.0],
+        "in_front_of": [-lh[0] - GAP - half[0], 0.0, 0.0],
+        "behind": [lh[0] + GAP + half[0], 0.0, 0.0],
+    }
+    if relation not in offsets:
+        raise ValueError(f"unknown relation {relation!r}")
+    point = c + offsets[relation]
+    return [np.array([point[0], point[1], z])]
+
+
+def carry_pose(tool_pose: np.ndarray, held_center: np.ndarray, new_center: np.ndarray) -> np.ndarray:
+    """Tool pose that puts the held object's centre at ``new_center``, orientation kept (no tipping)."""
+    pose = np.array(tool_pose, float)
+    pose[:3] = pose[:3] + (np.asarray(new_center, float) - np.asarray(held_center, float))
+    return pose
+
+
+def table_release_center(held_center: np.ndarray, held_size: np.ndarray, table_z: float) -> np.ndarray:
+    """Keep x, y; lower the held object until its bottom is just above the table."""
+    return np.array([held_center[0], held_center[1], table_z + RELEASE_CLEARANCE + held_size[2] / 2])
+
+
+# -- directions, pointing, grasping ---------------------------------------------
+
+def shifted(pose: np.ndarray, offset: np.ndarray) -> np.ndarray:
+    out = np.array(pose, float)
+    out[:3] += offset
+    return out
+
+
+def direction_target(pose: np.ndarray, direction: str, step: float = STEP) -> np.ndarray:
+    """The tool pose ``step`` metres along a base axis, orientation kept."""
+    return shifted(pose, step * np.asarray(DIRECTIONS[direction]))
+
+
+def relative_direction_target(pose: np.ndarray, box: Box, direction: str, step: float = STEP) -> np.ndarray | None:
+    """The tool pose ``step`` towards / away from the landmark's centre.
+
+    Towards never goes closer than ``GAP`` to the landmark's surface (so a
+    gripper already next to it reports "already there" instead of ramming
+    it); returns None when no movement towards is left.
+    """
+    offset = box.center - np.asarray(pose[:3], float)
+    distance = float(np.linalg.norm(offset))
+    if distance < 1e-6:
+        return None
+    unit = offset / distance
+    if direction == "away_from":
+        return shifted(pose, -step * unit)
+    # distance from the centre to the box surface along the line, plus the gap
+    with np.errstate(divide="ignore"):
+        surface = float(np.min(np.where(np.abs(unit) > 1e-9, box.half / np.abs(unit), np.inf)))
+    room = distance - surface - GAP
+    if room <= 0.01:
+        return None
+    return shifted(pose, min(step, room) * unit)
+
+
+def point_candidates(box: Box, shoulder: np.ndarray) -> list[np.ndarray]:
+    """Tool poses aiming the gripper at the object's centre from above and in front of it."""
+    outward = _toward_robot(box.center - np.asarray(shoulder, float) * [1, 1, 0])
+    poses = []
+    for elevation in (0.65, 0.9, 0.4):
+        aim = np.cos(elevation) * outward + np.sin(elevation) * DOWN
+        point = box.center - POINT_DISTANCE * aim - aim * np.linalg.norm(box.half * aim)
+        poses.append(make_pose(point, facing(aim)))
+    return poses
+
+
+@dataclass(frozen=True)
+class Grasp:
+    """A grasp: the pre-grasp pose, the grasp pose, and how far to lift after closing."""
+
+    pregrasp: np.ndarray
+    grasp: np.ndarray
+    lift: np.ndarray
+
+
+def grasp_candidates(box: Box, approach_distance: float = 0.10, lift_height: float = 0.12) -> list[Grasp]:
+    """Grasps for an upright object: from the side facing the robot, then top-down.
+
+    A side grasp squeezes the object at two thirds of its height; a top-down
+    grasp closes the fingers across the object's narrower horizontal extent.
+    Objects wider than the gripper on both axes get no candidates.
+    """
+    grasps: list[Grasp] = []
+    outward = _toward_robot(box.center)
+    up = np.array([0.0, 0.0, lift_height])
+    height = box.size[2]
+    # side grasps: fingers horizontal, closing across the object's width seen from the robot
+    width_across = abs(outward[0]) * box.size[1] + abs(outward[1]) * box.size[0]
+    if width_across <= MAX_GRIP_WIDTH:
+        z = box.bottom + min(max(0.6 * height, 0.025), height - 0.015)
+        for angle in (0.0, 0.3, -0.3):
+            direction = Rotation.from_euler("z", angle).apply(outward)
+            depth = abs(direction[0]) * box.half[0] + abs(direction[1]) * box.half[1]
+            grasp_point = np.array([box.center[0], box.center[1], z]) - direction * max(depth - 0.03, 0.0)
+            rot = facing(direction)
+            grasp = make_pose(grasp_point, rot)
+            grasps.append(Grasp(make_pose(grasp_point - approach_distance * direction, rot), grasp, shifted(grasp, up)))
+    # top-down grasps: fingertips a few centimetres below the top
+    depth = min(0.035, 0.6 * height)
+    top_point = np.array([box.center[0], box.center[1], box.top - depth])
+    yaw_robot = float(np.arctan2(outward[1], outward[0]))
+    for yaw, fits in ((yaw_robot, width_across <= MAX_GRIP_WIDTH), (yaw_robot + np.pi / 2, _depth_along(box, outward) <= MAX_GRIP_WIDTH)):
+        if not fits:
+            continue
+        rot = Rotation.from_euler("z", yaw) * Rotation.from_euler("y", np.pi / 2)
+        grasp = make_pose(top_point, rot)
+        grasps.append(Grasp(shifted(grasp, [0.0, 0.0, approach_distance]), grasp, shifted(grasp, up)))
+    return grasps
+
+
+def _depth_along(box: Box, direction: np.ndarray) -> float:
+    return float(abs(direction[0]) * box.size[0] + abs(direction[1]) * box.size[1])

@@ -1,0 +1,138 @@
+"""The bus side of the terminal UI.
+
+Zenoh delivers samples on the bus's worker threads; every handler here only
+turns the sample into a Textual message and posts it (thread-safe, never
+blocks), so a slow screen never stalls the bus and a closed app never raises
+on a Zenoh thread. Requests block, so the app calls them from
+``@work(thread=True)`` workers, never from its event loop.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any, Protocol
+
+from textual.message import Message
+
+from shared.bus import Bus, BusTimeout, RemoteError
+from shared.config import SessionOptions
+from tui import events
+
+# A cheap, side-effect-free request per service, timed for the status bar.
+# Services without one in the contract show presence only.
+PROBES: dict[str, tuple[str, dict[str, Any]]] = {
+    "nlu": ("nlu/vocabulary", {}),
+    "executor": ("executor/control/actions", {"op": "list"}),
+}
+
+
+class Poster(Protocol):
+    def post_message(self, message: Message) -> bool: ...
+
+
+class Bridge:
+    """Owns the app's Zenoh session: subscriptions in, utterances and requests out."""
+
+    def __init__(self, options: SessionOptions, app: Poster) -> None:
+        self.options = options
+        self._app = app
+        self.bus: Bus | None = None
+
+    @property
+    def connected(self) -> bool:
+        return self.bus is not None
+
+    def open(self) -> None:
+        """Open the session and declare every subscription (blocking: call from a worker)."""
+        bus = Bus(self.options)
+        keys = bus.keys
+        bus.subscribe(keys.say, self._on_say, schema="say")
+        bus.subscribe(keys.nlu_result, self._on_nlu_result, schema="nlu_result")
+        bus.subscribe(keys.objects, self._on_objects, schema="objects", latest_only=True, history=True)
+        bus.subscribe(keys.executor_state, self._on_executor_state, schema="executor_state",
+                      latest_only=True, history=True)
+        bus.subscribe(keys.sim_state, self._on_sim_state, schema="sim_state", latest_only=True)
+        bus.watch_alive(lambda service, alive: self._app.post_message(events.Presence(service, alive)))
+        self.bus = bus
+        self._app.post_message(events.BusConnected())
+
+    def close(self) -> None:
+        if self.bus is not None:
+            bus, self.bus = self.bus, None
+            bus.close()
+
+    # -- incoming ------------------------------------------------------------
+    def _on_say(self, msg: dict[str, Any]) -> None:
+        candidates = [str(c) for c in msg.get("candidates") or []]
+        self._app.post_message(events.Said(msg["text"], msg["kind"], candidates))
+
+    def _on_nlu_result(self, msg: dict[str, Any]) -> None:
+        self._app.post_message(events.Understood(msg))
+
+    def _on_objects(self, msg: dict[str, Any]) -> None:
+        self._app.post_message(events.ObjectsSeen(msg["objects"], msg.get("status")))
+
+    def _on_executor_state(self, msg: dict[str, Any]) -> None:
+        self._app.post_message(events.ExecutorChanged(msg["robot"], msg.get("reach") or {}))
+
+    def _on_sim_state(self, msg: dict[str, Any]) -> None:
+        self._app.post_message(events.SimMoved(msg["ee"], msg["grippers"], msg.get("moving") or {}))
+
+    # -- outgoing ------------------------------------------------------------
+    def _bus(self) -> Bus:
+        if self.bus is None:
+            raise ConnectionError("not connected to the robot's network yet")
+        return self.bus
+
+    def say(self, text: str, choice: int | None = None) -> None:
+        """Publish an utterance; ``choice`` answers the pending clarification by index."""
+        bus = self._bus()
+        message: dict[str, Any] = {"text": text, "source": "tui"}
+        if choice is not None:
+            message["choice"] = choice
+        bus.publish(bus.keys.utterance, message)
+
+    def command(self, procedure: str, args: dict[str, Any] | None = None, timeout: float = 3.0) -> str:
+        """Ask the executor to run a direct command; returns its message."""
+        bus = self._bus()
+        reply = bus.request(bus.keys.executor_control("command"),
+                            {"procedure": procedure, "args": args or {}}, timeout=timeout)
+        return str(reply.get("message") or "")
+
+    def stop(self) -> str:
+        """Stop the robot: through the executor, or straight at the simulator when it is gone.
+
+        Stopping must work even when the executor has died mid-motion, so a
+        missing executor falls back to the simulator's own stop.
+        """
+        try:
+            return self.command("stop", timeout=1.0) or "stopped"
+        except BusTimeout:
+            bus = self._bus()
+            bus.request(bus.keys.sim_control("stop"), {}, timeout=2.0)
+            return "stopped the arms directly (the executor did not answer)"
+
+    def describe(self) -> dict[str, str]:
+        bus = self._bus()
+        reply = bus.request(bus.keys.nlu_query("describe"), {}, timeout=3.0)
+        return {str(k): str(v) for k, v in reply.items() if k not in ("v", "ok") and isinstance(v, str)}
+
+    def vocabulary(self) -> tuple[list[str], list[str]]:
+        bus = self._bus()
+        reply = bus.request(bus.keys.nlu_query("vocabulary"), {}, timeout=3.0)
+        return [str(w) for w in reply.get("words", [])], [str(p) for p in reply.get("phrases", [])]
+
+    def ping(self, service: str) -> float | None:
+        """Round-trip seconds of the service's probe request, None if it did not answer."""
+        if service not in PROBES:
+            return None
+        bus = self._bus()
+        suffix, request = PROBES[service]
+        start = time.perf_counter()
+        try:
+            bus.request(f"pbd/{bus.keys.namespace}/{suffix}", request, timeout=2.0)
+        except BusTimeout:
+            return None
+        except RemoteError:
+            pass  # an error reply still measures the round trip
+        return time.perf_counter() - start

@@ -1,0 +1,114 @@
+"""Textual messages that carry what arrives on the bus into the app.
+
+The bus calls its handlers on worker threads; those handlers only post one of
+these messages (``App.post_message`` is thread-safe and never blocks), so all
+widget updates happen on Textual's own event loop.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from textual.message import Message
+
+
+class BusConnected(Message):
+    """The Zenoh session is open and every subscription is declared."""
+
+
+class BusUnavailable(Message):
+    """The Zenoh session could not be opened (e.g. no router reachable in client mode)."""
+
+    def __init__(self, reason: str) -> None:
+        super().__init__()
+        self.reason = reason
+
+
+class Said(Message):
+    """A line the robot says on ``dialog/say``."""
+
+    def __init__(self, text: str, kind: str, candidates: list[str]) -> None:
+        super().__init__()
+        self.text = text
+        self.kind = kind
+        self.candidates = candidates
+
+
+class Understood(Message):
+    """An ``nlu/result``: a command or a clarification, with the utterance it answers."""
+
+    def __init__(self, result: dict[str, Any]) -> None:
+        super().__init__()
+        self.result = result
+
+
+class ObjectsSeen(Message):
+    """A ``perception/objects`` sample: every perceived object."""
+
+    def __init__(self, objects: list[dict[str, Any]], status: str | None) -> None:
+        super().__init__()
+        self.objects = objects
+        self.status = status
+
+
+class ExecutorChanged(Message):
+    """An ``executor/state`` sample: robot fields, actions, progress, reach."""
+
+    def __init__(self, robot: dict[str, Any], reach: dict[str, Any]) -> None:
+        super().__init__()
+        self.robot = robot
+        self.reach = reach
+
+
+class SimMoved(Message):
+    """The latest ``sim/state``: tool poses and gripper readings."""
+
+    def __init__(self, ee: dict[str, Any], grippers: dict[str, Any], moving: dict[str, bool]) -> None:
+        super().__init__()
+        self.ee = ee
+        self.grippers = grippers
+        self.moving = moving
+
+
+class Presence(Message):
+    """A service's liveliness token appeared or vanished."""
+
+    def __init__(self, service: str, alive: bool) -> None:
+        super().__init__()
+        self.service = service
+        self.alive = alive
+
+
+class Latency(Message):
+    """Round-trip time of a cheap request to a service, or None when it did not answer."""
+
+    def __init__(self, service: str, seconds: float | None) -> None:
+        super().__init__()
+        self.service = service
+        self.seconds = seconds
+
+
+class Described(Message):
+    """Referring expressions per object id from ``nlu/describe``."""
+
+    def __init__(self, descriptions: dict[str, str]) -> None:
+        super().__init__()
+        self.descriptions = descriptions
+
+
+class VocabularyLoaded(Message):
+    """Words and phrases the NLU knows, for completion in the input line."""
+
+    def __init__(self, words: list[str], phrases: list[str]) -> None:
+        super().__init__()
+        self.words = words
+        self.phrases = phrases
+
+
+class RequestFailed(Message):
+    """A request the user caused (a key, a choice) failed; the reason is shown in the dialog."""
+
+    def __init__(self, what: str, reason: str) -> None:
+        super().__init__()
+        self.what = what
+        self.reason = reason
