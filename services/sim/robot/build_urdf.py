@@ -282,6 +282,38 @@ def _adjacent_pairs(links: list[Link], joints: list[Joint]) -> set[frozenset[str
     return pairs
 
 
+def _near_pairs(links: list[Link], joints: list[Joint]) -> set[frozenset[str]]:
+    """Pairs of links with geometry in one arm, at most two actuated joints apart.
+
+    The primitive shapes overlap where the real links nest (shoulder into upper
+    arm, upper arm into forearm at full flex, forearm into palm); the joint
+    limits, not the shapes, keep such links apart, so planners ignore them.
+    The two finger pads of one hand touch whenever the gripper is shut.
+    """
+    parent_joint = {j.child: j for j in joints}
+    solid = {link.name for link in links if link.shapes}
+
+    def chain(name: str) -> list[tuple[str, int]]:
+        """``name`` and its ancestors with the number of actuated joints crossed."""
+        crossed, out = 0, [(name, 0)]
+        while name in parent_joint:
+            joint = parent_joint[name]
+            crossed += joint.kind != "fixed"
+            name = joint.parent
+            out.append((name, crossed))
+        return out
+
+    pairs = set()
+    for link in solid:
+        for ancestor, crossed in chain(link)[1:]:
+            if ancestor in solid and crossed <= 2:
+                pairs.add(frozenset((link, ancestor)))
+    for side in ARMS:
+        p = ARM_PREFIX[side]
+        pairs.add(frozenset((f"{p}_gripper_l_finger_link", f"{p}_gripper_r_finger_link")))
+    return pairs
+
+
 def _sampled_pairs(known: set[frozenset[str]], samples: int, seed: int) -> tuple[set[frozenset[str]], set[frozenset[str]]]:
     """Link pairs colliding at the zero pose ("default") and in ≥ 95 % of random poses ("always").
 
@@ -323,11 +355,12 @@ def _srdf_document(reasons: dict[frozenset[str], str]) -> str:
 
 def srdf_text(links: list[Link], joints: list[Joint], samples: int = 400, seed: int = 0) -> str:
     """The collision matrix: adjacent links, the fixed body, and pairs found colliding by sampling."""
-    body_links = {"base_link", "torso_lift_link", "head_pan_link", "head_tilt_link", CAMERA_LINK}
-    # the shoulders and the head move only relative to the torso; their contacts with the
-    # body are part of the build, not something a planner can avoid
-    reasons = {frozenset(pair): "Body" for pair in combinations(
-        sorted(body_links | {"r_shoulder_pan_link", "l_shoulder_pan_link"}), 2)}
+    body_links = {"base_link", "torso_lift_link", "head_pan_link", "head_tilt_link", CAMERA_LINK,
+                  "r_shoulder_pan_link", "l_shoulder_pan_link", "r_shoulder_lift_link", "l_shoulder_lift_link"}
+    # the shoulders sit in the torso and the head on it: their contacts with the
+    # body are part of the build (the real robot nests them), not something a planner can avoid
+    reasons = {pair: "Near" for pair in _near_pairs(links, joints)}
+    reasons.update({frozenset(pair): "Body" for pair in combinations(sorted(body_links), 2)})
     reasons.update({pair: "Adjacent" for pair in _adjacent_pairs(links, joints)})
     default, always = _sampled_pairs(set(reasons), samples, seed)
     reasons.update({pair: "Default" for pair in default})

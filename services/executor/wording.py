@@ -1,0 +1,129 @@
+"""What the robot says, in the user's own words.
+
+The paper's robot keeps the phrases it was programmed with: if the user says
+"grab", the narration says "Grabbing …" now and when the action is replayed
+later. Objects are always named by a fresh referring expression (computed
+from the scene of the moment), so the narration stays right when objects
+moved. Failures name the arm, the place and the object, never a bare
+"Error".
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+Refer = Callable[[str], str]
+
+DEFAULT_VERBS = {
+    "move_abs_dest": "move", "move_rel_dest": "move", "move_abs_dir": "move", "move_rel_dir": "move",
+    "pick_up": "pick up", "place_abs": "place", "place_rel": "place", "point_to": "point at",
+    "look_at": "look at", "rotate": "rotate", "open": "open", "close": "close",
+}
+RELATION_WORDS = {
+    "above": "above", "next_to": "next to", "left_of": "to the left of", "right_of": "to the right of",
+    "in_front_of": "in front of", "behind": "behind", "on_top_of": "on top of", "near": "near",
+    "towards": "towards", "away_from": "away from",
+}
+DIRECTION_WORDS = {
+    "up": "up", "down": "down", "left": "to the left", "right": "to the right",
+    "forward": "forward", "backward": "backward", "cw": "clockwise", "ccw": "counter-clockwise",
+}
+DESTINATION_WORDS = {"side": "to the side", "table": "on the table", "here": "here"}
+VOWELS = set("aeiou")
+
+
+def gerund(verb: str) -> str:
+    """"grab" -> "grabbing", "move" -> "moving", "pick up" -> "picking up" (first word inflected)."""
+    head, _, rest = verb.strip().partition(" ")
+    word = head.lower()
+    if word.endswith("ie"):
+        word = word[:-2] + "y"
+    elif word.endswith("e") and not word.endswith(("ee", "ye", "oe")) and len(word) > 2:
+        word = word[:-1]
+    elif (len(word) >= 3 and word[-1] not in VOWELS | set("wxy") and word[-2] in VOWELS
+          and word[-3] not in VOWELS and _syllables(word) == 1):
+        word = word + word[-1]  # one-syllable consonant-vowel-consonant words: grab, put, drop
+    word += "ing"
+    return f"{word} {rest}".strip()
+
+
+def _syllables(word: str) -> int:
+    """Vowel groups: enough to tell "grab" (one) from "open" (two) for doubling."""
+    groups, previous = 0, False
+    for char in word:
+        vowel = char in VOWELS
+        groups += vowel and not previous
+        previous = vowel
+    return groups
+
+
+def sentence(text: str) -> str:
+    text = " ".join(text.split())
+    return text[:1].upper() + text[1:] + ("" if text.endswith((".", "!", "?")) else ".")
+
+
+def arm_words(arm: str, phrases: Mapping[str, str] | None = None, *, own: bool = False) -> str:
+    """"your right hand" in narration (the user's address to the robot), "my right hand" in errors."""
+    said = (phrases or {}).get("arm")
+    if said and not own:
+        return said if said.split()[0] in ("your", "the", "my") else f"your {said}"
+    return f"{'my' if own else 'your'} {arm} hand"
+
+
+def _word(table: Mapping[str, str], key: str, phrases: Mapping[str, str] | None, field: str) -> str:
+    said = (phrases or {}).get(field)
+    return said if said else table.get(key, key.replace("_", " "))
+
+
+def narration(procedure: str, args: Mapping, phrases: Mapping[str, str] | None, refer: Refer,
+              held: str | None = None) -> str:
+    """The sentence said just before a step runs, e.g. "Grabbing the red cup with your right hand."."""
+    verb = gerund((phrases or {}).get("verb") or DEFAULT_VERBS.get(procedure, procedure.replace("_", " ")))
+    arm = args.get("arm")
+    hand = arm_words(arm, phrases) if arm else ""
+    obj = refer(args["object"]) if args.get("object") else ""
+    relation = _word(RELATION_WORDS, args.get("relation") or args.get("direction", ""), phrases,
+                     "relation" if "relation" in args else "direction")
+    if procedure == "move_abs_dest":
+        return sentence(f"{verb} {hand} {_word(DESTINATION_WORDS, args['destination'], phrases, 'destination')}")
+    if procedure in ("move_rel_dest", "move_rel_dir"):
+        return sentence(f"{verb} {hand} {relation} {obj}")
+    if procedure == "move_abs_dir":
+        return sentence(f"{verb} {hand} {_word(DIRECTION_WORDS, args['direction'], phrases, 'direction')}")
+    if procedure in ("pick_up", "point_to"):
+        return sentence(f"{verb} {obj} with {hand}")
+    if procedure == "place_abs":
+        thing = held or "what I'm holding"
+        return sentence(f"{verb} {thing} {_word(DESTINATION_WORDS, args['destination'], phrases, 'destination')} with {hand}")
+    if procedure == "place_rel":
+        thing = held or "what I'm holding"
+        return sentence(f"{verb} {thing} {relation} {obj} with {hand}")
+    if procedure == "look_at":
+        return sentence(f"{verb} {obj}")
+    if procedure == "rotate":
+        return sentence(f"{verb} {hand} {_word(DIRECTION_WORDS, args['direction'], phrases, 'direction')}")
+    if procedure in ("open", "close"):
+        return sentence(f"{verb} {hand}")
+    return sentence(f"{verb}")
+
+
+# -- failures -----------------------------------------------------------------
+
+def cannot_reach(arm: str, relation: str, obj_words: str) -> str:
+    return sentence(f"I can't reach {RELATION_WORDS.get(relation, relation)} {obj_words} with my {arm} hand")
+
+
+def cannot_pick(arm: str, obj_words: str, why: str) -> str:
+    return sentence(f"I couldn't pick up {obj_words} with my {arm} hand: {why}")
+
+
+def not_holding(arm: str, purpose: str = "place") -> str:
+    return sentence(f"My {arm} hand isn't holding anything to {purpose}")
+
+
+def gone(obj_words: str) -> str:
+    return sentence(f"{obj_words} is no longer on the table")
+
+
+def unknown_object(object_id: str) -> str:
+    return sentence(f"I don't know any object called {object_id!r}; say \"record\" to look at the table again")

@@ -1,0 +1,5 @@
+import sys
+
+from services.nlu.main import main
+
+sys.exit(main())

@@ -1,0 +1,87 @@
+"""What the UI knows about the world, and how each field reads on screen.
+
+Kept apart from the widgets so that every panel shows an object the same
+way (one colour swatch, one size format, one reach wording).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+ARMS = ("right", "left")
+
+# Display colours for perception's colour words, used when an object carries
+# no measured ``rgb``.
+COLOR_WORDS: dict[str, tuple[int, int, int]] = {
+    "red": (220, 40, 40), "green": (40, 170, 60), "blue": (50, 90, 220),
+    "yellow": (230, 210, 40), "orange": (240, 140, 30), "purple": (140, 60, 180),
+    "white": (235, 235, 235), "black": (40, 40, 40), "grey": (128, 128, 128),
+    "unknown": (160, 160, 160),
+}
+
+
+@dataclass
+class WorldView:
+    """The latest world as the services report it."""
+
+    objects: dict[str, dict[str, Any]] = field(default_factory=dict)
+    descriptions: dict[str, str] = field(default_factory=dict)
+    reach: dict[str, dict[str, dict[str, bool]]] = field(default_factory=dict)
+    robot: dict[str, Any] = field(default_factory=dict)
+    ee: dict[str, list[float]] = field(default_factory=dict)
+    grippers: dict[str, dict[str, Any]] = field(default_factory=dict)
+    highlighted: str | None = None
+
+    def name_of(self, object_id: str | None) -> str:
+        """The referring expression of an object, or its id while none is known."""
+        if not object_id:
+            return "—"
+        return self.descriptions.get(object_id, object_id)
+
+
+def object_rgb(obj: dict[str, Any]) -> tuple[int, int, int]:
+    """The object's measured mean colour, else the colour of its colour word."""
+    rgb = obj.get("rgb")
+    if isinstance(rgb, (list, tuple)) and len(rgb) == 3:
+        values = [float(c) for c in rgb]
+        if max(values) <= 1.0:  # a 0–1 colour
+            values = [c * 255 for c in values]
+        return tuple(int(max(0, min(255, c))) for c in values)  # type: ignore[return-value]
+    return COLOR_WORDS.get(str(obj.get("color", "unknown")), COLOR_WORDS["unknown"])
+
+
+def hex_color(rgb: tuple[int, int, int]) -> str:
+    return "#{:02x}{:02x}{:02x}".format(*rgb)
+
+
+def size_text(size: Any) -> str:
+    """Extent in whole centimetres, x × y × z."""
+    try:
+        return "×".join(f"{float(s) * 100:.0f}" for s in size) + " cm"
+    except (TypeError, ValueError):
+        return "?"
+
+
+def reach_text(obj: dict[str, Any], reach: dict[str, dict[str, bool]] | None) -> str:
+    """Which arm can reach the object: 'held (right)', 'right', 'both', 'none' or '?'.
+
+    An arm reaches an object when it can pick it up; with no ``pick_up`` key
+    any true key counts. No reach information at all reads '?' (unknown), as
+    the design notes treat a missing key as unknown, not as unreachable.
+    """
+    if obj.get("held_by"):
+        return f"held ({obj['held_by']})"
+    if not reach:
+        return "?"
+    arms = []
+    for arm in ARMS:
+        keys = reach.get(arm)
+        if keys is None:
+            continue
+        ok = keys.get("pick_up") if "pick_up" in keys else any(keys.values())
+        if ok:
+            arms.append(arm)
+    if len(arms) == 2:
+        return "both"
+    return arms[0] if arms else "none"
