@@ -10,8 +10,8 @@ SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 
 have_gpu_vulkan() {
-    # A vendor ICD other than Mesa's software one means a real GPU driver.
-    ls /usr/share/vulkan/icd.d/ /etc/vulkan/icd.d/ 2>/dev/null | grep -v -E 'lvp|intel|radeon' | grep -q -E 'nvidia|\.json$'
+    # NVIDIA's driver installs its own Vulkan ICD; Mesa's ICDs need a new enough Mesa.
+    ls /usr/share/vulkan/icd.d/ /etc/vulkan/icd.d/ 2>/dev/null | grep -q nvidia
 }
 
 mesa_is_new_enough() {
@@ -54,5 +54,6 @@ if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
         .venv/bin/pip uninstall -q -y opencv-python
         .venv/bin/pip install -q --force-reinstall --no-deps "opencv-python-headless==4.11.0.86"
     fi
+    .venv/bin/python scripts/check_render.py
     touch "$stamp"
 fi
