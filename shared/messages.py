@@ -23,9 +23,12 @@ SCHEMAS: dict[str, dict[str, Any]] = {
     "cloud": {"stamp": Number, "xyz": Array, "rgb": Array, "camera_pose": list},
     "sim_state": {"stamp": Number, "joints": dict, "ee": dict, "grippers": dict},
     "truth": {"stamp": Number, "objects": list},
+    "sim_event": {"motion_id": str, "status": str, "message": str},
     "objects": {"stamp": Number, "objects": list},
     "nlu_result": {"kind": str, "utterance": str},
     "executor_state": {"stamp": Number, "robot": dict},
+    "speech_audio": {"pcm": Array, "rate": int},
+    "speech_ptt": {"on": bool},
     "request": {},
     "reply": {"ok": bool},
 }

@@ -31,7 +31,8 @@ class RobotPanel(Static):
             table.add_row(f"{arm} gripper", Text(state, style=_GRIPPER_STYLES.get(state, "")) + Text(detail, style="dim"))
         table.add_row("last arm", str(robot.get("last_arm") or "—"))
         last_object = robot.get("last_object")
-        table.add_row("last object", f"{world.name_of(last_object)}" + (f" ({last_object})" if last_object else ""))
+        named = last_object in world.descriptions
+        table.add_row("last object", world.name_of(last_object) + (f" ({last_object})" if named else ""))
         executing = bool(robot.get("executing"))
         table.add_row("robot", Text("executing", style="bold yellow") if executing else Text("idle", style="green"))
         self.update(table)

@@ -11,9 +11,9 @@ OPTIONAL = ("speech",)
 # What the user loses while a service is missing, in their terms.
 CONSEQUENCES: dict[str, str] = {
     "sim": "the robot cannot move",
-    "perception": "objects are not seen",
-    "nlu": "commands are not understood",
-    "executor": "commands are not carried out",
+    "perception": "objects not seen",
+    "nlu": "commands not understood",
+    "executor": "commands not carried out",
 }
 
 
@@ -64,7 +64,7 @@ class StatusBar(Static):
                 line.append(f" {seconds * 1000:.0f} ms", style="dim")
         missing = self.missing()
         if missing:
-            reasons = "; ".join(f"{CONSEQUENCES[s]} (no {s})" for s in missing)
+            reasons = " · ".join(f"no {s}: {CONSEQUENCES[s]}" for s in missing)
             line.append("\n")
             line.append(f"⚠ {reasons}", style="yellow")
         return line

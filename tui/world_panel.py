@@ -17,7 +17,9 @@ class ObjectTable(DataTable):
     """One row per perceived object: swatch, id, referring expression, type, size, reach."""
 
     def on_mount(self) -> None:
-        self.cursor_type = "row"
+        # No cursor: a cursor row would paint over the colour swatches; the
+        # referred object is marked with ▶ instead.
+        self.cursor_type = "none"
         self.zebra_stripes = True
         self.add_column(" ", key="mark", width=2)
         self.add_column("", key="swatch", width=2)
@@ -42,8 +44,6 @@ class ObjectTable(DataTable):
                 reach_text(obj, world.reach.get(object_id)),
                 key=object_id,
             )
-        if world.highlighted in world.objects:
-            self.move_cursor(row=self.get_row_index(world.highlighted))
 
 
 def _id_order(object_id: str) -> tuple[int, str]:
@@ -70,6 +70,10 @@ class TableCanvas(Widget):
 
     def show(self, world: WorldView) -> None:
         self.world = world
+        self.refresh()
+
+    def on_resize(self) -> None:
+        # the picture is scaled to the widget, so a new size needs a new drawing
         self.refresh()
 
     def _bounds(self) -> tuple[float, float, float, float]:

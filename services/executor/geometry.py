@@ -171,7 +171,7 @@ def relation_candidates(relation: str, box: Box) -> list[np.ndarray]:
         return _down_candidates(np.array([c[0], c[1], box.top + ON_TOP]))
     if relation in ("left_of", "right_of", "in_front_of", "behind"):
         point, approach = _side_point(box, relation, GAP)
-        return _side_candidates(point, approach)
+        return _side_candidates(point, approach) + _down_candidates(point)[:2]
     raise ValueError(f"unknown relation {relation!r}")
 
 
@@ -271,34 +271,36 @@ class Grasp:
     lift: np.ndarray
 
 
-def grasp_candidates(box: Box, approach_distance: float = 0.10, lift_height: float = 0.12) -> list[Grasp]:
+def grasp_candidates(box: Box, *, round_shape: bool = False, approach_distance: float = 0.10,
+                     lift_height: float = 0.12) -> list[Grasp]:
     """Grasps for an upright object: from the side facing the robot, then top-down.
 
-    A side grasp squeezes the object at two thirds of its height; a top-down
-    grasp closes the fingers across the object's narrower horizontal extent.
-    Objects wider than the gripper on both axes get no candidates.
+    A side grasp squeezes the object at about 60 % of its height; a top-down
+    grasp closes the fingers across the object a few centimetres below its
+    top. A direction is offered only when the object's width across the
+    fingers fits the open gripper (``round_shape``: cups and bowls are as
+    wide as their diameter from every side).
     """
     grasps: list[Grasp] = []
     outward = _toward_robot(box.center)
     up = np.array([0.0, 0.0, lift_height])
     height = box.size[2]
-    # side grasps: fingers horizontal, closing across the object's width seen from the robot
-    width_across = abs(outward[0]) * box.size[1] + abs(outward[1]) * box.size[0]
-    if width_across <= MAX_GRIP_WIDTH:
-        z = box.bottom + min(max(0.6 * height, 0.025), height - 0.015)
-        for angle in (0.0, 0.3, -0.3):
-            direction = Rotation.from_euler("z", angle).apply(outward)
-            depth = abs(direction[0]) * box.half[0] + abs(direction[1]) * box.half[1]
-            grasp_point = np.array([box.center[0], box.center[1], z]) - direction * max(depth - 0.03, 0.0)
-            rot = facing(direction)
-            grasp = make_pose(grasp_point, rot)
-            grasps.append(Grasp(make_pose(grasp_point - approach_distance * direction, rot), grasp, shifted(grasp, up)))
-    # top-down grasps: fingertips a few centimetres below the top
-    depth = min(0.035, 0.6 * height)
-    top_point = np.array([box.center[0], box.center[1], box.top - depth])
+    z = box.bottom + min(max(0.6 * height, 0.025), height - 0.015)
+    directions = [outward, np.array([1.0, 0.0, 0.0])]
+    directions += [Rotation.from_euler("z", a).apply(outward) for a in (0.35, -0.35)]
+    for direction in directions:
+        if _across(box, direction, round_shape) > MAX_GRIP_WIDTH:
+            continue
+        depth = _across(box, np.array([-direction[1], direction[0], 0.0]), round_shape) / 2
+        grasp_point = np.array([box.center[0], box.center[1], z]) - direction * max(depth - 0.025, 0.0)
+        rot = facing(direction)
+        grasp = make_pose(grasp_point, rot)
+        grasps.append(Grasp(make_pose(grasp_point - approach_distance * direction, rot), grasp, shifted(grasp, up)))
+    top_point = np.array([box.center[0], box.center[1], box.top - min(0.035, 0.6 * height)])
     yaw_robot = float(np.arctan2(outward[1], outward[0]))
-    for yaw, fits in ((yaw_robot, width_across <= MAX_GRIP_WIDTH), (yaw_robot + np.pi / 2, _depth_along(box, outward) <= MAX_GRIP_WIDTH)):
-        if not fits:
+    for yaw in (yaw_robot, yaw_robot + np.pi / 2):
+        fingers = np.array([-np.sin(yaw), np.cos(yaw), 0.0])
+        if _across(box, np.array([fingers[1], -fingers[0], 0.0]), round_shape) > MAX_GRIP_WIDTH:
             continue
         rot = Rotation.from_euler("z", yaw) * Rotation.from_euler("y", np.pi / 2)
         grasp = make_pose(top_point, rot)
@@ -306,5 +308,8 @@ def grasp_candidates(box: Box, approach_distance: float = 0.10, lift_height: flo
     return grasps
 
 
-def _depth_along(box: Box, direction: np.ndarray) -> float:
-    return float(abs(direction[0]) * box.size[0] + abs(direction[1]) * box.size[1])
+def _across(box: Box, direction: np.ndarray, round_shape: bool) -> float:
+    """Width of the object across (perpendicular to) a horizontal ``direction``."""
+    if round_shape:
+        return float(np.mean(box.size[:2]))
+    return float(abs(direction[1]) * box.size[0] + abs(direction[0]) * box.size[1])

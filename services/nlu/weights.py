@@ -68,7 +68,8 @@ class Margins:
 class Decision:
     tie: float = 0.05          # log-score difference under which two commands tie
     max_candidates: int = 8    # candidates listed in a clarification
-    typo_score: float = 80.0   # rapidfuzz ratio a misspelt word needs to be read as a known one
+    typo_edits_short: int = 1  # edits (incl. swapped letters) tolerated in a word of up to 5 letters
+    typo_edits_long: int = 2   # ... and in a longer word
 
 
 PRIOR = PriorWeights()

@@ -114,13 +114,17 @@ def robot_points(xyz: np.ndarray, segments: Sequence[Segment]) -> np.ndarray:
     near = np.flatnonzero(((xyz >= lo) & (xyz <= hi)).all(axis=1))
     if not len(near):
         return mask
-    p = xyz[near].astype(np.float64)
+    p = xyz[near]
     inside = np.zeros(len(near), bool)
     for s in segments:
+        lo_s, hi_s = np.minimum(s.a, s.b) - s.radius, np.maximum(s.a, s.b) + s.radius
+        close = np.flatnonzero(((p >= lo_s) & (p <= hi_s)).all(axis=1) & ~inside)
+        if not len(close):
+            continue
+        q = p[close].astype(np.float64)
         ab = s.b - s.a
         length2 = float(ab @ ab)
-        t = np.clip((p - s.a) @ ab / length2, 0.0, 1.0) if length2 > 1e-12 else np.zeros(len(p))
-        closest = s.a + t[:, None] * ab
-        inside |= ((p - closest) ** 2).sum(axis=1) <= s.radius ** 2
+        t = np.clip((q - s.a) @ ab / length2, 0.0, 1.0) if length2 > 1e-12 else np.zeros(len(q))
+        inside[close] = ((q - (s.a + t[:, None] * ab)) ** 2).sum(axis=1) <= s.radius ** 2
     mask[near] = inside
     return mask

@@ -284,3 +284,35 @@ def _hit_capsule(origin: np.ndarray, rays: np.ndarray, cap: Capsule) -> tuple[np
         best[closer] = t[closer]
         normals[closer] = (origin + rays[closer] * t[closer, None] - centre) / cap.radius
     return best, normals
+
+
+SHOULDER = {"right": (-0.05, -0.188, 1.121), "left": (-0.05, 0.188, 1.121)}
+POINTING_DOWN = (0.7071068, 0.0, 0.7071068, 0.0)   # tool x axis along -z
+
+
+def reaching_arm(tool: tuple[float, float, float], arm: str = "right",
+                 holding: bool = False) -> tuple[list[Capsule], dict]:
+    """A PR2-like arm with its gripper pointing down at ``tool``.
+
+    Returns the capsules to render and the matching ``sim/state`` fields
+    (``links``, ``ee``, ``grippers``) with PR2 link names, so masking is
+    exercised exactly as with the simulator's state.
+    """
+    side = "r" if arm == "right" else "l"
+    shoulder = np.asarray(SHOULDER[arm])
+    tool_p = np.asarray(tool, float)
+    wrist = tool_p + np.array([0.0, 0.0, 0.18])
+    upper = shoulder + np.array([0.1, 0.0, 0.0])
+    elbow = (upper + wrist) / 2 + np.array([0.0, 0.0, 0.12])
+    tip = tool_p - np.array([0.0, 0.0, 0.02])
+    capsules = [Capsule(tuple(shoulder), tuple(upper), 0.09), Capsule(tuple(upper), tuple(elbow), 0.07),
+                Capsule(tuple(elbow), tuple(wrist), 0.05), Capsule(tuple(wrist), tuple(tip), 0.035)]
+    links = {f"{side}_shoulder_pan_link": shoulder, f"{side}_upper_arm_roll_link": upper,
+             f"{side}_elbow_flex_link": elbow, f"{side}_wrist_roll_link": wrist,
+             f"{side}_gripper_palm_link": wrist, f"{side}_gripper_tool_frame": tool_p}
+    state = {
+        "links": {name: [*map(float, p), 1.0, 0.0, 0.0, 0.0] for name, p in links.items()},
+        "ee": {arm: [*map(float, tool_p), *POINTING_DOWN]},
+        "grippers": {arm: {"width": 0.07 if holding else 0.08, "holding": holding, "contact": holding}},
+    }
+    return capsules, state

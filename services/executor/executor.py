@@ -1,0 +1,383 @@
+"""The executor: accepts commands, runs them one at a time, records and replays actions.
+
+Threads and why:
+
+* Commands arrive on subscription / query threads and are handed to **one
+  command worker**, so those threads stay free: a "stop" is handled the
+  moment it arrives (it cancels the wait on the running motion and stops the
+  simulator at once), and any other command that arrives while one runs is
+  refused with a sentence instead of being dropped or queued behind a long
+  action.
+* A **reachability worker** with its own kinematic models recomputes the
+  reach map and can-move flags whenever the scene or the arms changed and
+  the arms are still, so the NLU always sees what is possible now.
+
+Every change (a command started or ended, a gripper changed, a new reach
+map) republishes the situated state on ``executor/state``.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from typing import Any
+
+import numpy as np
+
+from services.executor import wording
+from services.executor.commands import ADMIN, RECORDED, CommandError, check
+from services.executor.grounding import describe_kind, reground
+from services.executor.kinematics import ArmKinematics, joint_names
+from services.executor.procedures import Done, Procedures, StepFailed
+from services.executor.reach import reach_map
+from services.executor.referring import refer
+from services.executor.robot import SimRobot, Stopped
+from services.executor.scene import ARMS, Scene
+from services.executor.store import ActionStore, StoreError
+from shared.bus import Bus, BusTimeout, RemoteError
+
+log = logging.getLogger("hfpbd.executor")
+
+REACH_POLL = 0.2         # seconds between checks whether the reach map is stale
+JOINT_CHANGE = 0.01      # rad: an arm that moved more than this invalidates the map
+RECORD_TIMEOUT = 15.0
+
+
+class Executor:
+    """All of the executor's behaviour, on one bus."""
+
+    def __init__(self, bus: Bus, store: ActionStore) -> None:
+        self.bus = bus
+        self.store = store
+        self.scene = Scene()
+        self.cancel = threading.Event()
+        self.robot = SimRobot(bus, self.cancel)
+        self.procedures = Procedures(self.scene, self.robot, {arm: ArmKinematics(arm) for arm in ARMS},
+                                     self._record_objects)
+        self._reach_arms = {arm: ArmKinematics(arm, rng_seed=1) for arm in ARMS}
+        self._lock = threading.Lock()
+        self._busy: str | None = None           # procedure being run by the worker
+        self._executing = False
+        self._progress: dict[str, int] | None = None
+        self._pending: tuple[str, dict[str, Any], dict[str, Any]] | None = None
+        self._wake = threading.Condition(self._lock)
+        self._last_arm: str | None = None
+        self._last_object: str | None = None
+        self._reach: dict[str, Any] = {}
+        self._can_move: dict[str, dict[str, bool]] = {arm: {} for arm in ARMS}
+        self._reach_stale = threading.Event()
+        self._grippers: dict[str, str] = {}
+        self._closing = threading.Event()
+        self._state_publisher = bus.publisher(bus.keys.executor_state, cached=True)
+        self._threads = [threading.Thread(target=self._command_loop, name="executor-commands", daemon=True),
+                         threading.Thread(target=self._reach_loop, name="executor-reach", daemon=True)]
+
+    # -- lifecycle -----------------------------------------------------------------
+    def start(self) -> None:
+        bus, keys = self.bus, self.bus.keys
+        bus.subscribe(keys.objects, self._on_objects, schema="objects", history=True)
+        bus.subscribe(keys.sim_state, self._on_sim_state, schema="sim_state", latest_only=True)
+        bus.subscribe(keys.nlu_result, self._on_nlu_result, schema="nlu_result")
+        bus.serve(keys.executor_control("command"), self._on_control_command)
+        bus.serve(keys.executor_control("actions"), self._on_control_actions)
+        for thread in self._threads:
+            thread.start()
+        self.publish_state()
+
+    def close(self) -> None:
+        self._closing.set()
+        self.cancel.set()
+        with self._wake:
+            self._wake.notify_all()
+        for thread in self._threads:
+            thread.join(timeout=3.0)
+
+    # -- speaking --------------------------------------------------------------------
+    def say(self, text: str, kind: str = "narration") -> None:
+        log.info("say (%s): %s", kind, text)
+        self.bus.publish(self.bus.keys.say, {"text": text, "kind": kind})
+
+    # -- inputs --------------------------------------------------------------------------
+    def _on_objects(self, message: dict[str, Any]) -> None:
+        if self.scene.update_objects(message["objects"], message.get("table")):
+            self._reach_stale.set()
+
+    def _on_sim_state(self, message: dict[str, Any]) -> None:
+        self.scene.update_robot(message)
+        grippers = {arm: self.scene.snapshot().gripper_state(arm) for arm in ARMS}
+        if grippers != self._grippers:
+            self._grippers = grippers
+            self._reach_stale.set()
+            self.publish_state()
+
+    def _on_nlu_result(self, message: dict[str, Any]) -> None:
+        if message.get("kind") != "command":
+            return
+        phrases = message.get("phrases") if isinstance(message.get("phrases"), dict) else {}
+        context = {"phrases": {k: v for k, v in phrases.items() if isinstance(v, str)},
+                   "text": message.get("text") if isinstance(message.get("text"), str) else "",
+                   "utterance": message.get("utterance", "")}
+        ok, text = self.submit(message.get("procedure"), message.get("args"), context)
+        if not ok:
+            self.say(text, "error")
+
+    def _on_control_command(self, request: dict[str, Any]) -> dict[str, Any]:
+        ok, text = self.submit(request.get("procedure"), request.get("args"), {"phrases": {}, "text": "", "utterance": ""})
+        return {"ok": ok, "message": text}
+
+    # -- dispatch ---------------------------------------------------------------------------
+    def submit(self, procedure: Any, args: Any, context: dict[str, Any]) -> tuple[bool, str]:
+        """Accept a command for the worker, or say why not. Stop acts at once."""
+        try:
+            args = check(procedure, args)
+        except CommandError as exc:
+            return False, str(exc)
+        if procedure == "stop":
+            return True, self._stop()
+        with self._wake:
+            if self._busy is not None:
+                doing = "an action" if self._executing else self._busy.replace("_", " ")
+                return False, f"I'm still busy with {doing}; say \"stop\" to interrupt it."
+            self._busy = procedure
+            self._pending = (procedure, args, context)
+            self.cancel.clear()
+            self._wake.notify_all()
+        self.publish_state()
+        return True, "accepted"
+
+    def _stop(self) -> str:
+        with self._lock:
+            busy = self._busy
+        if busy is None:
+            self.say("There is nothing to stop.", "info")
+            return "nothing to stop"
+        self.cancel.set()
+        self.robot.stop()
+        return "stopping"
+
+    def _command_loop(self) -> None:
+        while not self._closing.is_set():
+            with self._wake:
+                self._wake.wait_for(lambda: self._pending is not None or self._closing.is_set())
+                if self._closing.is_set():
+                    return
+                procedure, args, context = self._pending  # type: ignore[misc]
+                self._pending = None
+            try:
+                self._run_command(procedure, args, context)
+            except Exception:  # a bug must not kill the worker: say so and carry on
+                log.exception("command %s failed unexpectedly", procedure)
+                self.say(f"Something went wrong inside me while doing {procedure.replace('_', ' ')}; "
+                         "the details are in my log.", "error")
+            finally:
+                with self._wake:
+                    self._busy = None
+                    self._executing = False
+                    self._progress = None
+                self._reach_stale.set()
+                self.publish_state()
+
+    def _run_command(self, procedure: str, args: dict[str, Any], context: dict[str, Any]) -> None:
+        if procedure == "create_action":
+            number = self.store.create()
+            self.say(f"Created action {number}.", "info")
+        elif procedure == "switch_action":
+            self._switch(args["target"])
+        elif procedure == "execute":
+            self._execute()
+        elif procedure == "record":
+            self._step(procedure, args, context, keep=False)
+        else:
+            self._step(procedure, args, context, keep=True)
+
+    def _switch(self, target: Any) -> None:
+        current, count = self.store.current, self.store.count()
+        if target == "next":
+            if current >= count:
+                self.say("There is no next action.", "error")
+                return
+            target = current + 1
+        elif target == "previous":
+            if current <= 1:
+                self.say("There is no previous action.", "error")
+                return
+            target = current - 1
+        try:
+            self.store.switch(target)
+        except StoreError as exc:
+            self.say(wording.sentence(str(exc)), "error")
+            return
+        self.say(f"Switched to action {target}.", "info")
+
+    # -- one step ------------------------------------------------------------------------------
+    def _step(self, procedure: str, args: dict[str, Any], context: dict[str, Any], *, keep: bool,
+              preferred: list[float] | None = None) -> bool:
+        """Narrate, run and (when ``keep``) record one procedure; False when it failed or was stopped."""
+        snap = self.scene.snapshot()
+        if procedure not in ADMIN:
+            self._last_arm = args.get("arm", self._last_arm)
+            if args.get("object"):
+                self._last_object = args["object"]
+        obj = args.get("object")
+        if obj is not None and obj not in snap.objects:
+            self.say(wording.unknown_object(obj), "error")
+            return False
+        held_words = self.procedures.held_description(args["arm"], snap) if "arm" in args else None
+        if procedure != "record":
+            self.say(wording.narration(procedure, args, context.get("phrases"), lambda oid: refer(snap.objects, oid),
+                                       held=held_words))
+        method = getattr(self.procedures, procedure)
+        kwargs = dict(args)
+        if preferred is not None and procedure == "move_rel_dest":
+            kwargs["preferred"] = preferred
+        try:
+            done: Done = method(**kwargs)
+        except Stopped:
+            self.say("Stopped.", "info")
+            return False
+        except StepFailed as exc:
+            self.say(str(exc), "error")
+            return False
+        if done.message:
+            self.say(done.message, "info")
+        if keep and procedure in RECORDED:
+            step = {"procedure": procedure, "args": args, "phrases": context.get("phrases", {}),
+                    "text": context.get("text", ""), "utterance": context.get("utterance", ""),
+                    "landmark": done.landmark, "relative_pose": done.relative_pose}
+            self.store.append_step(step)
+        return True
+
+    # -- actions -----------------------------------------------------------------------------------
+    def _execute(self) -> None:
+        number = self.store.current
+        if number == 0:
+            self.say("There is no action to execute yet; teach me some steps first.", "error")
+            return
+        steps = self.store.get(number)["steps"]
+        if not steps:
+            self.say(f"Action {number} has no steps yet.", "error")
+            return
+        with self._lock:
+            self._executing = True
+            self._progress = {"step": 0, "of": len(steps)}
+        self.publish_state()
+        self.say(f"Executing action {number}.", "narration")
+        if not self._step("record", {}, {}, keep=False):
+            self.say(f"Stopped action {number} before its first step.", "error")
+            return
+        snap = self.scene.snapshot()
+        landmarks = [s["landmark"] for s in steps if s.get("landmark")]
+        matched = reground(landmarks, list(snap.objects.values()))
+        for i, step in enumerate(steps, start=1):
+            if self.cancel.is_set():
+                self.say(f"Stopped action {number} at step {i} of {len(steps)}.", "info")
+                return
+            with self._lock:
+                self._progress = {"step": i, "of": len(steps)}
+            self.publish_state()
+            args = dict(step["args"])
+            landmark = step.get("landmark")
+            if landmark and "object" in args:
+                if landmark["id"] in matched.missing:
+                    self.say(matched.missing[landmark["id"]] + f" Stopped action {number} at step {i}.", "error")
+                    return
+                args["object"] = matched.mapping[landmark["id"]]
+            context = {"phrases": step.get("phrases", {}), "text": step.get("text", ""), "utterance": step.get("utterance", "")}
+            preferred = step.get("relative_pose") if step["procedure"] == "move_rel_dest" else None
+            if not self._step(step["procedure"], args, context, keep=False, preferred=preferred):
+                if not self.cancel.is_set():
+                    self.say(f"Action {number} stopped at step {i} of {len(steps)}.", "error")
+                return
+        self.say(f"Completed action {number}.", "narration")
+
+    def _record_objects(self) -> list[dict[str, Any]]:
+        """A fresh settled observation from perception, taken into the scene at once."""
+        try:
+            reply = self.bus.request(self.bus.keys.record, {}, timeout=RECORD_TIMEOUT)
+        except BusTimeout as exc:
+            raise StepFailed("I can't see anything: the perception service is not answering.") from exc
+        except RemoteError as exc:
+            raise StepFailed(wording.sentence(f"I couldn't get a clear view of the table: {exc}")) from exc
+        objects = [o for o in reply.get("objects", []) if isinstance(o, dict)]
+        if self.scene.update_objects(objects, reply.get("table")):
+            self._reach_stale.set()
+        return objects
+
+    def _on_control_actions(self, request: dict[str, Any]) -> dict[str, Any]:
+        """List, show, rename and delete actions for the TUI (errors become error replies)."""
+        from services.executor.actions_cli import apply_action_op
+        reply = apply_action_op(self.store, request)
+        self.publish_state()
+        return reply
+
+    # -- situated state ---------------------------------------------------------------------------------
+    def _reach_loop(self) -> None:
+        last_q: dict[str, np.ndarray] = {}
+        last_held: dict[str, str | None] = {}
+        while not self._closing.is_set():
+            self._reach_stale.wait(REACH_POLL)
+            if self._closing.is_set():
+                return
+            snap = self.scene.snapshot()
+            if snap.robot is None:
+                continue
+            if any((snap.robot.get("moving") or {}).values()):
+                continue
+            joints = snap.joints()
+            q = {arm: np.array([joints.get(n, 0.0) for n in joint_names(arm)]) for arm in ARMS}
+            held = self.procedures.held()
+            held_ids = {arm: (h.object_id if h else None) for arm, h in held.items()}
+            moved = not last_q or any(np.max(np.abs(q[a] - last_q[a])) > JOINT_CHANGE for a in ARMS)
+            if not (self._reach_stale.is_set() or moved or held_ids != last_held):
+                continue
+            self._reach_stale.clear()
+            started = time.perf_counter()
+            try:
+                reach, can_move = reach_map(self._reach_arms, snap, held)
+            except Exception:
+                log.exception("reachability computation failed")
+                continue
+            log.debug("reach map for %d objects in %.3f s", len(snap.objects), time.perf_counter() - started)
+            last_q, last_held = q, held_ids
+            with self._lock:
+                self._reach, self._can_move = reach, can_move
+            self.publish_state()
+
+    def state_message(self) -> dict[str, Any]:
+        number = self.store.current
+        steps = self.store.get(number)["steps"] if number else []
+        snap = self.scene.snapshot()
+        with self._lock:
+            robot = {
+                "grippers": {arm: snap.gripper_state(arm) for arm in ARMS},
+                "last_arm": self._last_arm,
+                "last_object": self._last_object,
+                "executing": self._executing,
+                "busy": self._busy,
+                "can_move": self._can_move,
+                "action": number,
+                "actions": self.store.step_counts(),
+                "steps": [s.get("utterance") or s.get("text") or _step_words(s) for s in steps],
+                "progress": self._progress,
+                "holding": {arm: (h.object_id if h else None) for arm, h in self.procedures.held().items()},
+            }
+            reach = {oid: per_arm for oid, per_arm in self._reach.items() if oid in snap.objects}
+        return {"stamp": time.time(), "robot": robot, "reach": reach}
+
+    def publish_state(self) -> None:
+        try:
+            self._state_publisher.put(self.state_message())
+        except StoreError as exc:
+            log.error("cannot publish state: %s", exc)
+
+
+def _step_words(step: dict[str, Any]) -> str:
+    """Words for a step taught without an utterance (a direct command)."""
+    args = step.get("args", {})
+    landmark = step.get("landmark")
+    parts = [step["procedure"].replace("_", " ")]
+    parts += [str(v).replace("_", " ") for k, v in args.items() if k != "object"]
+    if landmark:
+        parts.append(f"the {describe_kind(landmark)}")
+    return " ".join(parts)

@@ -1,0 +1,360 @@
+"""Inverse kinematics and collision-aware motion planning for one PR2 arm (mplib).
+
+mplib loads the project's URDF + SRDF into Pinocchio (kinematics) and FCL
+(collisions) and plans with OMPL; this module adds what the executor needs
+on top:
+
+* **Seeded IK.** Damped least-squares IK converges only from a nearby start,
+  and random restarts are too slow for a reachability map of every object ×
+  relation × arm in under a second. At start-up a table of a few ten
+  thousand random arm configurations is indexed by where they put the tool
+  frame (position + approach and finger axes, in the torso's frame so it
+  holds at any torso height); a target is solved from its nearest neighbours
+  in that table, then from the current configuration.
+* **A live planning world.** The table and every perceived object are boxes;
+  the other arm is part of the robot model at its measured joints; a held
+  object is attached to the gripper so that carrying it around is planned
+  collision-free too.
+* **Only the arm moves.** mplib's move group for a tool frame includes the
+  torso; the torso is pinned (IK bounds, planner fixed joint) so plans are
+  pure 7-joint arm trajectories the simulator can follow.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+import mplib
+import numpy as np
+from mplib import Pose
+from mplib.collision_detection import fcl
+from scipy.spatial import cKDTree
+from scipy.spatial.transform import Rotation, Slerp
+
+from services.executor.geometry import Box, rotation_of
+
+log = logging.getLogger("hfpbd.executor.kinematics")
+
+ROBOT_DIR = Path(__file__).resolve().parents[1] / "sim" / "robot"
+URDF = ROBOT_DIR / "pr2.urdf"
+SRDF = ROBOT_DIR / "pr2.srdf"
+PREFIX = {"right": "r", "left": "l"}
+ARM_JOINTS = ("shoulder_pan_joint", "shoulder_lift_joint", "upper_arm_roll_joint", "elbow_flex_joint",
+              "forearm_roll_joint", "wrist_flex_joint", "wrist_roll_joint")
+TORSO = "torso_lift_joint"
+SEED_COUNT = 24000
+NEIGHBOURS = 5
+APPROACH_WEIGHT, FINGER_WEIGHT = 0.2, 0.1   # metres per unit axis difference in the seed index
+IK_TOLERANCE = 1e-3
+# Joint speed and acceleration limits for time parameterisation: moves take
+# time in proportion to how far the joints travel (about 0.5 m/s at the hand).
+JOINT_SPEED = 1.0
+JOINT_ACCEL = 1.5
+CARTESIAN_STEP = 0.01  # straight-line moves are interpolated every centimetre
+ROLL_JOINTS = (4, 6)   # forearm and wrist roll: sampled over one turn only
+
+
+def joint_names(arm: str) -> list[str]:
+    return [f"{PREFIX[arm]}_{name}" for name in ARM_JOINTS]
+
+
+def tool_frame(arm: str) -> str:
+    return f"{PREFIX[arm]}_gripper_tool_frame"
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Arm joint positions (N, 7) and the times (N,) at which to reach them, from 0."""
+
+    points: np.ndarray
+    times: np.ndarray
+
+    @property
+    def duration(self) -> float:
+        return float(self.times[-1]) if len(self.times) else 0.0
+
+
+def _to_pose(pose: np.ndarray) -> Pose:
+    return Pose(np.asarray(pose[:3], float), np.asarray(pose[3:7], float))
+
+
+def _features(position: np.ndarray, approach: np.ndarray, fingers: np.ndarray) -> np.ndarray:
+    return np.concatenate([position, APPROACH_WEIGHT * approach, FINGER_WEIGHT * fingers], axis=-1)
+
+
+class ArmKinematics:
+    """IK, collision checks and planning for one arm. Not thread-safe: one instance per thread."""
+
+    def __init__(self, arm: str, *, urdf: Path = URDF, srdf: Path = SRDF, seeds: int = SEED_COUNT,
+                 rng_seed: int = 0) -> None:
+        self.arm = arm
+        self.planner = mplib.Planner(urdf=str(urdf), srdf=str(srdf), move_group=tool_frame(arm),
+                                     joint_vel_limits=np.full(8, JOINT_SPEED),
+                                     joint_acc_limits=np.full(8, JOINT_ACCEL))
+        self.model = self.planner.pinocchio_model
+        self.names = list(self.planner.user_joint_names)
+        self.index = {name: i for i, name in enumerate(self.names)}
+        self.arm_idx = np.array([self.index[n] for n in joint_names(arm)])
+        self.torso_idx = self.index[TORSO]
+        self.group_idx = np.asarray(self.planner.move_group_joint_indices)
+        if list(self.group_idx) != [self.torso_idx, *self.arm_idx]:
+            raise RuntimeError(f"unexpected move group for the {arm} arm: {[self.names[i] for i in self.group_idx]}")
+        self.link = self.planner.link_name_2_idx[tool_frame(arm)]
+        self.limits = np.array(self.planner.joint_limits, float)
+        self.qpos = np.zeros(len(self.names))
+        self.qpos[self.arm_idx] = np.clip(0.0, self.limits[self.arm_idx, 0], self.limits[self.arm_idx, 1])
+        self._ik_mask = [i not in set(self.arm_idx) for i in range(len(self.names))]
+        self._gripper_links = [n for n in self.planner.user_link_names if n.startswith(f"{PREFIX[arm]}_gripper")]
+        self._robot_links = list(self.planner.user_link_names)
+        self._obstacles: set[str] = set()
+        self.held: str | None = None
+        self._build_seeds(seeds, rng_seed)
+
+    # -- state ----------------------------------------------------------------
+    def set_joints(self, joints: dict[str, float]) -> None:
+        """Take the measured joint positions (any subset, by name) as the model's state."""
+        for name, value in joints.items():
+            i = self.index.get(name)
+            if i is not None:
+                self.qpos[i] = float(value)
+        self.qpos = np.clip(self.qpos, self.limits[:, 0], self.limits[:, 1])
+
+    @property
+    def arm_q(self) -> np.ndarray:
+        return self.qpos[self.arm_idx].copy()
+
+    def full(self, arm_q: np.ndarray) -> np.ndarray:
+        q = self.qpos.copy()
+        q[self.arm_idx] = arm_q
+        return q
+
+    def fk(self, arm_q: np.ndarray | None = None) -> np.ndarray:
+        """Tool pose ``[x, y, z, qw, qx, qy, qz]`` for ``arm_q`` (default: the current joints)."""
+        self.model.compute_forward_kinematics(self.full(self.arm_q if arm_q is None else arm_q))
+        pose = self.model.get_link_pose(self.link)
+        return np.concatenate([pose.p, pose.q])
+
+    # -- seeds ------------------------------------------------------------------
+    def _build_seeds(self, count: int, rng_seed: int) -> None:
+        rng = np.random.default_rng(rng_seed)
+        lo, hi = self.limits[self.arm_idx, 0].copy(), self.limits[self.arm_idx, 1].copy()
+        for j in ROLL_JOINTS:
+            lo[j], hi[j] = -np.pi, np.pi
+        samples = rng.uniform(lo, hi, size=(count, 7))
+        base = np.zeros(len(self.names))
+        features = np.empty((count, 9))
+        for k, arm_q in enumerate(samples):
+            base[self.arm_idx] = arm_q
+            self.model.compute_forward_kinematics(base)
+            matrix = self.model.get_link_pose(self.link).to_transformation_matrix()
+            features[k] = _features(matrix[:3, 3], matrix[:3, 0], matrix[:3, 1])
+        self._seed_q = samples
+        self._seed_tree = cKDTree(features)
+
+    def _seeds_for(self, pose: np.ndarray, k: int) -> list[np.ndarray]:
+        if k <= 0:
+            return []
+        rot = rotation_of(pose).as_matrix()
+        position = np.asarray(pose[:3], float) - [0.0, 0.0, self.qpos[self.torso_idx]]
+        _, rows = self._seed_tree.query(_features(position, rot[:, 0], rot[:, 1]), k=k)
+        return [self._seed_q[r] for r in np.atleast_1d(rows)]
+
+    # -- obstacles ----------------------------------------------------------------
+    def set_obstacles(self, boxes: dict[str, Box]) -> None:
+        """Replace the planning world's obstacles (name -> box), e.g. the table and the objects."""
+        world = self.planner.planning_world
+        for name in self._obstacles - set(boxes):
+            world.remove_object(name)
+        for name, box in boxes.items():
+            if name == self.held:
+                continue
+            shape = fcl.CollisionObject(fcl.Box(np.maximum(box.size, 1e-3)))
+            world.add_object(fcl.FCLObject(name, Pose(box.center, [1, 0, 0, 0]), [shape], [Pose()]))
+        self._obstacles = set(boxes) - ({self.held} if self.held else set())
+
+    def allow_touching(self, name: str, allowed: bool = True) -> None:
+        """Let the gripper touch obstacle ``name`` (the object being grasped or released)."""
+        self.planner.planning_world.get_allowed_collision_matrix().set_entry(name, self._gripper_links, allowed)
+
+    def attach(self, name: str, box: Box, tool_pose: np.ndarray) -> None:
+        """Carry ``box`` in the gripper: it moves with the tool frame and must not hit anything."""
+        if self.held:
+            self.detach()
+        world = self.planner.planning_world
+        if world.has_object(name):
+            world.remove_object(name)
+        self._obstacles.discard(name)
+        relative = _to_pose(tool_pose).inv() * Pose(box.center, [1, 0, 0, 0])
+        world.attach_object(name, fcl.Box(np.maximum(box.size, 1e-3)), self.planner.robot.get_name(),
+                            self.link, relative, self._gripper_links)
+        self.held = name
+
+    def detach(self) -> None:
+        if self.held:
+            self.planner.planning_world.detach_object(self.held, True)
+            self.held = None
+
+    # -- checks ---------------------------------------------------------------------
+    def collisions(self, arm_q: np.ndarray) -> list[tuple[str, str]]:
+        """Colliding pairs (robot links, obstacles, held object) at ``arm_q``."""
+        world = self.planner.planning_world
+        self.planner.robot.set_qpos(self.full(arm_q), True)
+        return [(c.link_name1 or c.object_name1, c.link_name2 or c.object_name2) for c in world.check_collision()]
+
+    def within_limits(self, arm_q: np.ndarray) -> bool:
+        lim = self.limits[self.arm_idx]
+        return bool(np.all(arm_q >= lim[:, 0] - 1e-6) and np.all(arm_q <= lim[:, 1] + 1e-6))
+
+    # -- inverse kinematics ---------------------------------------------------------
+    def ik(self, pose: np.ndarray, *, seeds: list[np.ndarray] | None = None, check_collisions: bool = True,
+           neighbours: int = NEIGHBOURS) -> np.ndarray | None:
+        """Arm joints putting the tool frame at ``pose``, or None.
+
+        Tries the given seeds, then the current joints, then the nearest
+        table entries; a solution counts only within joint limits and, when
+        ``check_collisions``, without touching anything. The solver runs
+        unbounded (bounding it mid-iteration traps it at the limits far more
+        often) and the answer is checked against the limits afterwards.
+        """
+        goal = _to_pose(pose)
+        starts = list(seeds or []) + [self.arm_q] + self._seeds_for(pose, neighbours)
+        for start in starts:
+            q, ok, _ = self.model.compute_IK_CLIK(self.link, goal, self.full(start), self._ik_mask,
+                                                  eps=1e-4, max_iter=100, dt=1.0)
+            if not ok:
+                continue
+            arm_q = self._wrapped(q[self.arm_idx])
+            if not self.within_limits(arm_q):
+                continue
+            if check_collisions and self.collisions(arm_q):
+                continue
+            return self._unwound(arm_q)
+        return None
+
+    def _wrapped(self, arm_q: np.ndarray) -> np.ndarray:
+        """Roll joints brought into one turn (the solver lets them wander past their limits)."""
+        out = arm_q.copy()
+        for j in ROLL_JOINTS:
+            out[j] = (out[j] + np.pi) % (2 * np.pi) - np.pi
+        return out
+
+    def _unwound(self, arm_q: np.ndarray) -> np.ndarray:
+        """Roll joints turned by whole turns to stay nearest the current ones (no needless spins)."""
+        out = arm_q.copy()
+        current = self.arm_q
+        for j in ROLL_JOINTS:
+            lo, hi = self.limits[self.arm_idx[j]]
+            best = out[j]
+            for turn in (-2 * np.pi, 2 * np.pi):
+                candidate = arm_q[j] + turn
+                if lo <= candidate <= hi and abs(candidate - current[j]) < abs(best - current[j]):
+                    best = candidate
+            out[j] = best
+        return out
+
+    def first_reachable(self, poses: list[np.ndarray], **kw: object) -> tuple[int, np.ndarray] | None:
+        """Index and joints of the first pose in ``poses`` with an IK solution."""
+        for i, pose in enumerate(poses):
+            q = self.ik(pose, **kw)  # type: ignore[arg-type]
+            if q is not None:
+                return i, q
+        return None
+
+    # -- motion ------------------------------------------------------------------------
+    def _parameterise(self, arm_path: np.ndarray) -> Trajectory:
+        """Time a joint path by the speed/acceleration limits (time grows with distance)."""
+        if len(arm_path) < 2 or np.max(np.abs(arm_path[-1] - arm_path[0])) < 1e-4 and len(arm_path) == 2:
+            return Trajectory(arm_path[-1:], np.array([0.0]))
+        group = np.column_stack([np.full(len(arm_path), self.qpos[self.torso_idx]), arm_path])
+        times, positions, *_ = self.planner.TOPP(group, step=0.05)
+        if len(times) < 2:
+            times, positions = np.array([0.0, 0.1]), group[[0, -1]]
+        return Trajectory(positions[:, 1:].copy(), np.asarray(times, float))
+
+    @contextmanager
+    def _tolerating_start_contacts(self) -> Iterator[None]:
+        """Let the arm leave objects it already touches (a grasped object, a misperceived blob).
+
+        Without this, a start state in contact makes every path "invalid";
+        the table is never tolerated, so paths still cannot cut through it.
+        """
+        touched = sorted({name for pair in self.collisions(self.arm_q) for name in pair if name in self._obstacles}
+                         - {"table"})
+        acm = self.planner.planning_world.get_allowed_collision_matrix()
+        for name in touched:
+            acm.set_entry(name, self._robot_links, True)
+        try:
+            yield
+        finally:
+            for name in touched:
+                acm.set_entry(name, self._robot_links, False)
+
+    def plan_to(self, arm_q: np.ndarray, planning_time: float = 1.5) -> Trajectory | None:
+        """A collision-free joint trajectory from the current joints to ``arm_q`` (OMPL RRTConnect)."""
+        with self._tolerating_start_contacts():
+            return self._plan_to(arm_q, planning_time)
+
+    def _plan_to(self, arm_q: np.ndarray, planning_time: float) -> Trajectory | None:
+        start = self.full(self.arm_q)
+        goal = self.full(arm_q)
+        if not self.collisions(self.arm_q):
+            straight = self._joint_line(self.arm_q, arm_q)
+            if straight is not None:
+                return self._parameterise(straight)
+        result = self.planner.plan_qpos([goal], start, planning_time=planning_time,
+                                        fixed_joint_indices=[0], rrt_range=0.1)
+        if result["status"] != "Success":
+            log.info("%s arm: no collision-free path (%s)", self.arm, result["status"])
+            return None
+        positions = np.asarray(result["position"])[:, 1:]
+        return Trajectory(positions.copy(), np.asarray(result["time"], float))
+
+    def _joint_line(self, a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+        """The straight joint-space path a → b if it is collision-free (the common, cheap case)."""
+        steps = max(2, int(np.ceil(np.max(np.abs(b - a)) / 0.05)) + 1)
+        path = np.linspace(a, b, steps)
+        for q in path[1:]:
+            if self.collisions(q):
+                return None
+        return path
+
+    def straight_line(self, pose: np.ndarray, *, check_collisions: bool = True,
+                      ignore: tuple[str, ...] = ()) -> Trajectory | None:
+        """Move the tool in a straight line to ``pose`` (approach, descend, lift), orientation interpolated.
+
+        Collisions with obstacles in ``ignore`` (the object being grasped)
+        are allowed along the way.
+        """
+        start_pose = self.fk()
+        distance = float(np.linalg.norm(np.asarray(pose[:3]) - start_pose[:3]))
+        steps = max(2, int(np.ceil(distance / CARTESIAN_STEP)) + 1)
+        r0, r1 = rotation_of(start_pose), rotation_of(pose)
+        slerp = Slerp([0.0, 1.0], Rotation.concatenate([r0, r1]))
+        path = [self.arm_q]
+        for s in np.linspace(0.0, 1.0, steps)[1:]:
+            rot = slerp([s])[0]
+            x, y, z, w = rot.as_quat()
+            waypoint = np.concatenate([start_pose[:3] + s * (np.asarray(pose[:3]) - start_pose[:3]), [w, x, y, z]])
+            q = self.ik(waypoint, seeds=[path[-1]], check_collisions=False, neighbours=0)
+            if q is None or np.max(np.abs(q - path[-1])) > 0.5:
+                log.info("%s arm: no smooth IK along the line at %s (%s)", self.arm, waypoint.round(3),
+                         "no solution" if q is None else f"jump {np.max(np.abs(q - path[-1])):.2f} rad")
+                return None
+            path.append(q)
+        if check_collisions:
+            for name in ignore:
+                self.allow_touching(name, True)
+            try:
+                with self._tolerating_start_contacts():
+                    for q in path[1:]:
+                        if hit := self.collisions(q):
+                            log.info("%s arm: the straight line collides: %s", self.arm, hit)
+                            return None
+            finally:
+                for name in ignore:
+                    self.allow_touching(name, False)
+        return self._parameterise(np.asarray(path))

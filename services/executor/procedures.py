@@ -1,0 +1,420 @@
+"""The robot procedures p1–p13 on the simulated PR2.
+
+Each procedure checks what it needs first (the object exists, the hand holds
+something to place, the pose is reachable) and fails with a specific
+sentence *before* anything moves; only then does it plan collision-free
+motions and send them. A procedure returns a :class:`Done` with what the
+action recorder keeps (the landmark and the tool pose relative to it), or
+raises :class:`StepFailed` with the sentence to say.
+
+Pick-up is physical: approach, straight descent, close with force, lift,
+and the grasp counts only if the simulator's finger contacts still hold the
+object after the lift.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from services.executor import geometry as geo
+from services.executor import targets, wording
+from services.executor.geometry import Box
+from services.executor.kinematics import ArmKinematics, Trajectory
+from services.executor.reach import sync
+from services.executor.referring import refer
+from services.executor.robot import MotionError, SimRobot
+from services.executor.scene import Scene, SceneSnapshot
+from services.executor.targets import Held
+from services.sim.layout import HEAD_LOOK_AT, arm_pose
+
+log = logging.getLogger("hfpbd.executor.procedures")
+
+OPEN_WIDTH = 0.08
+CLOSE_WIDTH = 0.0
+GRIP_FORCE = 30.0
+RETREAT = 0.08          # after releasing, the hand backs off this far
+STATE_WAIT = 1.0        # seconds to wait for a robot state newer than a finished motion
+PICK_ATTEMPTS = 2
+
+
+class StepFailed(RuntimeError):
+    """A procedure could not be done; ``str(exc)`` is the sentence to say."""
+
+
+@dataclass
+class Done:
+    """A procedure that worked: what it said and what an action step keeps of it."""
+
+    message: str = ""
+    landmark: dict[str, Any] | None = None
+    relative_pose: list[float] | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+class Procedures:
+    """Runs p1–p13. Called from the one command worker thread (never concurrently)."""
+
+    def __init__(self, scene: Scene, robot: SimRobot, arms: dict[str, ArmKinematics],
+                 record_objects: Callable[[], list[dict[str, Any]]]) -> None:
+        self.scene = scene
+        self.robot = robot
+        self.arms = arms
+        self._record_objects = record_objects
+        self._held: dict[str, Held | None] = {"right": None, "left": None}
+        self._held_lock = threading.Lock()
+
+    # -- what the hands hold --------------------------------------------------------
+    def held(self) -> dict[str, Held | None]:
+        with self._held_lock:
+            return dict(self._held)
+
+    def _set_held(self, arm: str, held: Held | None) -> None:
+        with self._held_lock:
+            self._held[arm] = held
+
+    def held_description(self, arm: str, snap: SceneSnapshot) -> str | None:
+        held = self.held().get(arm)
+        if held is None:
+            return None
+        return refer(snap.objects, held.object_id)
+
+    # -- helpers --------------------------------------------------------------------------
+    def _snapshot(self) -> SceneSnapshot:
+        return self.scene.snapshot()
+
+    def _ready(self, arm: str) -> tuple[ArmKinematics, SceneSnapshot]:
+        """The arm's planning model brought up to date with the world as measured now."""
+        snap = self._snapshot()
+        if snap.robot is None:
+            raise StepFailed("I can't feel my arms: no robot state has arrived from the simulator yet.")
+        kin = self.arms[arm]
+        held = self.held()[arm]
+        if held is not None:
+            held = self._refresh_held(held, snap, kin)
+        sync(kin, snap, held)
+        return kin, snap
+
+    def _refresh_held(self, held: Held, snap: SceneSnapshot, kin: ArmKinematics) -> Held:
+        """The held object's box from the offset measured at grasp time and the tool pose now."""
+        kin.set_joints(snap.joints())
+        tool = kin.fk()
+        return Held(held.object_id, Box(np.asarray(tool[:3]) + held.offset, held.box.size), tool)
+
+    def _object(self, snap: SceneSnapshot, object_id: str) -> dict[str, Any]:
+        if object_id not in snap.objects:
+            raise StepFailed(wording.unknown_object(object_id))
+        return snap.objects[object_id]
+
+    def _go(self, arm: str, trajectory: Trajectory) -> None:
+        """Run a trajectory and wait until the simulator reports the arm there."""
+        if len(trajectory.points) == 0:
+            return
+        version = self.scene.snapshot().robot_version
+        try:
+            outcome = self.robot.move_arm(arm, trajectory.points, trajectory.times)
+        except MotionError as exc:
+            raise StepFailed(wording.sentence(f"My {arm} arm could not move: {exc}")) from exc
+        if outcome.status != "done":
+            raise StepFailed(wording.sentence(f"My {arm} arm was blocked: {outcome.message or outcome.status}"))
+        self.scene.wait_robot(version, STATE_WAIT)
+
+    def _grip(self, arm: str, width: float) -> None:
+        version = self.scene.snapshot().robot_version
+        try:
+            self.robot.gripper(arm, width, GRIP_FORCE)
+        except MotionError as exc:
+            raise StepFailed(wording.sentence(f"My {arm} gripper could not move: {exc}")) from exc
+        self.scene.wait_robot(version, STATE_WAIT)
+        # the state after the motion's report: one more fresh sample so contacts are current
+        self.scene.wait_robot(self.scene.snapshot().robot_version, STATE_WAIT)
+
+    def _plan(self, kin: ArmKinematics, arm_q: np.ndarray, why: str) -> Trajectory:
+        trajectory = kin.plan_to(arm_q)
+        if trajectory is None:
+            raise StepFailed(why)
+        return trajectory
+
+    def _line(self, kin: ArmKinematics, pose: np.ndarray, why: str, ignore: tuple[str, ...] = ()) -> Trajectory:
+        trajectory = kin.straight_line(pose, ignore=ignore)
+        if trajectory is None:
+            raise StepFailed(why)
+        return trajectory
+
+    def _relative(self, kin: ArmKinematics, box: Box) -> list[float]:
+        tool = kin.fk()
+        return [*(tool[:3] - box.center).round(4).tolist(), *np.round(tool[3:], 5).tolist()]
+
+    def _landmark(self, obj: dict[str, Any]) -> dict[str, Any]:
+        from services.executor.grounding import descriptor
+        return descriptor(obj)
+
+    # -- p1 ----------------------------------------------------------------------------------
+    def move_abs_dest(self, arm: str, destination: str = "side") -> Done:
+        kin, _ = self._ready(arm)
+        goal = np.asarray(arm_pose("side", arm), float)
+        self._go(arm, self._plan(kin, goal, wording.sentence(f"I can't find a clear path to move my {arm} hand to the side")))
+        return Done()
+
+    # -- p2 ------------------------------------------------------------------------------------
+    def move_rel_dest(self, arm: str, relation: str, object: str, preferred: list[float] | None = None) -> Done:
+        kin, snap = self._ready(arm)
+        obj = self._object(snap, object)
+        box = Box.of(obj)
+        held = self.held()[arm]
+        if held is not None and held.object_id == object:
+            raise StepFailed(wording.sentence(f"I'm holding {refer(snap.objects, object)} in my {arm} hand"))
+        poses = targets.move_relation(relation, box, kin.fk(), self._refreshed(arm, kin, snap), snap.table_z)
+        if preferred is not None:
+            poses = [np.concatenate([box.center + preferred[:3], preferred[3:7]])] + poses
+        found = kin.first_reachable(poses)
+        if found is None:
+            raise StepFailed(wording.cannot_reach(arm, relation, refer(snap.objects, object)))
+        self._go(arm, self._plan(kin, found[1], wording.sentence(
+            f"I can't find a clear path for my {arm} hand to {wording.RELATION_WORDS[relation]} {refer(snap.objects, object)}")))
+        kin.set_joints(self._snapshot().joints())
+        return Done(landmark=self._landmark(obj), relative_pose=self._relative(kin, box))
+
+    def _refreshed(self, arm: str, kin: ArmKinematics, snap: SceneSnapshot) -> Held | None:
+        held = self.held()[arm]
+        return None if held is None else self._refresh_held(held, snap, kin)
+
+    # -- p3 -------------------------------------------------------------------------------------
+    def move_abs_dir(self, arm: str, direction: str) -> Done:
+        kin, _ = self._ready(arm)
+        goal = geo.direction_target(kin.fk(), direction)
+        words = wording.DIRECTION_WORDS[direction]
+        self._go(arm, self._line(kin, goal, wording.sentence(f"I can't move my {arm} hand {words} any further")))
+        return Done()
+
+    # -- p4 -------------------------------------------------------------------------------------
+    def move_rel_dir(self, arm: str, direction: str, object: str) -> Done:
+        kin, snap = self._ready(arm)
+        obj = self._object(snap, object)
+        box = Box.of(obj)
+        goal = geo.relative_direction_target(kin.fk(), box, direction)
+        words = refer(snap.objects, object)
+        if goal is None:
+            raise StepFailed(wording.sentence(f"My {arm} hand is already as close to {words} as it can get"))
+        self._go(arm, self._line(kin, goal, wording.sentence(
+            f"I can't move my {arm} hand {wording.RELATION_WORDS[direction]} {words} any further")))
+        kin.set_joints(self._snapshot().joints())
+        return Done(landmark=self._landmark(obj), relative_pose=self._relative(kin, box))
+
+    # -- p5 --------------------------------------------------------------------------------------
+    def pick_up(self, arm: str, object: str) -> Done:
+        kin, snap = self._ready(arm)
+        obj = self._object(snap, object)
+        words = refer(snap.objects, object)
+        held = self.held()
+        if held[arm] is not None:
+            raise StepFailed(wording.sentence(
+                f"My {arm} hand is already holding {refer(snap.objects, held[arm].object_id)}"))
+        other = "left" if arm == "right" else "right"
+        if (held[other] is not None and held[other].object_id == object) or obj.get("held_by") == other:
+            raise StepFailed(wording.sentence(f"My {other} hand is holding {words}"))
+        plans = self._grasp_plans(kin, obj)
+        if not plans:
+            raise StepFailed(wording.cannot_pick(arm, words, "I can't reach around it"))
+        reason = "it slipped out of my fingers"
+        for attempt, (grasp, pre_q) in enumerate(plans[:PICK_ATTEMPTS]):
+            if snap.gripper_state(arm) != "open":
+                self._grip(arm, OPEN_WIDTH)
+            self._go(arm, self._plan(kin, pre_q, wording.cannot_pick(arm, words, "I can't find a clear path to it")))
+            kin, snap = self._ready(arm)
+            log.info("at pre-grasp: tool %s, goal %s, collisions %s", kin.fk().round(3), grasp.grasp.round(3), kin.collisions(kin.arm_q))
+            self._go(arm, self._line(kin, grasp.grasp, wording.cannot_pick(arm, words, "I can't reach down to it"),
+                                     ignore=(object,)))
+            self._grip(arm, CLOSE_WIDTH)
+            snap = self._snapshot()
+            if snap.gripper_state(arm) != "holding":
+                reason = "my fingers closed on nothing"
+                self._release_and_back_off(arm)
+                continue
+            kin.set_joints(snap.joints())
+            tool = kin.fk()
+            self._set_held(arm, Held(object, Box.of(obj), tool))
+            kin, snap = self._ready(arm)
+            lift = geo.shifted(kin.fk(), [0.0, 0.0, grasp.lift[2] - grasp.grasp[2]])
+            trajectory = kin.straight_line(lift, check_collisions=False)
+            if trajectory is not None:
+                self._go(arm, trajectory)
+            snap = self._snapshot()
+            if snap.gripper_state(arm) == "holding":
+                return Done(landmark=self._landmark(obj), relative_pose=None,
+                            extra={"attempts": attempt + 1})
+            self._set_held(arm, None)
+            reason = "it slipped out of my fingers when I lifted it"
+            self._release_and_back_off(arm)
+        raise StepFailed(wording.cannot_pick(arm, words, reason))
+
+    def _grasp_plans(self, kin: ArmKinematics, obj: dict[str, Any]) -> list[tuple[geo.Grasp, np.ndarray]]:
+        """Grasps whose pre-grasp and grasp both have IK solutions, in preference order."""
+        plans = []
+        for grasp in targets.grasps(obj):
+            pre_q = kin.ik(grasp.pregrasp)
+            if pre_q is None:
+                continue
+            kin.allow_touching(obj["id"], True)
+            try:
+                grasp_q = kin.ik(grasp.grasp, seeds=[pre_q])
+            finally:
+                kin.allow_touching(obj["id"], False)
+            if grasp_q is not None:
+                plans.append((grasp, pre_q))
+        return plans
+
+    def _release_and_back_off(self, arm: str) -> None:
+        self._grip(arm, OPEN_WIDTH)
+        self._set_held(arm, None)
+        kin, _ = self._ready(arm)
+        back = geo.shifted(kin.fk(), -RETREAT * geo.approach_axis(kin.fk()))
+        trajectory = kin.straight_line(back, check_collisions=False)
+        if trajectory is not None:
+            self._go(arm, trajectory)
+
+    # -- p6, p7 -------------------------------------------------------------------------------------
+    def _holding(self, arm: str, snap: SceneSnapshot, purpose: str = "place") -> Held:
+        held = self.held()[arm]
+        if held is None or snap.gripper_state(arm) != "holding":
+            if held is not None:
+                self._set_held(arm, None)
+            raise StepFailed(wording.not_holding(arm, purpose))
+        return held
+
+    def place_abs(self, arm: str, destination: str) -> Done:
+        kin, snap = self._ready(arm)
+        held = self._refresh_held(self._holding(arm, snap), snap, kin)
+        support = self._support_below(held, snap) if destination == "here" else snap.table_z
+        _, release = targets.place_table(kin.fk(), held, support)
+        where = "here" if destination == "here" else "on the table"
+        self._go(arm, self._line(kin, release, wording.sentence(f"I can't lower my {arm} hand to put it down {where}")))
+        return self._release(arm, held)
+
+    def _support_below(self, held: Held, snap: SceneSnapshot) -> float:
+        """Top of whatever is under the held object: another object's top, else the table."""
+        top = snap.table_z
+        for oid, obj in snap.objects.items():
+            if oid == held.object_id:
+                continue
+            box = Box.of(obj)
+            overlap = np.all(np.abs(box.center[:2] - held.box.center[:2]) < (box.half[:2] + held.box.half[:2]))
+            if overlap and box.top < held.box.bottom + 0.01:
+                top = max(top, box.top)
+        return top
+
+    def place_rel(self, arm: str, relation: str, object: str) -> Done:
+        kin, snap = self._ready(arm)
+        held = self._refresh_held(self._holding(arm, snap), snap, kin)
+        obj = self._object(snap, object)
+        words = refer(snap.objects, object)
+        if object == held.object_id:
+            raise StepFailed(wording.sentence(f"I can't place {words} relative to itself"))
+        box = Box.of(obj)
+        for hover, release in targets.place_relation(relation, box, kin.fk(), held, snap.table_z):
+            hover_q = kin.ik(hover)
+            if hover_q is None:
+                continue
+            self._go(arm, self._plan(kin, hover_q, wording.sentence(
+                f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}")))
+            kin, snap = self._ready(arm)
+            self._go(arm, self._line(kin, release, wording.cannot_reach(arm, relation, words)))
+            done = self._release(arm, held)
+            done.landmark = self._landmark(obj)
+            return done
+        raise StepFailed(wording.cannot_reach(arm, relation, words))
+
+    def _release(self, arm: str, held: Held) -> Done:
+        self._grip(arm, OPEN_WIDTH)
+        self._set_held(arm, None)
+        kin, _ = self._ready(arm)
+        back = geo.shifted(kin.fk(), [0.0, 0.0, RETREAT])
+        trajectory = kin.straight_line(back, check_collisions=False)
+        if trajectory is not None:
+            self._go(arm, trajectory)
+        return Done()
+
+    # -- p8, p9 --------------------------------------------------------------------------------------
+    def point_to(self, arm: str, object: str) -> Done:
+        kin, snap = self._ready(arm)
+        obj = self._object(snap, object)
+        box = Box.of(obj)
+        shoulder = kin.fk(np.zeros(7))[:3] * [0, 1, 0] + [0.0, 0.0, box.center[2]]
+        found = kin.first_reachable(geo.point_candidates(box, shoulder))
+        words = refer(snap.objects, object)
+        if found is None:
+            raise StepFailed(wording.sentence(f"I can't point at {words} with my {arm} hand"))
+        self._go(arm, self._plan(kin, found[1], wording.sentence(f"I can't find a clear path to point at {words}")))
+        return Done(landmark=self._landmark(obj))
+
+    def look_at(self, object: str) -> Done:
+        snap = self._snapshot()
+        obj = self._object(snap, object)
+        try:
+            outcome = self.robot.look_at(np.asarray(obj["position"], float))
+        except MotionError as exc:
+            raise StepFailed(wording.sentence(f"I can't turn my head: {exc}")) from exc
+        if outcome.status != "done":
+            raise StepFailed(wording.sentence(f"I can't look at {refer(snap.objects, object)}: {outcome.message}"))
+        return Done(landmark=self._landmark(obj))
+
+    # -- p10 – p12 ---------------------------------------------------------------------------------------
+    def rotate(self, arm: str, direction: str) -> Done:
+        kin, _ = self._ready(arm)
+        q = kin.arm_q
+        q[6] += geo.ROTATE_STEP if direction == "ccw" else -geo.ROTATE_STEP
+        words = wording.DIRECTION_WORDS[direction]
+        if not kin.within_limits(q):
+            raise StepFailed(wording.sentence(f"My {arm} wrist can't turn {words} any further"))
+        self._go(arm, self._plan(kin, q, wording.sentence(f"My {arm} wrist can't turn {words} without hitting something")))
+        return Done()
+
+    def open(self, arm: str) -> Done:
+        snap = self._snapshot()
+        if snap.gripper_state(arm) == "open":
+            raise StepFailed(wording.sentence(f"My {arm} hand is already open"))
+        self._grip(arm, OPEN_WIDTH)
+        self._set_held(arm, None)
+        return Done()
+
+    def close(self, arm: str) -> Done:
+        snap = self._snapshot()
+        state = snap.gripper_state(arm)
+        if state == "closed":
+            raise StepFailed(wording.sentence(f"My {arm} hand is already closed"))
+        if state == "holding":
+            raise StepFailed(wording.sentence(f"My {arm} hand is already closed on something"))
+        self._grip(arm, CLOSE_WIDTH)
+        snap = self._snapshot()
+        if snap.gripper_state(arm) == "holding":
+            kin, _ = self._ready(arm)
+            tool = kin.fk()
+            nearest = min(snap.objects.values(), default=None,
+                          key=lambda o: float(np.linalg.norm(np.asarray(o["position"]) - tool[:3])))
+            if nearest is not None:
+                self._set_held(arm, Held(nearest["id"], Box.of(nearest), tool))
+        return Done()
+
+    # -- p13 -------------------------------------------------------------------------------------------------
+    def record(self) -> Done:
+        """Arms out of the view, head on the table, a fresh settled observation."""
+        for arm in ("right", "left"):
+            kin, _ = self._ready(arm)
+            goal = np.asarray(arm_pose("side", arm), float)
+            if np.max(np.abs(goal - kin.arm_q)) > 0.05:
+                trajectory = kin.plan_to(goal)
+                if trajectory is not None:
+                    self._go(arm, trajectory)
+        try:
+            self.robot.look_at(np.asarray(HEAD_LOOK_AT, float))
+        except MotionError as exc:
+            raise StepFailed(wording.sentence(f"I can't turn my head to the table: {exc}")) from exc
+        objects = self._record_objects()
+        count = len(objects)
+        noun = "object" if count == 1 else "objects"
+        return Done(message=f"Found {count} {noun}." if count else "I don't see any objects on the table.")

@@ -1,0 +1,100 @@
+"""What each arm can do with each object right now: the reachability map and can-move flags.
+
+The NLU weighs commands by feasibility (paper §III-E), so the map must be
+current: it is recomputed whenever objects move, an arm moves or a hand
+picks something up — never cached from the last "record". Only IK is used
+(no planning): a key is true when some candidate pose of that procedure has
+a collision-free IK solution. Candidates are tried in the procedures' own
+order and the first success ends the search, so the common case is one or
+two IK solves per key.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from services.executor import geometry as geo
+from services.executor import targets
+from services.executor.geometry import Box
+from services.executor.kinematics import ArmKinematics
+from services.executor.scene import SceneSnapshot
+from services.executor.targets import Held
+
+RELATION_KEYS = ("above", "next_to", "left_of", "right_of", "in_front_of", "behind", "on_top_of", "near")
+REACH_KEYS = ("pick_up", "place", *RELATION_KEYS, "towards", "away_from")
+SIDES = ("left_of", "right_of", "in_front_of", "behind")
+
+
+def sync(kin: ArmKinematics, snap: SceneSnapshot, held: Held | None) -> None:
+    """Bring one arm's planning model up to the measured joints, the objects and the held object."""
+    kin.set_joints(snap.joints())
+    kin.detach()
+    skip = {held.object_id} if held else set()
+    kin.set_obstacles(snap.obstacles(skip=skip))
+    if held is not None:
+        kin.attach(held.object_id, held.box, kin.fk())
+
+
+def _any(kin: ArmKinematics, poses: list[np.ndarray]) -> bool:
+    return kin.first_reachable(poses) is not None
+
+
+def can_pick(kin: ArmKinematics, obj: dict[str, Any]) -> bool:
+    """Some grasp whose pre-grasp is collision-free and whose grasp touches only the object."""
+    for grasp in targets.grasps(obj):
+        if kin.ik(grasp.pregrasp) is None:
+            continue
+        kin.allow_touching(obj["id"], True)
+        try:
+            if kin.ik(grasp.grasp) is not None:
+                return True
+        finally:
+            kin.allow_touching(obj["id"], False)
+    return False
+
+
+def object_reach(kin: ArmKinematics, snap: SceneSnapshot, oid: str, held: Held | None) -> dict[str, bool]:
+    """Every reach key of one object for one (already synced) arm."""
+    obj = snap.objects[oid]
+    box = Box.of(obj)
+    tool = kin.fk()
+    out: dict[str, bool] = {}
+    side = {}
+    if held is not None and held.object_id == oid:
+        return {key: False for key in REACH_KEYS}
+    for relation in ("above", "on_top_of", *SIDES):
+        side[relation] = _any(kin, targets.move_relation(relation, box, tool, held, snap.table_z))
+    out.update(side)
+    out["next_to"] = side["left_of"] or side["right_of"]
+    out["near"] = out["next_to"] or side["in_front_of"] or side["behind"]
+    out["pick_up"] = held is None and obj.get("held_by") is None and can_pick(kin, obj)
+    if held is None:
+        out["place"] = out["near"] or out["on_top_of"]
+    else:
+        out["place"] = any(_any(kin, [release for _, release in targets.place_relation(r, box, tool, held, snap.table_z)])
+                           for r in ("on_top_of", *SIDES))
+    for direction in ("towards", "away_from"):
+        goal = geo.relative_direction_target(tool, box, direction)
+        out[direction] = goal is not None and kin.ik(goal, seeds=[kin.arm_q]) is not None
+    return out
+
+
+def can_move(kin: ArmKinematics) -> dict[str, bool]:
+    """Per direction: is the tool pose one step that way reachable without collision?"""
+    tool = kin.fk()
+    return {d: kin.ik(geo.direction_target(tool, d), seeds=[kin.arm_q]) is not None for d in geo.DIRECTIONS}
+
+
+def reach_map(arms: dict[str, ArmKinematics], snap: SceneSnapshot,
+              held: dict[str, Held | None]) -> tuple[dict[str, dict[str, dict[str, bool]]], dict[str, dict[str, bool]]]:
+    """``(reach[object][arm][key], can_move[arm][direction])`` for the scene in ``snap``."""
+    reach: dict[str, dict[str, dict[str, bool]]] = {oid: {} for oid in snap.objects}
+    moves: dict[str, dict[str, bool]] = {}
+    for arm, kin in arms.items():
+        sync(kin, snap, held.get(arm))
+        moves[arm] = can_move(kin)
+        for oid in snap.objects:
+            reach[oid][arm] = object_reach(kin, snap, oid, held.get(arm))
+    return reach, moves

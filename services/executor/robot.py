@@ -1,0 +1,112 @@
+"""Talking to the simulated robot: start motions, wait for them, stop them at once.
+
+Long motions answer "accepted" with a motion id and report completion on
+``sim/events``; a motion is waited for here while a cancel flag is watched,
+so "stop" interrupts a motion in the middle (it sends ``sim/control/stop``
+and the wait ends as "stopped"), not only between steps.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from shared.bus import Bus, BusTimeout, RemoteError
+
+log = logging.getLogger("hfpbd.executor.robot")
+
+EVENT_SLACK = 8.0      # seconds a motion may take beyond its planned duration before we give up on it
+REQUEST_TIMEOUT = 5.0
+
+
+class MotionError(RuntimeError):
+    """A motion could not be started or did not finish; the message says why, in plain words."""
+
+
+class Stopped(RuntimeError):
+    """The user said stop while this motion ran."""
+
+
+@dataclass(frozen=True)
+class Outcome:
+    status: str   # done / stopped / failed
+    message: str
+
+
+class SimRobot:
+    """Motion requests to ``sim/control/*`` and their completions from ``sim/events``."""
+
+    def __init__(self, bus: Bus, cancel: threading.Event) -> None:
+        self.bus = bus
+        self.cancel = cancel
+        self._events: dict[str, Outcome] = {}
+        self._cond = threading.Condition()
+        bus.subscribe(bus.keys.sim_events, self._on_event)
+
+    def _on_event(self, message: dict[str, Any]) -> None:
+        motion_id = message.get("motion_id")
+        status = message.get("status")
+        if not isinstance(motion_id, str) or status not in ("done", "stopped", "failed"):
+            self.bus.rejected[self.bus.keys.sim_events] += 1
+            log.warning("ignored malformed sim event %r", {k: v for k, v in message.items() if k != "_key"})
+            return
+        with self._cond:
+            self._events[motion_id] = Outcome(status, str(message.get("message", "")))
+            if len(self._events) > 512:  # keep memory bounded; nobody waits on old motions
+                for old in list(self._events)[:256]:
+                    del self._events[old]
+            self._cond.notify_all()
+
+    def _request(self, name: str, payload: dict[str, Any]) -> dict[str, Any]:
+        try:
+            return self.bus.request(self.bus.keys.sim_control(name), payload, timeout=REQUEST_TIMEOUT)
+        except BusTimeout as exc:
+            raise MotionError("the simulator is not answering") from exc
+        except RemoteError as exc:
+            raise MotionError(str(exc)) from exc
+
+    def _wait(self, motion_id: str, timeout: float) -> Outcome:
+        with self._cond:
+            ready = self._cond.wait_for(lambda: motion_id in self._events or self.cancel.is_set(), timeout)
+            if motion_id in self._events:
+                return self._events.pop(motion_id)
+        if self.cancel.is_set():
+            raise Stopped()
+        if not ready:
+            raise MotionError("the motion did not finish in time")
+        raise MotionError("the motion ended without a report")
+
+    def _run(self, name: str, payload: dict[str, Any], expected: float) -> Outcome:
+        if self.cancel.is_set():
+            raise Stopped()
+        reply = self._request(name, payload)
+        motion_id = reply.get("motion_id")
+        if not isinstance(motion_id, str):
+            return Outcome("done", "")
+        outcome = self._wait(motion_id, expected + EVENT_SLACK)
+        if outcome.status == "stopped" and self.cancel.is_set():
+            raise Stopped()
+        return outcome
+
+    # -- motions ----------------------------------------------------------------
+    def move_arm(self, arm: str, points: np.ndarray, times: np.ndarray) -> Outcome:
+        """Follow a timed joint trajectory; returns when the arm got there (or could not)."""
+        payload = {"arm": arm, "points": np.asarray(points, np.float64), "times": np.asarray(times, np.float64)}
+        return self._run("arm", payload, float(times[-1]) if len(times) else 0.0)
+
+    def gripper(self, arm: str, width: float, force: float) -> Outcome:
+        return self._run("gripper", {"arm": arm, "width": float(width), "force": float(force)}, 3.0)
+
+    def look_at(self, point: np.ndarray) -> Outcome:
+        return self._run("head", {"look_at": [float(v) for v in point]}, 3.0)
+
+    def stop(self) -> None:
+        """Stop every motion now (best effort: called while another thread waits on it)."""
+        try:
+            self.bus.request(self.bus.keys.sim_control("stop"), {}, timeout=REQUEST_TIMEOUT)
+        except (BusTimeout, RemoteError) as exc:
+            log.warning("stop request failed: %s", exc)

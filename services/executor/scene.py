@@ -1,0 +1,168 @@
+"""The executor's live picture of the world: perceived objects, the table, the robot's measured state.
+
+Written by subscription threads, read by the command worker and the
+reachability thread, so every read returns a consistent copy. A version
+number counts object changes that matter for reachability (an object
+appeared, vanished or moved more than a centimetre), so the reach map is
+recomputed when the scene changes and not on every identical frame.
+"""
+
+from __future__ import annotations
+
+import copy
+import threading
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from services.executor.geometry import Box
+from services.sim.layout import TABLE_THICKNESS, TABLE_TOP_Z, TABLE_X, TABLE_Y
+
+MOVED = 0.01  # metres an object must move to count as a change
+ARMS = ("right", "left")
+CLOSED_WIDTH = 0.0025
+SUPPORT_GAP = 0.025  # metres between an object's bottom and what it stands on
+MAX_STACK = 4  # gripper gap below which the fingers met: closed on nothing
+
+
+@dataclass
+class SceneSnapshot:
+    """A consistent copy of what is known at one moment."""
+
+    objects: dict[str, dict[str, Any]]
+    table_z: float
+    table: Box
+    robot: dict[str, Any] | None
+    version: int
+    robot_version: int = 0
+
+    def box(self, object_id: str) -> Box:
+        return Box.of(self.objects[object_id])
+
+    def obstacles(self, *, skip: set[str] = frozenset()) -> dict[str, Box]:
+        """Boxes for the planning world: the table and every supported object not in ``skip``.
+
+        An object floating in the air with nothing under it cannot be a real
+        object on this table (held objects are attached to their gripper
+        separately): it is a piece of the robot's own arm seen by the camera,
+        and treating it as an obstacle would block the arm against itself.
+        """
+        boxes = {"table": self.table}
+        boxes.update({oid: Box.of(o) for oid, o in self.objects.items()
+                      if oid not in skip and self.supported(oid)})
+        return boxes
+
+    def supported(self, object_id: str, depth: int = 0) -> bool:
+        """Whether the object rests on the table, or on an object that is itself supported (a stack)."""
+        box = Box.of(self.objects[object_id])
+        if box.bottom <= self.table_z + SUPPORT_GAP:
+            return True
+        if depth >= MAX_STACK:
+            return False
+        for oid, other in self.objects.items():
+            under = Box.of(other)
+            if (oid != object_id and abs(under.top - box.bottom) <= SUPPORT_GAP
+                    and np.all(np.abs(under.center[:2] - box.center[:2]) < under.half[:2] + box.half[:2])
+                    and self.supported(oid, depth + 1)):
+                return True
+        return False
+
+    def held_by(self, arm: str) -> str | None:
+        """The id of the object perception sees in ``arm``'s gripper, if any."""
+        for oid, obj in self.objects.items():
+            if obj.get("held_by") == arm:
+                return oid
+        return None
+
+    def gripper_state(self, arm: str) -> str:
+        """``open`` / ``closed`` / ``holding``, from the simulator's contact sensing."""
+        grippers = (self.robot or {}).get("grippers", {})
+        g = grippers.get(arm)
+        if not isinstance(g, dict):
+            return "open"
+        if g.get("holding"):
+            return "holding"
+        return "closed" if float(g.get("width", 0.09)) < CLOSED_WIDTH else "open"
+
+    def joints(self) -> dict[str, float]:
+        return dict((self.robot or {}).get("joints", {}))
+
+
+def table_box(height: float) -> Box:
+    """The table as a box whose top is at ``height`` (its extent comes from the scene layout)."""
+    cx, cy = (TABLE_X[0] + TABLE_X[1]) / 2, (TABLE_Y[0] + TABLE_Y[1]) / 2
+    size = np.array([TABLE_X[1] - TABLE_X[0], TABLE_Y[1] - TABLE_Y[0], TABLE_THICKNESS])
+    return Box(np.array([cx, cy, height - TABLE_THICKNESS / 2]), size)
+
+
+class Scene:
+    """Thread-safe holder of the latest objects and robot state."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Condition()
+        self._objects: dict[str, dict[str, Any]] = {}
+        self._table_z = TABLE_TOP_Z
+        self._robot: dict[str, Any] | None = None
+        self._version = 0
+        self._robot_version = 0
+        self.objects_received = False
+
+    def update_objects(self, objects: list[dict[str, Any]], table: dict | None = None) -> bool:
+        """Take a perception message's objects; True when something changed that matters."""
+        fresh = {o["id"]: o for o in objects if _valid_object(o)}
+        with self._lock:
+            changed = _differs(self._objects, fresh)
+            self._objects = fresh
+            self.objects_received = True
+            if isinstance(table, dict) and isinstance(table.get("height"), (int, float)):
+                changed |= abs(float(table["height"]) - self._table_z) > MOVED
+                self._table_z = float(table["height"])
+            if changed:
+                self._version += 1
+            self._lock.notify_all()
+            return changed
+
+    def update_robot(self, state: dict[str, Any]) -> None:
+        with self._lock:
+            self._robot = state
+            self._robot_version += 1
+            self._lock.notify_all()
+
+    def snapshot(self) -> SceneSnapshot:
+        with self._lock:
+            return SceneSnapshot(copy.deepcopy(self._objects), self._table_z, table_box(self._table_z),
+                                 copy.deepcopy(self._robot), self._version, self._robot_version)
+
+    def wait_robot(self, after_version: int, timeout: float) -> bool:
+        """Wait for a robot state newer than ``after_version``."""
+        with self._lock:
+            return self._lock.wait_for(lambda: self._robot_version > after_version, timeout)
+
+    @property
+    def version(self) -> int:
+        with self._lock:
+            return self._version
+
+
+def _valid_object(obj: Any) -> bool:
+    try:
+        return (isinstance(obj.get("id"), str) and len(obj["position"]) == 3 and len(obj["size"]) == 3
+                and all(np.isfinite(np.asarray(obj["position"], float)))
+                and all(np.isfinite(np.asarray(obj["size"], float))))
+    except (TypeError, ValueError, KeyError, AttributeError):
+        return False
+
+
+def _differs(old: dict[str, dict], new: dict[str, dict]) -> bool:
+    if set(old) != set(new):
+        return True
+    for oid, obj in new.items():
+        before = old[oid]
+        if np.linalg.norm(np.asarray(obj["position"], float) - np.asarray(before["position"], float)) > MOVED:
+            return True
+        if np.linalg.norm(np.asarray(obj["size"], float) - np.asarray(before["size"], float)) > MOVED:
+            return True
+        if obj.get("held_by") != before.get("held_by"):
+            return True
+    return False

@@ -1,0 +1,80 @@
+"""The dialogue: history, pending clarifications, and replies to them.
+
+Why a separate object: the model is per world, but a conversation spans
+worlds. A reply to a question ("the tallest one", "left") is merged with the
+pending command instead of starting over; "it" refers to the object of the
+command just issued even before the robot reports back; a choice by number
+picks a listed candidate.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from services.nlu.commands import ADMIN_PROCEDURES
+from services.nlu.infer import Clarify, CommandResult, Model, Result
+from services.nlu.prior import History
+from services.nlu.tokens import read
+from services.nlu.weights import LANGUAGE
+
+
+@dataclass
+class Pending:
+    clarify: Clarify
+
+
+@dataclass
+class Dialogue:
+    """One user's conversation with the robot."""
+
+    history: History | None = None  # from commands issued here; None = trust the world's
+    pending: Pending | None = field(default=None)
+
+    def observe_robot(self) -> None:
+        """The robot reported a newer state: its history now supersedes ours."""
+        self.history = None
+
+    def understand(self, model: Model, text: str, choice: int | None = None) -> Result:
+        """Interpret one utterance (or a numbered choice) in the current world."""
+        if choice is not None:
+            return self._choose(model, choice)
+        result = None
+        if self.pending is not None and self._is_reply(text):
+            clarify = self.pending.clarify
+            result = model.parse(text, self._history(model), among=clarify.candidates, focus=clarify.params)
+        if result is None or (isinstance(result, Clarify) and not result.candidates):
+            result = model.parse(text, self._history(model))
+        self._remember(result, model)
+        return result
+
+    def _choose(self, model: Model, choice: int) -> Result:
+        if self.pending is None:
+            return Clarify([], "There is no question pending to choose an answer for.")
+        candidates = self.pending.clarify.candidates
+        if not 0 <= choice < len(candidates):
+            return Clarify([], f"There is no candidate {choice}; please choose from 0 to {len(candidates) - 1}.", candidates,
+                           self.pending.clarify.labels)
+        command = candidates[choice]
+        result = CommandResult(command, 1.0, model.describe_command(command), {}, 0.0)
+        self._remember(result, model)
+        return result
+
+    @staticmethod
+    def _is_reply(text: str) -> bool:
+        """A reply names parameters only; a new verb means a new command."""
+        return not any(m.slot == "procedure" and m.weight >= LANGUAGE.verb
+                       for term in read(text).terms for reading in term.readings for m in reading)
+
+    def _history(self, model: Model) -> History:
+        return self.history if self.history is not None else model.default_history
+
+    def _remember(self, result: Result, model: Model) -> None:
+        if isinstance(result, Clarify):
+            if result.candidates:
+                self.pending = Pending(result)
+            return
+        self.pending = None
+        command = result.command
+        if command.procedure not in ADMIN_PROCEDURES:
+            base = self._history(model)
+            self.history = History(command.arg("arm") or base.last_arm, command.arg("object") or base.last_object)

@@ -1,0 +1,174 @@
+"""The vocabulary: every phrase the model understands and what it can mean.
+
+A phrase has one or more *readings*; a reading is a set of meanings that hold
+together ("raise" = move + up). An ambiguous word has several readings ("left"
+= the direction, the arm, or the leftmost object) and a command is credited
+with the reading that suits it best. Meanings carry the weights of
+``weights.LANGUAGE``: verbs weigh most for picking the command, adjectives
+most for picking the object.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from services.nlu.weights import LANGUAGE as W
+
+MOVE = frozenset({"move_abs_dest", "move_rel_dest", "move_abs_dir", "move_rel_dir"})
+PLACE = frozenset({"place_abs", "place_rel"})
+
+# slots whose meaning is a property of an object rather than a command argument
+OBJECT_SLOTS = frozenset({"color", "type", "label", "generic", "anaphor"})
+
+
+@dataclass(frozen=True)
+class Meaning:
+    slot: str        # procedure, arm, destination, relation, direction, target, number, or an object slot
+    value: Any
+    weight: float
+
+
+Reading = tuple[Meaning, ...]
+
+
+def _procs(*names: str) -> frozenset[str]:
+    return frozenset(names)
+
+
+def verb(procedures: frozenset[str], weight: float = W.verb) -> Meaning:
+    return Meaning("procedure", procedures, weight)
+
+
+def option(slot: str, value: Any, weight: float = W.option) -> Meaning:
+    return Meaning(slot, value, weight)
+
+
+# (phrases, readings); phrases are lower-case, single-spaced, already stemmed
+_ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
+    # verbs of motion
+    (("move", "go", "bring", "shift", "position", "put your hand", "put your arm"), ((verb(MOVE),),)),
+    (("raise", "lift up"), ((verb(MOVE), option("direction", "up")),)),
+    (("lower",), ((verb(MOVE), option("direction", "down")),)),
+    (("approach",), ((verb(MOVE), option("direction", "towards")),)),
+    (("retreat", "back off", "back away"), ((verb(MOVE), option("direction", "away_from")),)),
+    (("tuck", "put away"), ((verb(MOVE), option("destination", "side")),)),
+    # pick and place
+    (("pick up", "pick", "pickup", "grab", "take", "grasp", "lift", "get", "collect", "seize"), ((verb(_procs("pick_up")),),)),
+    (("place", "set", "lay", "drop", "deposit", "stack", "place down", "set down", "lay down"), ((verb(PLACE),),)),
+    (("put",), ((verb(PLACE),), (verb(MOVE, W.weak),))),
+    (("put down",), ((verb(PLACE), option("destination", "table", W.weak)),)),
+    (("release", "let go", "let go of"), ((verb(_procs("open")),), (verb(PLACE, W.weak),))),
+    # looking and pointing
+    (("point", "point to", "point at", "point towards", "point toward", "indicate", "show", "show me"), ((verb(_procs("point_to")),),)),
+    (("look", "look at", "look to", "look towards", "look toward", "see", "watch", "gaze at", "find"), ((verb(_procs("look_at")),),)),
+    # wrist and gripper
+    (("rotate", "turn", "twist", "spin", "roll"), ((verb(_procs("rotate")),),)),
+    (("clockwise", "cw", "clock wise"), ((option("direction", "cw"),),)),
+    (("counterclockwise", "counter clockwise", "anticlockwise", "anti clockwise", "ccw"), ((option("direction", "ccw"),),)),
+    (("open", "ungrip", "unclench", "open up"), ((verb(_procs("open")),),)),
+    (("close", "shut", "grip", "clench", "squeeze", "close up"), ((verb(_procs("close")),),)),
+    # the system itself
+    (("record", "scan", "rescan", "look around", "detect", "refresh", "update", "record objects", "scan the table"), ((verb(_procs("record")),),)),
+    (("create", "new", "make", "begin", "create action", "new action", "create new action", "make new action", "start new action", "start a new action"), ((verb(_procs("create_action")),),)),
+    (("switch", "switch to", "change to", "go to action", "switch action", "change action"), ((verb(_procs("switch_action")),),)),
+    (("action", "program"), ((verb(_procs("create_action", "switch_action", "execute"), W.weak),),)),
+    (("next", "following"), ((option("target", "next"),),)),
+    (("previous", "prior", "preceding"), ((option("target", "previous"),),)),
+    (("next action", "the next action", "following action"), ((verb(_procs("switch_action")), option("target", "next")),)),
+    (("previous action", "the previous action", "last action", "the last action", "prior action"),
+     ((verb(_procs("switch_action")), option("target", "previous")),)),
+    (("execute", "run", "perform", "replay", "play", "do it", "go ahead", "start", "test", "execute action", "run action"), ((verb(_procs("execute")),),)),
+    (("stop", "halt", "freeze", "abort", "cancel", "pause", "stop executing", "stop it", "stop moving"), ((verb(_procs("stop")),),)),
+    # arms
+    (("right hand", "right arm", "right gripper", "your right"), ((option("arm", "right", W.arm),),)),
+    (("left hand", "left arm", "left gripper", "your left"), ((option("arm", "left", W.arm),),)),
+    (("hand", "arm", "gripper", "claw"), ((option("arm", "*", W.generic_arm),),)),
+    # places
+    (("side", "to the side", "aside", "out of the way", "sideways", "to your side"), ((option("destination", "side"),),)),
+    (("table", "on the table", "onto the table", "on table", "to the table", "on the tabletop"), ((option("destination", "table"),),)),
+    (("here", "right here", "over here", "where it is", "in place", "there it is"), ((option("destination", "here"),),)),
+    # relations (destinations relative to an object)
+    (("above", "over", "on top", "higher than"), ((option("relation", "above"),),)),
+    (("on top of", "on", "onto", "on to", "atop", "upon", "in", "into", "inside"), ((option("relation", "on_top_of"),),)),
+    (("next to", "beside", "besides", "alongside", "by the side of", "at the side of"), ((option("relation", "next_to"),),)),
+    (("to the left of", "left of", "on the left of", "at the left of", "on the left side of", "to the left side of"), ((option("relation", "left_of"),),)),
+    (("to the right of", "right of", "on the right of", "at the right of", "on the right side of", "to the right side of"), ((option("relation", "right_of"),),)),
+    (("in front of", "front of", "before"), ((option("relation", "in_front_of"),),)),
+    (("behind", "in back of", "at the back of", "back of", "beyond"), ((option("relation", "behind"),),)),
+    (("near", "close to", "near to", "nearby", "by", "around"), ((option("relation", "near"),),)),
+    # directions
+    (("up", "upward", "upwards", "higher"), ((option("direction", "up"),),)),
+    (("down", "downward", "downwards"), ((option("direction", "down"),), (option("destination", "table", W.weak),))),
+    (("to the left", "leftward", "leftwards", "to your left"), ((option("direction", "left"),),)),
+    (("to the right", "rightward", "rightwards", "to your right"), ((option("direction", "right"),),)),
+    (("left",), ((option("direction", "left"),), (option("arm", "left", W.weak),),
+                 (Meaning("label", "leftmost", W.adjective),), (option("direction", "ccw", W.weak * 3),))),
+    (("right",), ((option("direction", "right"),), (option("arm", "right", W.weak),),
+                  (Meaning("label", "rightmost", W.adjective),), (option("direction", "cw", W.weak * 3),))),
+    (("forward", "forwards", "ahead", "further", "farther", "away from me", "outward"), ((option("direction", "forward"),),)),
+    (("backward", "backwards", "back", "towards yourself", "toward yourself", "towards you", "toward you", "closer to you"), ((option("direction", "backward"),),)),
+    (("towards", "toward", "closer to", "closer", "nearer to"), ((option("direction", "towards"),),)),
+    (("away from", "away", "further from", "farther from", "further away from"), ((option("direction", "away_from"),),)),
+    (("to",), ((option("direction", "towards", W.weak),),)),
+    (("from",), ((option("direction", "away_from", W.weak),),)),
+    # object words
+    (("leftmost", "left most", "furthest left", "farthest left"), ((Meaning("label", "leftmost", W.adjective),),)),
+    (("rightmost", "right most", "furthest right", "farthest right"), ((Meaning("label", "rightmost", W.adjective),),)),
+    (("nearest", "closest", "near most", "front", "nearer"), ((Meaning("label", "nearest", W.adjective),),)),
+    (("farthest", "furthest", "far", "farthest away", "furthest away", "far away", "rear"), ((Meaning("label", "farthest", W.adjective),),)),
+    (("tallest", "tall", "highest", "high", "taller"), ((Meaning("label", "tallest", W.adjective),),)),
+    (("shortest", "short", "lowest", "low", "shorter", "flattest", "flat"), ((Meaning("label", "shortest", W.adjective),),)),
+    (("biggest", "big", "largest", "large", "bigger", "larger", "huge"), ((Meaning("label", "biggest", W.adjective),),)),
+    (("smallest", "small", "little", "tiny", "smaller", "littlest"), ((Meaning("label", "smallest", W.adjective),),)),
+    (("middle", "center", "centre", "central", "in the middle", "in between"), ((Meaning("label", "middle", W.adjective),),)),
+    (("object", "thing", "item", "one", "objects", "things"), ((Meaning("generic", "*", W.generic_noun),),)),
+    (("it", "that", "this", "there", "same", "the same one", "same one", "same object", "that one", "this one", "them"), ((Meaning("anaphor", "*", W.anaphor),),)),
+]
+
+COLOR_WORDS: dict[str, str] = {
+    "red": "red", "green": "green", "blue": "blue", "yellow": "yellow", "orange": "orange",
+    "purple": "purple", "violet": "purple", "white": "white", "black": "black", "grey": "grey", "gray": "grey",
+}
+TYPE_WORDS: dict[str, str] = {
+    "cup": "cup", "mug": "cup", "glass": "cup", "box": "box", "block": "box", "crate": "box", "cube": "box",
+    "plate": "plate", "dish": "plate", "saucer": "plate", "bowl": "bowl",
+}
+
+FILLERS = frozenset(
+    "please now could can would will you your my the a an robot kindly just then and ok okay hey with of at "
+    "i want like me is for so use using hmm um uh well also again let us lets s its".split())
+
+NUMBER_WORDS: dict[str, int] = {
+    w: i for i, w in enumerate(
+        "zero one two three four five six seven eight nine ten eleven twelve thirteen fourteen fifteen "
+        "sixteen seventeen eighteen nineteen twenty".split())
+}
+
+
+def _build() -> dict[str, tuple[Reading, ...]]:
+    table: dict[str, tuple[Reading, ...]] = {}
+    for phrases, readings in _ENTRIES:
+        for phrase in phrases:
+            table[phrase] = table.get(phrase, ()) + readings
+    for word, color in COLOR_WORDS.items():
+        table[word] = ((Meaning("color", color, W.adjective),),)
+    for word, kind in TYPE_WORDS.items():
+        table[word] = ((Meaning("type", kind, W.noun),),)
+    return table
+
+
+PHRASES: dict[str, tuple[Reading, ...]] = _build()
+MAX_PHRASE_WORDS = max(len(p.split()) for p in PHRASES)
+WORDS: frozenset[str] = frozenset(w for p in PHRASES for w in p.split())
+
+
+def number_reading(value: int) -> tuple[Reading, ...]:
+    """An action number: the switch target ("action 3")."""
+    return ((Meaning("number", value, W.number),),)
+
+
+def vocabulary() -> dict[str, list[str]]:
+    """Every word and phrase understood (for completion and the speech grammar)."""
+    words = set(WORDS) | set(NUMBER_WORDS) | {"please"}
+    return {"words": sorted(words), "phrases": sorted(PHRASES)}

@@ -1,0 +1,147 @@
+"""Words the robot says: command sentences (in the user's own words) and questions.
+
+The sentence of a command is the template of its procedure filled with the
+phrases the user used for each parameter (paper IV-F: "grab" stays "grab"),
+defaulting to the canonical phrase, with a freshly generated referring
+expression for the object so the description fits the scene as it is now.
+"""
+
+from __future__ import annotations
+
+from services.nlu.commands import NUMBER, Command
+from services.nlu.refexp import Scene
+
+DEFAULT_VERBS = {
+    "move_abs_dest": "move", "move_rel_dest": "move", "move_abs_dir": "move", "move_rel_dir": "move",
+    "pick_up": "pick up", "place_abs": "place", "place_rel": "place", "point_to": "point to",
+    "look_at": "look at", "rotate": "rotate", "open": "open", "close": "close", "record": "record",
+    "create_action": "create", "switch_action": "switch to", "execute": "execute", "stop": "stop",
+}
+OPTION_WORDS = {
+    "side": "to the side", "table": "on the table", "here": "here",
+    "above": "above", "next_to": "next to", "left_of": "to the left of", "right_of": "to the right of",
+    "in_front_of": "in front of", "behind": "behind", "on_top_of": "on top of", "near": "near",
+    "up": "up", "down": "down", "left": "to the left", "right": "to the right", "forward": "forward",
+    "backward": "backward", "towards": "towards", "away_from": "away from",
+    "cw": "clockwise", "ccw": "counterclockwise", "next": "the next action", "previous": "the previous action",
+}
+SLOT_QUESTIONS = {
+    "arm": "Which hand", "object": "Which object", "relation": "Where exactly", "direction": "Which direction",
+    "destination": "Where", "target": "Which action",
+}
+
+
+def arm_words(arm: str) -> str:
+    return f"{arm} hand"
+
+
+def option_words(value: object) -> str:
+    if isinstance(value, int):
+        return f"action {value}"
+    return OPTION_WORDS.get(str(value), str(value).replace("_", " "))
+
+
+def command_text(command: Command, scene: Scene, phrases: dict[str, str] | None = None) -> str:
+    """The sentence for ``command``, in the user's words where they gave them."""
+    phrases = phrases or {}
+    verb = phrases.get("verb", DEFAULT_VERBS[command.procedure])
+    arm = command.arg("arm")
+    said_arm = phrases.get("arm", "")
+    names_limb = arm is not None and arm in said_arm and any(w in said_arm for w in ("hand", "arm", "gripper"))
+    hand = f"your {said_arm}" if names_limb else (f"your {arm_words(arm)}" if arm else "")
+    obj = _object_words(command, scene)
+
+    def option(slot: str) -> str:
+        value = command.arg(slot)
+        said = phrases.get(slot)
+        if said is not None and said == phrases.get("verb"):
+            return ""  # the verb already says it ("raise" = move up)
+        return said if said is not None and value not in ("left", "right") else option_words(value)
+
+    p = command.procedure
+    if p in ("move_abs_dest", "move_abs_dir"):
+        slot = "destination" if p == "move_abs_dest" else "direction"
+        words = [verb, hand, option(slot)]
+    elif p in ("move_rel_dest", "move_rel_dir"):
+        slot = "relation" if p == "move_rel_dest" else "direction"
+        words = [verb, hand, option(slot), obj]
+    elif p in ("pick_up", "point_to"):
+        words = [verb, obj, "with", hand]
+    elif p == "place_abs":
+        words = [verb, "the object in", hand, option("destination")]
+    elif p == "place_rel":
+        words = [verb, "the object in", hand, option("relation"), obj]
+    elif p == "look_at":
+        words = [verb, obj]
+    elif p == "rotate":
+        words = [verb, hand, option("direction")]
+    elif p in ("open", "close"):
+        words = [verb, hand]
+    elif p == "record":
+        words = [verb, "the objects on the table"]
+    elif p == "create_action":
+        words = [verb, "a new action"]
+    elif p == "switch_action":
+        words = [verb.removesuffix(" action"), option_words(command.arg("target"))]
+    elif p == "execute":
+        words = [verb, "the current action"]
+    else:
+        words = [verb]
+    return " ".join(w for w in words if w)
+
+
+def _object_words(command: Command, scene: Scene) -> str:
+    object_id = command.arg("object")
+    if object_id is None:
+        return ""
+    return scene.describe(scene.world.index_of(object_id)).text
+
+
+def value_words(slot: str, value: object, scene: Scene) -> str:
+    """How a clarification names one option of a parameter."""
+    if slot == "object":
+        return scene.describe(scene.world.index_of(str(value))).text
+    if slot == "arm":
+        return f"the {arm_words(str(value))}"
+    if slot == "target" and value == NUMBER:
+        return "a numbered action"
+    return option_words(value)
+
+
+def either(options: list[str], limit: int = 4) -> str:
+    """"a, b or c" (with "or another" beyond ``limit``)."""
+    shown = options[:limit]
+    if len(options) > limit:
+        return ", ".join(shown) + " or another one"
+    if len(shown) == 1:
+        return shown[0]
+    return ", ".join(shown[:-1]) + " or " + shown[-1]
+
+
+def parameter_question(params: list[str], candidates: list[Command], scene: Scene) -> str:
+    """"Which object do you mean: the red cup or the blue cup?" for every contended parameter."""
+    parts = []
+    for i, slot in enumerate(params):
+        values: list[object] = []
+        for command in candidates:
+            value = command.arg(slot)
+            if value not in values:
+                values.append(value)
+        words = either([value_words(slot, v, scene) for v in values])
+        if i == 0:
+            parts.append(f"{SLOT_QUESTIONS[slot]} do you mean: {words}?")
+        else:
+            parts.append(f"And {SLOT_QUESTIONS[slot].lower()}: {words}?")
+    return " ".join(parts)
+
+
+def rephrase_question(candidates: list[Command], scene: Scene) -> str:
+    """Ask to rephrase, offering the readings that tied (if any)."""
+    if not candidates:
+        return "Sorry, I did not understand that. Please rephrase the command."
+    options = []
+    for command in candidates:
+        text = command_text(command, scene)
+        if text not in options:
+            options.append(text)
+    return f"Please rephrase the command: do you want me to {either(options)}?"

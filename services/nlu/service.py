@@ -1,0 +1,187 @@
+"""The NLU service: live world in, commands and questions out, over Zenoh.
+
+It keeps the latest objects (``perception/objects``) and robot state
+(``executor/state``), rebuilds the model only when one of them changed and an
+utterance needs it, and answers ``dialog/utterance`` on ``nlu/result`` (plus
+``dialog/say`` for questions). Bad input is logged and answered, never fatal.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import math
+import threading
+from typing import Any
+
+from shared.bus import Bus
+from shared.service import run_service, wait_until_stopped
+from services.nlu.context import Dialogue
+from services.nlu.infer import Clarify, CommandResult, Model, Result
+from services.nlu.lexicon import vocabulary
+from services.nlu.templates import sentence_templates
+from services.nlu.world import COLORS, TYPES, WorldError, parse_world
+
+log = logging.getLogger("hfpbd.nlu")
+
+_ROBOT_FIELDS = ("grippers", "last_arm", "last_object", "executing", "can_move", "action", "actions")
+
+
+class LiveWorld:
+    """The world as last heard from perception and the executor, and the dialogue on it."""
+
+    def __init__(self) -> None:
+        self.lock = threading.Lock()
+        self.objects: list[dict[str, Any]] = []
+        self.robot: dict[str, Any] = {}
+        self.reach: dict[str, Any] = {}
+        self.dialogue = Dialogue()
+        self._model: Model | None = None
+
+    def on_objects(self, message: dict[str, Any]) -> None:
+        objects = [_object_fields(item) for item in message["objects"]]
+        try:
+            parse_world({"objects": objects}, strict=False)
+        except WorldError as exc:
+            log.warning("ignoring perception/objects: %s", exc)
+            return
+        with self.lock:
+            self.objects = objects
+            self._model = None
+
+    def on_executor(self, message: dict[str, Any]) -> None:
+        robot = {k: message["robot"][k] for k in _ROBOT_FIELDS if k in message["robot"]}
+        reach = message.get("reach") or {}
+        try:
+            parse_world({"objects": [], "robot": {**robot, "last_object": None}})
+            if not isinstance(reach, dict):
+                raise WorldError("executor/state reach must be a map of object ids")
+        except WorldError as exc:
+            log.warning("ignoring executor/state: %s", exc)
+            return
+        with self.lock:
+            moved = (robot.get("last_arm"), robot.get("last_object")) != (self.robot.get("last_arm"), self.robot.get("last_object"))
+            self.robot, self.reach = robot, reach
+            if moved:
+                self.dialogue.observe_robot()  # the robot's own account of history is newer
+            self._model = None
+
+    def model(self) -> Model:
+        """The model of the current world (built lazily, once per change). Call with the lock held."""
+        if self._model is None:
+            objects = [{**obj, "reach": self.reach.get(obj["id"], {})} if isinstance(self.reach.get(obj["id"]), dict)
+                       else obj for obj in self.objects]
+            try:
+                world = parse_world({"objects": objects, "robot": self.robot}, strict=False)
+            except WorldError as exc:
+                log.warning("reachability map rejected (%s); using the objects without it", exc)
+                world = parse_world({"objects": self.objects, "robot": self.robot}, strict=False)
+            self._model = Model(world)
+        return self._model
+
+
+def _object_fields(item: dict[str, Any]) -> dict[str, Any]:
+    """The world-state fields of a perceived object; unknown colour/type words become 'unknown'."""
+    color = item.get("color") if item.get("color") in COLORS else "unknown"
+    kind = item.get("type") if item.get("type") in TYPES else "unknown"
+    return {"id": item.get("id"), "color": color, "type": kind, "position": _listed(item.get("position")),
+            "size": _listed(item.get("size")), "held_by": item.get("held_by")}
+
+
+def _listed(value: Any) -> Any:
+    return [float(v) for v in value] if hasattr(value, "__len__") and not isinstance(value, (str, dict)) else value
+
+
+class NluService:
+    def __init__(self, bus: Bus) -> None:
+        self.bus = bus
+        self.live = LiveWorld()
+        self.results = bus.publisher(bus.keys.nlu_result)
+
+    def on_utterance(self, message: dict[str, Any]) -> None:
+        text = message["text"]
+        choice = message.get("choice")
+        if choice is not None and (isinstance(choice, bool) or not isinstance(choice, int)):
+            self._say_error(f"A choice must be a candidate number, got {choice!r}.")
+            return
+        with self.live.lock:
+            model = self.live.model()
+            dialogue = self.live.dialogue
+            if choice is None and isinstance(message.get("nbest"), list):
+                text = _most_plausible(model, dialogue, message["nbest"]) or text
+            result = dialogue.understand(model, text, choice)
+        self._publish(result, text)
+
+    def _publish(self, result: Result, text: str) -> None:
+        self.results.put({**result.to_json(), "utterance": text})
+        if isinstance(result, Clarify):
+            self.bus.publish(self.bus.keys.say, {"text": result.question, "kind": "clarify", "candidates": result.labels})
+        log.info("%r -> %s", text, result.command.as_dict() if isinstance(result, CommandResult) else result.question)
+
+    def _say_error(self, text: str) -> None:
+        self.bus.publish(self.bus.keys.say, {"text": text, "kind": "error"})
+
+    # -- queryables ---------------------------------------------------------
+    def _model_for(self, request: dict[str, Any]) -> tuple[Model, Dialogue | None]:
+        if "world" in request:
+            return Model(parse_world(request["world"])), None
+        with self.live.lock:
+            return self.live.model(), self.live.dialogue
+
+    def serve_parse(self, request: dict[str, Any]) -> dict[str, Any]:
+        text = _text(request)
+        model, dialogue = self._model_for(request)
+        history = dialogue.history if dialogue is not None else None
+        return model.parse(text, history).to_json()
+
+    def serve_ground(self, request: dict[str, Any]) -> dict[str, Any]:
+        return self._model_for(request)[0].ground(_text(request))
+
+    def serve_describe(self, request: dict[str, Any]) -> dict[str, Any]:
+        return self._model_for(request)[0].describe()
+
+    @staticmethod
+    def serve_vocabulary(_request: dict[str, Any]) -> dict[str, Any]:
+        return {**vocabulary(), "templates": sentence_templates()}
+
+
+def _text(request: dict[str, Any]) -> str:
+    text = request.get("text")
+    if not isinstance(text, str):
+        raise ValueError("request needs 'text' (a string)")
+    return text
+
+
+def _most_plausible(model: Model, dialogue: Dialogue, nbest: list[Any]) -> str | None:
+    """The speech hypothesis whose best command is most likely: log p(hypothesis) + log P(C|S)P(L|C,S)."""
+    best_text, best_score = None, -math.inf
+    history = dialogue.history
+    for hypothesis in nbest:
+        if not isinstance(hypothesis, dict) or not isinstance(hypothesis.get("text"), str):
+            continue
+        weight = hypothesis.get("score", 1.0)
+        if not isinstance(weight, (int, float)) or weight <= 0:
+            continue
+        result = model.parse(hypothesis["text"], history)
+        score = math.log(weight) + result.score
+        if score > best_score:
+            best_text, best_score = hypothesis["text"], score
+    return best_text
+
+
+def _body(bus: Bus, _args: argparse.Namespace, stop: threading.Event) -> None:
+    service = NluService(bus)
+    keys = bus.keys
+    bus.subscribe(keys.objects, service.live.on_objects, schema="objects", latest_only=True, history=True)
+    bus.subscribe(keys.executor_state, service.live.on_executor, schema="executor_state", latest_only=True, history=True)
+    bus.subscribe(keys.utterance, service.on_utterance, schema="utterance")
+    bus.serve(keys.nlu_query("parse"), service.serve_parse)
+    bus.serve(keys.nlu_query("ground"), service.serve_ground)
+    bus.serve(keys.nlu_query("describe"), service.serve_describe)
+    bus.serve(keys.nlu_query("vocabulary"), service.serve_vocabulary)
+    bus.declare_alive("nlu")
+    wait_until_stopped(stop)
+
+
+def run(argv: list[str]) -> int:
+    return run_service("nlu", "Situated language understanding: utterances + world state -> commands.", _body, argv)

@@ -1,0 +1,129 @@
+"""From raw text to terms: normalise, correct, and segment into known phrases.
+
+Why this exists: the paper's parser needed exact hyphenated vocabulary
+("pick-up", "right-hand"). Here ordinary writing works: capitals,
+punctuation, hyphens or spaces, filler words, plurals and inflections, small
+typos, and split phrasal verbs ("pick it up"). Multi-word phrases are matched
+as units, longest first, so "move left hand right" reads as arm = left,
+direction = right.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from functools import lru_cache
+
+from rapidfuzz import process
+from rapidfuzz.distance import DamerauLevenshtein
+
+from services.nlu.lexicon import FILLERS, MAX_PHRASE_WORDS, NUMBER_WORDS, PHRASES, WORDS, Reading, number_reading
+from services.nlu.weights import DECISION
+
+_TOKEN = re.compile(r"[a-z0-9]+")
+_KNOWN = WORDS | FILLERS | frozenset(NUMBER_WORDS)
+_CHOICES = sorted(_KNOWN)
+_SUFFIXES = (("ies", "y"), ("es", ""), ("s", ""), ("ed", ""), ("ed", "e"), ("d", ""), ("ing", ""), ("ing", "e"),
+             ("er", ""), ("est", ""))
+# verbs whose particle may come after the object ("pick it up", "put the cup down")
+_SPLIT_PARTICLES = {"pick": "up", "put": "down", "set": "down", "lay": "down"}
+_ARM_WORDS = frozenset({"hand", "arm", "gripper", "claw"})
+
+
+@dataclass(frozen=True)
+class Term:
+    """One recognised phrase of the utterance and its possible readings."""
+
+    words: str                      # the phrase as the user (after correction) said it
+    readings: tuple[Reading, ...]
+    start: int                      # token position, to keep the user's order
+
+    @property
+    def number(self) -> int | None:
+        for reading in self.readings:
+            for meaning in reading:
+                if meaning.slot == "number":
+                    return int(meaning.value)
+        return None
+
+
+@dataclass(frozen=True)
+class Utterance:
+    """Result of reading an utterance: its terms and the words nobody knows."""
+
+    terms: tuple[Term, ...]
+    unknown: tuple[str, ...]
+
+
+def read(text: str) -> Utterance:
+    """Segment ``text`` into terms; unknown words are returned, not dropped silently."""
+    raw = _TOKEN.findall(text.lower().replace("_", " "))
+    tokens: list[str] = []
+    unknown: list[str] = []
+    for token in raw:
+        word = canonical(token)
+        if word is None:
+            unknown.append(token)
+        else:
+            tokens.append(word)
+    tokens = _join_particles(tokens)
+    terms: list[Term] = []
+    i = 0
+    while i < len(tokens):
+        for n in range(min(MAX_PHRASE_WORDS, len(tokens) - i), 0, -1):
+            phrase = " ".join(tokens[i:i + n])
+            readings = PHRASES.get(phrase, ())
+            if n == 1:
+                number = _number(phrase, tokens[i - 1] if i else "")
+                if number is not None:
+                    readings = readings + number_reading(number)
+            if readings:
+                terms.append(Term(phrase, readings, i))
+                i += n
+                break
+        else:
+            i += 1  # a filler word: nothing to credit
+    return Utterance(tuple(terms), tuple(unknown))
+
+
+@lru_cache(maxsize=4096)
+def canonical(token: str) -> str | None:
+    """The known word ``token`` stands for (itself, its stem, or a typo's fix), else None."""
+    if token in _KNOWN or token.isdigit():
+        return token
+    for suffix, replacement in _SUFFIXES:
+        if token.endswith(suffix) and len(token) > len(suffix) + 1:
+            stem = token[: -len(suffix)] + replacement
+            if stem in WORDS:
+                return stem
+            if not replacement and len(stem) > 2 and stem[-1] == stem[-2] and stem[:-1] in WORDS:
+                return stem[:-1]  # grabbed -> grab
+    if len(token) >= 3:
+        edits = DECISION.typo_edits_short if len(token) <= 5 else DECISION.typo_edits_long
+        match = process.extractOne(token, _CHOICES, scorer=DamerauLevenshtein.distance, score_cutoff=edits)
+        if match is not None:
+            return match[0]
+    return None
+
+
+def _number(word: str, previous: str) -> int | None:
+    """A digit, or a number word; "one" only right after "action" ("the red one" is no number)."""
+    if word.isdigit():
+        return int(word)
+    if word == "one" and previous not in ("action", "number", "program"):
+        return None
+    return NUMBER_WORDS.get(word)
+
+
+def _join_particles(tokens: list[str]) -> list[str]:
+    """Move a split particle next to its verb: "pick the red cup up" -> "pick up the red cup"."""
+    out = list(tokens)
+    for i, word in enumerate(out):
+        particle = _SPLIT_PARTICLES.get(word)
+        if particle is None:
+            continue
+        for j in range(i + 2, min(i + 5, len(out))):
+            if out[j] == particle and not _ARM_WORDS.intersection(out[i + 1:j]):
+                out.insert(i + 1, out.pop(j))
+                break
+    return out

@@ -1,0 +1,5 @@
+import sys
+
+from services.perception.main import main
+
+sys.exit(main())

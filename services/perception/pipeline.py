@@ -1,0 +1,65 @@
+"""One cloud in, the objects on the table out: the stages in order.
+
+valid points → table plane → points above it → minus the robot's arms →
+top-down clusters → descriptors. Each stage is its own module; this one only
+wires them and holds their settings, so tests and the benchmark run exactly
+what the service runs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from services.perception.cloud import cloud_from_message
+from services.perception.descriptors import Descriptor, describe
+from services.perception.plane import Plane, PlaneSettings, find_table
+from services.perception.robot_mask import robot_points, segments_from_state
+from services.perception.segment import SegmentSettings, cluster, object_candidates, table_outline
+
+
+TABLE_STRIDE = 8   # every 8th table point is plenty for its 2 cm outline grid
+
+
+@dataclass(frozen=True)
+class Settings:
+    plane: PlaneSettings = field(default_factory=PlaneSettings)
+    segment: SegmentSettings = field(default_factory=SegmentSettings)
+
+
+@dataclass(frozen=True)
+class Detection:
+    """The objects seen in one cloud, and the table they stand on."""
+
+    objects: list[Descriptor]
+    plane: Plane
+    table_outline: np.ndarray
+
+
+def detect(message: Mapping[str, Any], state: Mapping[str, Any] | None = None,
+           settings: Settings = Settings()) -> Detection:
+    """Objects in the ``sim/cloud`` ``message``; ``state`` (``sim/state``) masks the arms.
+
+    Raises :class:`~services.perception.cloud.CloudError` when the cloud is
+    unusable (empty, malformed, no table in view).
+    """
+    cloud = cloud_from_message(dict(message))
+    arms = segments_from_state(state)
+    votes = cloud.valid[np.random.default_rng(0).integers(0, len(cloud.valid), settings.plane.refit_size)]
+    plane = find_table(cloud.xyz[votes], settings.plane, ignore=lambda p: robot_points(p, arms))
+    with np.errstate(invalid="ignore"):
+        height = plane.height(cloud.xyz)
+        on_table = np.flatnonzero(np.abs(height) <= settings.plane.inlier_distance)
+        above = object_candidates(height, plane, settings.segment)
+    outline = table_outline(cloud.xyz[on_table[::TABLE_STRIDE], :2], settings.segment)
+    xyz = cloud.xyz[above]
+    robot = robot_points(xyz, arms)
+    above, xyz = above[~robot], xyz[~robot]
+    groups = cluster(xyz, above, cloud.shape, outline, settings.segment)
+    rgb = cloud.rgb[above]
+    objects = [describe(xyz[g], rgb[g], plane) for g in groups]
+    objects.sort(key=lambda d: (round(float(d.position[0]), 3), round(float(d.position[1]), 3)))
+    return Detection(objects, plane, outline)

@@ -1,0 +1,143 @@
+"""The perception service: clouds in, a stable object list out, fresh views on request.
+
+Why it is shaped this way: clouds arrive faster than anyone needs them, so
+only the newest is processed (``latest_only``); the object list is published
+on a cached key so a UI started later sees it at once; a bad cloud (empty,
+malformed, no table in view) never erases what we knew — the last good list is
+re-published with a status that says what went wrong. ``perception/record``
+answers from frames that arrive *after* the request and agree with each other,
+so the executor never acts on a view taken while the arms were still moving.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections import deque
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from shared.bus import Bus
+from shared.codec import MessageError
+from shared.messages import validate
+from services.perception.cloud import CloudError
+from services.perception.pipeline import Settings, detect
+from services.perception.tracking import Tracker, TrackSettings
+
+log = logging.getLogger("hfpbd.perception")
+
+OK = "ok"
+SETTLE_DISTANCE = 0.01   # m two frames' positions may differ and still agree
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One processed cloud, as remembered for ``record`` requests."""
+
+    number: int
+    status: str
+    objects: list[dict]
+
+
+class PerceptionService:
+    def __init__(self, bus: Bus, settings: Settings = Settings(),
+                 track_settings: TrackSettings = TrackSettings(), record_timeout: float = 5.0) -> None:
+        self.bus = bus
+        self.settings = settings
+        self.tracker = Tracker(track_settings)
+        self.record_timeout = record_timeout
+        self._state: Mapping[str, Any] | None = None
+        self._objects: list[dict] = []
+        self._table: dict | None = None
+        self._frames: deque[Frame] = deque(maxlen=8)
+        self._changed = threading.Condition()
+        self._publisher = bus.publisher(bus.keys.objects, cached=True)
+
+    def start(self) -> None:
+        """Subscribe and serve; the caller declares liveliness afterwards."""
+        keys = self.bus.keys
+        self.bus.subscribe(keys.sim_state, self.on_state, schema="sim_state", latest_only=True)
+        self.bus.subscribe(keys.cloud, self.on_cloud, latest_only=True)
+        self.bus.serve(keys.record, self.on_record)
+
+    # -- streams -----------------------------------------------------------
+    def on_state(self, message: Mapping[str, Any]) -> None:
+        self._state = message
+
+    def on_cloud(self, message: dict[str, Any]) -> None:
+        """Process one cloud; on any problem keep the last good objects and say why."""
+        stamp = message.get("stamp") if isinstance(message.get("stamp"), (int, float)) else time.time()
+        try:
+            validate("cloud", message)
+            detection = detect(message, self._state, self.settings)
+        except (MessageError, CloudError) as exc:
+            status = f"rejected cloud: {exc}" if isinstance(exc, MessageError) else str(exc)
+            if isinstance(exc, MessageError):
+                self.bus.rejected[self.bus.keys.cloud] += 1
+            log.warning("%s", status)
+            self._publish(stamp, status)
+            return
+        self._objects = self.tracker.update(detection.objects, time.monotonic(), self._state)
+        plane = detection.plane
+        centre = detection.table_outline.mean(axis=0)
+        self._table = {"height": round(plane.z_at(float(centre[0]), float(centre[1])), 4),
+                       "normal": [round(float(v), 4) for v in plane.normal],
+                       "outline": np.round(detection.table_outline, 3).tolist()}
+        self._publish(stamp, OK)
+
+    def _publish(self, stamp: float, status: str) -> None:
+        message = {"stamp": float(stamp), "objects": self._objects, "status": status}
+        if self._table is not None:
+            message["table"] = self._table
+        self._publisher.put(message)
+        with self._changed:
+            number = self._frames[-1].number + 1 if self._frames else 1
+            self._frames.append(Frame(number, status, self._objects))
+            self._changed.notify_all()
+
+    # -- record ------------------------------------------------------------
+    def on_record(self, _request: Mapping[str, Any]) -> dict:
+        """Objects from two consecutive good frames that arrived after the request and agree."""
+        deadline = time.monotonic() + self.record_timeout
+        with self._changed:
+            after = self._frames[-1].number if self._frames else 0
+            while True:
+                fresh = [f for f in self._frames if f.number > after]
+                settled = _settled(fresh)
+                if settled is not None:
+                    return {"ok": True, "objects": settled.objects, "settled": True,
+                            **({"table": self._table} if self._table else {})}
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise RuntimeError(_record_failure(fresh, self.record_timeout))
+                self._changed.wait(left)
+
+
+def _settled(frames: list[Frame]) -> Frame | None:
+    """The newest frame that is good and agrees with the good frame just before it."""
+    for earlier, later in zip(reversed(frames[:-1]), reversed(frames)):
+        if earlier.status == OK and later.status == OK and _agree(earlier.objects, later.objects):
+            return later
+    return None
+
+
+def _agree(a: list[dict], b: list[dict]) -> bool:
+    """Same ids, each within ``SETTLE_DISTANCE`` of where it was."""
+    where = {o["id"]: np.asarray(o["position"]) for o in a}
+    if set(where) != {o["id"] for o in b}:
+        return False
+    return all(float(np.linalg.norm(where[o["id"]] - np.asarray(o["position"]))) <= SETTLE_DISTANCE for o in b)
+
+
+def _record_failure(fresh: list[Frame], timeout: float) -> str:
+    """Why no settled observation came in time, in words for the user."""
+    if not fresh:
+        return f"no point cloud from the simulator in {timeout:g} s — is hfpbd sim running?"
+    bad = [f.status for f in fresh if f.status != OK]
+    if bad and len(bad) == len(fresh):
+        return f"cannot see the table: {bad[-1]}"
+    return f"the scene did not settle within {timeout:g} s: objects are still moving"

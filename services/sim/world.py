@@ -1,0 +1,420 @@
+"""The simulated world: a PR2 at a table with objects, stepped by PhysX and seen by a head camera.
+
+Why one class owns the SAPIEN scene: SAPIEN is not thread-safe, so every
+touch of the scene (stepping, drives, rendering, loading objects) happens on
+the one thread that owns a ``SimWorld``; the service feeds it commands from
+a queue. Grasps are physical: the fingers are position-driven with a force
+limit, and an object stays in the hand only through friction at the pads.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from itertools import count
+
+import numpy as np
+import sapien
+from scipy.optimize import brentq
+from scipy.spatial.transform import Rotation
+
+from services.sim import objects as object_builder
+from services.sim.layout import HEAD_LOOK_AT, TORSO_HEIGHT, arm_pose_map
+from services.sim.motion import MinimumJerk, Motion, Waypoints
+from services.sim.robot.build_urdf import (ARMS, CAMERA_LINK, URDF_PATH, arm_joint_names,
+                                           finger_joint_names, tool_frame)
+from services.sim.scene_file import ObjectSpec, SceneSpec
+
+TIMESTEP = 1.0 / 250.0
+KINECT_HFOV = math.radians(57.0)
+CAMERA_NEAR, CAMERA_FAR = 0.4, 4.5       # a Kinect returns nothing nearer or farther
+GRIPPER_OPEN = 0.08                      # start-up opening (m)
+GRIPPER_SPEED = 0.08                     # gap closing/opening speed (m/s)
+DEFAULT_GRIP_FORCE = 30.0                # N per pad, the PR2 gripper's usual effort
+PAD_FRICTION = 1.5
+GRIPPER_SETTLE_TRAVEL = 0.0005          # m: the pads have stopped when the opening changes less than this
+GRIPPER_SETTLE_TIME = 0.15               # s ... over this long
+ROBOT_IGNORE_BIT = 1 << 30               # collision group 2 bit shared by all robot shapes
+
+# joint drives: (stiffness, damping, force limit); gravity is off for the robot's
+# links (a real PR2 is counterbalanced), so the drives only fight contacts and loads
+ARM_DRIVE = (3000.0, 150.0)
+WRIST_DRIVE = (1000.0, 50.0)
+HEAD_DRIVE = (800.0, 80.0, 50.0)
+TORSO_DRIVE = (2.0e5, 2.0e4, 1.0e4)
+FINGER_DRIVE = (2000.0, 150.0)
+
+
+@dataclass(frozen=True)
+class JointInfo:
+    name: str
+    index: int
+    lower: float
+    upper: float
+    velocity: float
+    effort: float
+
+
+@dataclass
+class Capture:
+    """One head-camera frame as the renderer gives it (converted to a cloud elsewhere)."""
+
+    position: np.ndarray        # (H, W, 4) camera-frame xyz (OpenGL axes) + depth
+    color: np.ndarray           # (H, W, 4) float 0..1
+    model_matrix: np.ndarray    # (4, 4) OpenGL camera frame -> world
+    camera_pose: list[float]    # camera link pose (x forward, y left, z up), base frame
+    sim_time: float
+    segmentation: np.ndarray | None = None   # (H, W) entity ids (tests only)
+
+
+def pose_list(pose: sapien.Pose) -> list[float]:
+    return [float(v) for v in (*pose.p, *pose.q)]
+
+
+def look_rotation(eye: np.ndarray, target: np.ndarray) -> list[float]:
+    """Quaternion (w, x, y, z) turning a camera's x axis towards ``target`` with z kept up."""
+    forward = (target - eye) / np.linalg.norm(target - eye)
+    left = np.cross([0.0, 0.0, 1.0], forward)
+    left /= np.linalg.norm(left)
+    up = np.cross(forward, left)
+    x, y, z, w = Rotation.from_matrix(np.column_stack([forward, left, up])).as_quat()
+    return [w, x, y, z]
+
+
+class SimWorld:
+    """The SAPIEN scene with its robot, table, objects, camera and running motions."""
+
+    def __init__(self, width: int = 640, height: int = 480, timestep: float = TIMESTEP) -> None:
+        sapien.physx.set_scene_config(enable_tgs=True, enable_friction_every_iteration=True)
+        sapien.physx.set_body_config(solver_position_iterations=20, solver_velocity_iterations=2)
+        sapien.physx.set_shape_config(contact_offset=0.004, rest_offset=0.0)
+        self.scene = sapien.Scene()
+        self.scene.set_timestep(timestep)
+        self.timestep = timestep
+        self.scene.set_ambient_light([0.45, 0.45, 0.45])
+        self.scene.add_directional_light([0.3, 0.4, -1.0], [0.75, 0.75, 0.75])
+        self.scene.add_point_light([0.6, 0.0, 2.2], [0.6, 0.6, 0.6])
+        self.scene.add_ground(0.0, render_half_size=[3, 3])
+        self.table = object_builder.build_table(self.scene)
+        self.robot = self._load_robot()
+        self.joints = self._joint_info()
+        self.links = {link.name: link for link in self.robot.get_links()}
+        self.camera = self._mount_camera(width, height)
+        self.overview = None
+        self.objects: dict[str, sapien.Entity] = {}
+        self.specs: dict[str, ObjectSpec] = {}
+        self.scene_name = ""
+        self.motions: dict[str, Motion] = {}
+        self.grip_force = {arm: DEFAULT_GRIP_FORCE for arm in ARMS}
+        self.sim_time = 0.0
+        self._ids = count(1)
+        self.home()
+
+    # -- construction --------------------------------------------------------
+    def _load_robot(self) -> sapien.physx.PhysxArticulation:
+        loader = self.scene.create_urdf_loader()
+        loader.fix_root_link = True
+        robot = loader.load(str(URDF_PATH), srdf_file="")  # planning-only SRDF: physics ignores self-contact below
+        robot.set_name("pr2")
+        pad_material = sapien.physx.PhysxMaterial(PAD_FRICTION, PAD_FRICTION, 0.0)
+        pads = {name for arm in ARMS for name in self.pad_links(arm)}
+        for link in robot.get_links():
+            link.disable_gravity = True
+            for shape in link.collision_shapes:
+                groups = shape.get_collision_groups()
+                groups[2] |= ROBOT_IGNORE_BIT
+                shape.set_collision_groups(groups)
+                if link.name in pads:
+                    shape.set_physical_material(pad_material)
+        for joint in robot.get_active_joints():
+            name = joint.name
+            if "finger" in name:
+                joint.set_drive_properties(*FINGER_DRIVE, DEFAULT_GRIP_FORCE)
+            elif name == "torso_lift_joint":
+                joint.set_drive_properties(*TORSO_DRIVE)
+            elif name.startswith("head"):
+                joint.set_drive_properties(*HEAD_DRIVE)
+            elif "wrist" in name:
+                joint.set_drive_properties(*WRIST_DRIVE, 3.0 * 10.0)
+            else:
+                joint.set_drive_properties(*ARM_DRIVE, 3.0 * 30.0)
+        return robot
+
+    def _joint_info(self) -> dict[str, JointInfo]:
+        from services.sim.robot.build_urdf import model
+        _, joint_specs = model()
+        by_name = {j.name: j for j in joint_specs}
+        info = {}
+        for index, joint in enumerate(self.robot.get_active_joints()):
+            spec = by_name[joint.name]
+            info[joint.name] = JointInfo(joint.name, index, spec.lower, spec.upper, spec.velocity, spec.effort)
+        return info
+
+    def _mount_camera(self, width: int, height: int) -> sapien.render.RenderCameraComponent:
+        focal = (width / 2) / math.tan(KINECT_HFOV / 2)
+        fovy = 2 * math.atan((height / 2) / focal)
+        camera = self.scene.add_mounted_camera("head_camera", self.links[CAMERA_LINK].entity, sapien.Pose(),
+                                               width, height, fovy, 0.05, CAMERA_FAR + 1.0)
+        return camera
+
+    @staticmethod
+    def pad_links(arm: str) -> list[str]:
+        p = arm[0]
+        return [f"{p}_gripper_l_finger_link", f"{p}_gripper_r_finger_link"]
+
+    # -- robot posture ---------------------------------------------------------
+    def home(self) -> None:
+        """Torso up, arms to the side, grippers open, head on the table: the start posture."""
+        targets = {"torso_lift_joint": TORSO_HEIGHT, **arm_pose_map("side")}
+        pan, tilt = self.head_angles_for(np.array(HEAD_LOOK_AT), TORSO_HEIGHT)
+        targets.update(head_pan_joint=pan, head_tilt_joint=tilt)
+        for arm in ARMS:
+            for name in finger_joint_names(arm):
+                targets[name] = GRIPPER_OPEN / 2
+        qpos = np.zeros(len(self.joints))
+        for name, value in targets.items():
+            qpos[self.joints[name].index] = value
+        self.robot.set_qpos(qpos)
+        self.robot.set_qvel(np.zeros(len(self.joints)))
+        for name, value in targets.items():
+            joint = self.robot.get_active_joints()[self.joints[name].index]
+            joint.set_drive_target(value)
+            joint.set_drive_velocity_target(0.0)
+
+    def qpos(self, names: list[str]) -> np.ndarray:
+        q = self.robot.get_qpos()
+        return np.array([q[self.joints[n].index] for n in names])
+
+    def joint_targets(self, names: list[str]) -> np.ndarray:
+        """Where the drives are told to be (a new motion starts here, so holding forces stay)."""
+        active = self.robot.get_active_joints()
+        return np.array([float(np.asarray(active[self.joints[n].index].drive_target).reshape(-1)[0]) for n in names])
+
+    def head_angles_for(self, target: np.ndarray, torso: float | None = None) -> tuple[float, float]:
+        """Pan and tilt that put ``target`` on the head camera's optical axis (clamped to the limits)."""
+        torso = self.qpos(["torso_lift_joint"])[0] if torso is None else torso
+        pan_axis = np.array([-0.05 - 0.01707, 0.0, 0.051 + 0.739675 + torso + 0.38145])
+        offset = target - pan_axis
+        pan = float(np.clip(math.atan2(offset[1], offset[0]), self.joints["head_pan_joint"].lower,
+                            self.joints["head_pan_joint"].upper))
+        ahead = math.hypot(offset[0], offset[1]) - 0.068
+        rise = offset[2]
+        cam_x, cam_z = -0.14707, 0.29195
+
+        def miss(tilt: float) -> float:
+            c, s = math.cos(tilt), math.sin(tilt)
+            eye_x, eye_z = cam_x * c + cam_z * s, -cam_x * s + cam_z * c
+            return c * (rise - eye_z) + s * (ahead - eye_x)
+
+        low, high = self.joints["head_tilt_joint"].lower, self.joints["head_tilt_joint"].upper
+        if miss(low) * miss(high) > 0:
+            tilt = low if abs(miss(low)) < abs(miss(high)) else high
+        else:
+            tilt = brentq(miss, low, high)
+        return pan, float(tilt)
+
+    # -- motions ---------------------------------------------------------------
+    def new_motion_id(self) -> str:
+        return f"m{next(self._ids)}"
+
+    def start_motion(self, motion: Motion) -> Motion | None:
+        """Run ``motion``; returns the motion it replaced on the same part, if any."""
+        replaced = self.motions.pop(motion.part, None)
+        self.motions[motion.part] = motion
+        return replaced
+
+    def move_joints(self, part: str, names: list[str], goal: np.ndarray, motion_id: str) -> Motion | None:
+        start = self.joint_targets(names)
+        velocity = np.array([self.joints[n].velocity for n in names])
+        return self.start_motion(Motion(motion_id, part, names, MinimumJerk(start, goal, velocity), self.sim_time))
+
+    def follow_waypoints(self, part: str, names: list[str], times: np.ndarray, points: np.ndarray,
+                         motion_id: str) -> Motion | None:
+        if times[0] > 0:   # start from where the joints are now
+            times = np.concatenate([[0.0], times])
+            points = np.vstack([self.joint_targets(names), points])
+        else:
+            points = points.copy()
+            points[0] = self.joint_targets(names)
+        return self.start_motion(Motion(motion_id, part, names, Waypoints(times, points), self.sim_time))
+
+    def move_gripper(self, arm: str, width: float, force: float, motion_id: str) -> Motion | None:
+        names = finger_joint_names(arm)
+        start = self.joint_targets(names)
+        goal = np.full(2, width / 2)
+        self.grip_force[arm] = force
+        for name in names:
+            joint = self.robot.get_active_joints()[self.joints[name].index]
+            joint.set_drive_properties(*FINGER_DRIVE, force)
+        # pads move at a fixed speed; the force limit, not the reference, stops them on contact
+        velocity = np.full(2, 1.875 * GRIPPER_SPEED / 2)  # minimum jerk: peak = 1.875 × mean
+        return self.start_motion(GripperMotion(motion_id, f"{arm}_gripper", names,
+                                               MinimumJerk(start, goal, velocity, 1.0), self.sim_time, arm=arm))
+
+    def stop(self, parts: list[str]) -> list[Motion]:
+        """Stop the motions of ``parts`` where the joints are now."""
+        stopped = []
+        active = self.robot.get_active_joints()
+        for part in parts:
+            motion = self.motions.pop(part, None)
+            if motion is None:
+                continue
+            stopped.append(motion)
+            if isinstance(motion, GripperMotion):
+                continue     # a gripper keeps squeezing what it holds
+            for name, value in zip(motion.joints, self.qpos(motion.joints)):
+                active[self.joints[name].index].set_drive_target(float(value))
+                active[self.joints[name].index].set_drive_velocity_target(0.0)
+        return stopped
+
+    # -- stepping ----------------------------------------------------------------
+    def step(self) -> list[tuple[Motion, str, str]]:
+        """Advance physics one step; returns finished motions with their status and message."""
+        active = self.robot.get_active_joints()
+        for motion in self.motions.values():
+            position, velocity = motion.reference(self.sim_time)
+            for name, p, v in zip(motion.joints, position, velocity):
+                joint = active[self.joints[name].index]
+                joint.set_drive_target(float(p))
+                joint.set_drive_velocity_target(float(v))
+        self.scene.step()
+        self.sim_time += self.timestep
+        finished = []
+        for part, motion in list(self.motions.items()):
+            if isinstance(motion, GripperMotion):
+                result = motion.gripper_outcome(self.sim_time, self)
+            else:
+                result = motion.outcome(self.sim_time, self.qpos(motion.joints))
+            if result is not None:
+                del self.motions[part]
+                finished.append((motion, *result))
+        return finished
+
+    # -- scene -------------------------------------------------------------------
+    def load(self, scene: SceneSpec) -> None:
+        """Replace the objects by those of ``scene`` and put the robot in its start posture."""
+        for entity in self.objects.values():
+            self.scene.remove_entity(entity)
+        self.objects.clear()
+        self.specs.clear()
+        self.motions.clear()
+        self.home()
+        for spec in scene.objects:
+            self.objects[spec.id] = object_builder.build_object(self.scene, spec)
+            self.specs[spec.id] = spec
+        self.scene_name = scene.name
+
+    def settle(self, seconds: float = 0.5) -> None:
+        for _ in range(int(seconds / self.timestep)):
+            self.step()
+
+    # -- reading -----------------------------------------------------------------
+    def contacts_by_link(self, links: set[str]) -> dict[str, set[str]]:
+        """Object ids touching each of ``links`` (any contact point closer than 2 mm)."""
+        touching: dict[str, set[str]] = {name: set() for name in links}
+        for contact in self.scene.get_contacts():
+            names = [body.entity.name for body in contact.bodies]
+            for mine, other in (names, names[::-1]):
+                if mine in links and other in self.objects:
+                    if any(point.separation < 0.002 for point in contact.points):
+                        touching[mine].add(other)
+        return touching
+
+    def gripper_width(self, arm: str) -> float:
+        return float(self.qpos(finger_joint_names(arm)).sum())
+
+    def state(self) -> dict:
+        """Everything ``sim/state`` carries except the stamp and the real-time factor."""
+        qpos = self.robot.get_qpos()
+        joints = {name: float(qpos[info.index]) for name, info in self.joints.items()}
+        pads = {name for arm in ARMS for name in self.pad_links(arm)}
+        touching = self.contacts_by_link(pads)
+        grippers = {}
+        for arm in ARMS:
+            left, right = (touching[name] for name in self.pad_links(arm))
+            both = sorted(left & right)
+            grippers[arm] = {"width": self.gripper_width(arm), "holding": both[0] if both else None,
+                             "contact": sorted(left | right), "force": self.grip_force[arm]}
+        links = {name: pose_list(link.entity_pose) for name, link in self.links.items()
+                 if name[:2] in ("r_", "l_") and (link.collision_shapes or name.endswith("tool_frame"))}
+        return {
+            "sim_time": self.sim_time,
+            "joints": joints,
+            "ee": {arm: pose_list(self.links[tool_frame(arm)].entity_pose) for arm in ARMS},
+            "grippers": grippers,
+            "moving": {arm: arm in self.motions for arm in ARMS},
+            "head": {"pan": joints["head_pan_joint"], "tilt": joints["head_tilt_joint"]},
+            "torso": joints["torso_lift_joint"],
+            "links": links,
+            "scene": self.scene_name,
+        }
+
+    def truth(self) -> list[dict]:
+        """Ground-truth objects: world-state fields plus pose and the world bounding box."""
+        out = []
+        for object_id, entity in self.objects.items():
+            spec = self.specs[object_id]
+            box = object_builder.world_aabb(entity)
+            out.append({
+                "id": object_id, "color": spec.color, "type": spec.type,
+                "position": [float(v) for v in (box[0] + box[1]) / 2],
+                "size": [float(v) for v in box[1] - box[0]],
+                "dimensions": list(spec.size),
+                "pose": pose_list(entity.pose),
+                "aabb": box.tolist(),
+                "entity_id": int(entity.per_scene_id),
+            })
+        return out
+
+    def capture(self, segmentation: bool = False) -> Capture:
+        """Render the head camera (the caller turns it into a cloud off this thread)."""
+        self.scene.update_render()
+        self.camera.take_picture()
+        return Capture(
+            position=self.camera.get_picture("Position"),
+            color=self.camera.get_picture("Color"),
+            model_matrix=np.asarray(self.camera.get_model_matrix(), dtype=np.float64),
+            camera_pose=pose_list(self.links[CAMERA_LINK].entity_pose),
+            sim_time=self.sim_time,
+            segmentation=self.camera.get_picture("Segmentation")[..., 1].copy() if segmentation else None,
+        )
+
+    def overview_rgb(self, width: int = 800, height: int = 600) -> np.ndarray:
+        """An RGB picture (uint8) of the robot and table from the front-left, for people."""
+        if self.overview is None:
+            eye, target = np.array([1.9, 1.1, 1.75]), np.array([0.45, 0.0, 0.75])
+            self.overview = self.scene.add_camera("overview", width, height, math.radians(45.0), 0.05, 10.0)
+            self.overview.entity.set_pose(sapien.Pose(eye, look_rotation(eye, target)))
+        self.scene.update_render()
+        self.overview.take_picture()
+        rgba = self.overview.get_picture("Color")
+        return (np.clip(rgba[..., :3], 0.0, 1.0) * 255).astype(np.uint8)
+
+
+class GripperMotion(Motion):
+    """A gripper move that finishes when the pads stop: at the goal, or squeezing something."""
+
+    def __init__(self, *args, arm: str, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.arm = arm
+        self._watch: tuple[float, float] | None = None     # (time, width) when the pads were last seen moving
+
+    def gripper_outcome(self, now: float, world: SimWorld) -> tuple[str, str] | None:
+        if now - self.start_time < self.trajectory.duration:
+            return None
+        # joint velocities jitter while squeezing, so "stopped" is judged from the opening itself
+        width = world.gripper_width(self.arm)
+        if self._watch is None or abs(width - self._watch[1]) > GRIPPER_SETTLE_TRAVEL:
+            self._watch = (now, width)
+            return None
+        if now - self._watch[0] < GRIPPER_SETTLE_TIME:
+            return None
+        width = world.gripper_width(self.arm)
+        goal = float(self.goal.sum())
+        if abs(width - goal) <= 0.003:
+            return "done", f"{self.arm} gripper at {width:.3f} m"
+        touching = world.contacts_by_link(set(world.pad_links(self.arm)))
+        held = set.intersection(*touching.values())
+        if held:
+            return "done", f"{self.arm} gripper holding {sorted(held)[0]} at {width:.3f} m"
+        return "failed", f"{self.arm} gripper was blocked at {width:.3f} m (goal {goal:.3f} m)"

@@ -1,0 +1,5 @@
+import sys
+
+from services.speech.main import main
+
+sys.exit(main())

@@ -1,0 +1,131 @@
+"""``hfpbd bench speech``: espeak-ng corpus -> PocketSphinx -> NLU, in fixed scenes.
+
+Reports word error rate, command accuracy from the top hypothesis and from
+the n-best rescored by the NLU (log p(hypothesis) + log P(C|S) P(L|C,S), the
+same rule the NLU service applies), and decoding time per second of audio.
+The rescoring is shown for several acoustic scales, which is how
+``recogniser.ACOUSTIC_SCALE`` is chosen.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import sys
+import tempfile
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from rapidfuzz.distance import Levenshtein
+
+from services.nlu.infer import CommandResult, Model, Result
+from services.nlu.world import parse_world
+from services.speech import espeak
+from services.speech.audio import RATE, silence
+from services.speech.corpus import Item, corpus
+from services.speech.grammar import SceneWords
+from services.speech.recogniser import ACOUSTIC_SCALE, Hypothesis, Recogniser, posteriors
+from services.speech.vocabulary import nlu_vocabulary
+
+SCALES = (0.0, 0.01, 0.03, 0.1, 0.3, 1.0)
+TARGET_ACCURACY = 0.90
+
+
+@dataclass
+class Outcome:
+    item: Item
+    hypotheses: list[Hypothesis]
+    seconds: float
+    decode_s: float
+    results: list[Result] = field(default_factory=list)
+
+
+def _words(text: str) -> list[str]:
+    return text.lower().replace(",", " ").split()
+
+
+def _command(result: Result) -> dict | None:
+    return result.command.as_dict() if isinstance(result, CommandResult) else None
+
+
+def rescored(outcome: Outcome, scale: float) -> dict | None:
+    """The command of the hypothesis with the best log p(hypothesis) + NLU score."""
+    logliks = {h.text: h.loglik for h in outcome.hypotheses}
+    best, best_score = None, -math.inf
+    for hyp, result in zip(posteriors(logliks, scale), outcome.results):
+        if hyp.score <= 0:
+            continue
+        score = math.log(hyp.score) + result.score
+        if score > best_score:
+            best, best_score = result, score
+    return _command(best) if best is not None else None
+
+
+def run(vocabulary: str, limit: int | None, out: Path) -> list[Outcome]:
+    items = corpus()[:limit]
+    full = nlu_vocabulary()
+    recogniser = Recogniser(full if vocabulary == "full" else full.core(3))
+    outcomes: list[Outcome] = []
+    for n, item in enumerate(items):
+        path = out / f"{n:03d}.wav"
+        espeak.write(item.text, path, item.voice, item.speed)
+        from services.speech.audio import read_wav
+        pcm = np.concatenate([silence(0.3), read_wav(path), silence(0.3)])
+        recogniser.set_scene(SceneWords.of(item.world["objects"]))
+        started = time.perf_counter()
+        hypotheses = recogniser.decode(pcm)
+        decode_s = time.perf_counter() - started
+        model = Model(parse_world(item.world))
+        outcome = Outcome(item, hypotheses, len(pcm) / RATE, decode_s, [model.parse(h.text) for h in hypotheses])
+        outcomes.append(outcome)
+    return outcomes
+
+
+def report(outcomes: list[Outcome], vocabulary: str) -> bool:
+    n = len(outcomes)
+    errors = sum(Levenshtein.distance(_words(o.item.text), _words(o.hypotheses[0].text if o.hypotheses else ""))
+                 for o in outcomes)
+    reference_words = sum(len(_words(o.item.text)) for o in outcomes)
+    exact = sum(bool(o.hypotheses) and o.hypotheses[0].text == o.item.text for o in outcomes)
+    top1 = sum(bool(o.results) and _command(o.results[0]) == o.item.expected for o in outcomes)
+    in_nbest = sum(any(_command(r) == o.item.expected for r in o.results) for o in outcomes)
+    rtf = [o.decode_s / o.seconds for o in outcomes]
+    audio = sum(o.seconds for o in outcomes)
+    print(f"speech benchmark: {n} utterances, {len({o.item.expected['procedure'] for o in outcomes})} procedures, "
+          f"{len({o.item.scene for o in outcomes})} scenes, {len({o.item.voice for o in outcomes})} voices, "
+          f"{len({o.item.speed for o in outcomes})} speeds; grammar: {vocabulary} vocabulary")
+    print(f"  word error rate (top hypothesis)         {errors / reference_words:7.2%}  ({errors} errors / {reference_words} words)")
+    print(f"  sentence exactly right                   {exact / n:7.2%}")
+    print(f"  command accuracy, top hypothesis         {top1 / n:7.2%}")
+    for scale in SCALES:
+        accuracy = sum(rescored(o, scale) == o.item.expected for o in outcomes) / n
+        mark = "  <- ACOUSTIC_SCALE" if scale == ACOUSTIC_SCALE else ""
+        print(f"  command accuracy, n-best rescored @{scale:<5g} {accuracy:7.2%}{mark}")
+    print(f"  right command anywhere in the n-best     {in_nbest / n:7.2%}")
+    print(f"  n-best length                            mean {statistics.mean(len(o.hypotheses) for o in outcomes):.2f}")
+    print(f"  decode time per second of audio          mean {statistics.mean(rtf):.3f} s, "
+          f"p95 {float(np.percentile(rtf, 95)):.3f} s, max {max(rtf):.3f} s ({audio:.0f} s of audio)")
+    best = sum(rescored(o, ACOUSTIC_SCALE) == o.item.expected for o in outcomes) / n
+    print(f"  target command accuracy >= {TARGET_ACCURACY:.0%}: {'met' if best >= TARGET_ACCURACY else 'NOT met'}")
+    wrong = [o for o in outcomes if rescored(o, ACOUSTIC_SCALE) != o.item.expected]
+    for o in wrong:
+        print(f"  miss [{o.item.voice} {o.item.speed}] said {o.item.text!r}, heard "
+              f"{[h.text for h in o.hypotheses] or 'nothing'}")
+    return best >= TARGET_ACCURACY
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="hfpbd bench speech", description=__doc__.splitlines()[0])
+    parser.add_argument("--vocabulary", choices=("core", "full"), default="core")
+    parser.add_argument("--limit", type=int, default=None, help="only the first N utterances")
+    args = parser.parse_args(argv)
+    if not espeak.available():
+        print("hfpbd bench speech: espeak-ng is not installed (Debian package espeak-ng)", file=sys.stderr)
+        return 2
+    with tempfile.TemporaryDirectory(prefix="hfpbd-speech-bench-") as folder:
+        outcomes = run(args.vocabulary, args.limit, Path(folder))
+    return 0 if report(outcomes, args.vocabulary) else 1

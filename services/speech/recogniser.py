@@ -1,0 +1,138 @@
+"""Offline decoding with PocketSphinx under a generated grammar, with an n-best list.
+
+Why n-best: the top string is often one word off ("left" for "right"); the
+NLU can pick the alternative that makes sense in the scene (P(C|S)) when it
+sees the runners-up and how much less likely the recogniser found them.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from pocketsphinx import Decoder
+
+from services.speech.audio import dither
+from services.speech.grammar import SceneWords, build_jsgf
+from services.speech.vocabulary import SpeechVocabulary
+
+NBEST = 5
+NBEST_SEARCH = 50  # lattice paths read to find NBEST distinct sentences
+# PocketSphinx scores acoustic frames as if independent, which overstates how
+# sure it is; this scale turns score differences into usable probabilities
+# (set from the speech benchmark).
+ACOUSTIC_SCALE = 1.0
+MIN_POSTERIOR = 1e-6
+_SCORE_UNIT = 1024.0  # PocketSphinx reports scores shifted down by 10 bits
+
+
+class RecogniserError(RuntimeError):
+    """The recogniser could not be set up (bad grammar, missing model)."""
+
+
+@dataclass(frozen=True)
+class Hypothesis:
+    """One sentence the recogniser heard; ``score`` is its probability within the n-best (they sum to 1)."""
+
+    text: str
+    score: float
+    loglik: float = 0.0  # the recogniser's scaled-down acoustic log-likelihood, for re-weighting
+
+    def to_json(self) -> dict[str, object]:
+        return {"text": self.text, "score": float(f"{self.score:.6g}")}
+
+
+class Recogniser:
+    """A PocketSphinx decoder whose grammar follows the vocabulary and the scene.
+
+    Not thread-safe: one thread decodes (the service's decoding worker).
+    """
+
+    def __init__(self, vocabulary: SpeechVocabulary, scene: SceneWords = SceneWords(),
+                 nbest: int = NBEST, acoustic_scale: float = ACOUSTIC_SCALE) -> None:
+        self._decoder = Decoder(lm=None, loglevel="ERROR")
+        self._nbest = nbest
+        self._scale = acoustic_scale
+        self._search: str | None = None
+        self._version = 0
+        self.vocabulary = vocabulary
+        self.scene = scene
+        self.unpronounceable: set[str] = set()
+        self.jsgf = ""
+        self.set_vocabulary(vocabulary, scene)
+
+    def set_vocabulary(self, vocabulary: SpeechVocabulary, scene: SceneWords | None = None) -> None:
+        """Regenerate the grammar; words missing from the pronunciation dictionary are left out."""
+        words = vocabulary.words()
+        self.unpronounceable = {w for w in words if not self._pronounceable(w)}
+        usable = vocabulary.restricted(words - self.unpronounceable)
+        scene = self.scene if scene is None else scene
+        jsgf = build_jsgf(usable, scene)
+        if jsgf == self.jsgf:
+            return
+        self._version += 1
+        name = f"commands{self._version}"
+        try:
+            self._decoder.add_jsgf_string(name, jsgf)
+        except ValueError as exc:
+            raise RecogniserError(f"the generated speech grammar does not parse: {exc}") from None
+        self._decoder.activate_search(name)
+        if self._search is not None:
+            self._decoder.remove_search(self._search)
+        self._search, self.jsgf, self.vocabulary, self.scene = name, jsgf, vocabulary, scene
+
+    def _pronounceable(self, word: str) -> bool:
+        """Whether the dictionary has ``word``, adding compounds of two known words ("left" + "most")."""
+        if self._decoder.lookup_word(word) is not None:
+            return True
+        for cut in range(2, len(word) - 1):
+            head, tail = self._decoder.lookup_word(word[:cut]), self._decoder.lookup_word(word[cut:])
+            if head is not None and tail is not None:
+                self._decoder.add_word(word, f"{head} {tail}", True)
+                return True
+        return False
+
+    def set_scene(self, scene: SceneWords) -> None:
+        if scene != self.scene:
+            self.set_vocabulary(self.vocabulary, scene)
+
+    def decode(self, pcm: np.ndarray, acoustic_scale: float | None = None) -> list[Hypothesis]:
+        """Decode one utterance (16 kHz int16); best first, empty when nothing in the grammar was heard."""
+        self._decoder.start_utt()
+        self._decoder.process_raw(dither(pcm).tobytes(), no_search=False, full_utt=True)
+        self._decoder.end_utt()
+        best = self._decoder.hyp()
+        scored: dict[str, float] = {}
+        if best is not None and best.hypstr:
+            scored[best.hypstr] = self._loglik(best.score)
+        for hyp in itertools.islice(self._decoder.nbest(), NBEST_SEARCH):
+            if hyp is not None and hyp.hypstr and hyp.hypstr not in scored:
+                scored[hyp.hypstr] = self._loglik(hyp.score)
+            if len(scored) >= self._nbest:
+                break
+        return posteriors(scored, self._scale if acoustic_scale is None else acoustic_scale)
+
+    def _loglik(self, score: float) -> float:
+        if score <= 0.0:
+            return -math.inf
+        return math.log(score) * _SCORE_UNIT
+
+
+def posteriors(logliks: dict[str, float], scale: float) -> list[Hypothesis]:
+    """Probabilities within the list (scaled log-likelihoods, softmax), the decoder's first choice first.
+
+    Alternatives too unlikely to ever win a rescoring (below ``MIN_POSTERIOR``) are left out.
+    """
+    if not logliks:
+        return []
+    values = np.array([v * scale for v in logliks.values()])
+    finite = np.isfinite(values)
+    if not finite.any():
+        return [Hypothesis(next(iter(logliks)), 1.0)]
+    weights = np.where(finite, np.exp(values - values[finite].max()), 0.0)
+    probabilities = weights / weights.sum()
+    hyps = [Hypothesis(text, float(p), loglik) for (text, loglik), p in zip(logliks.items(), probabilities)]
+    rest = sorted((h for h in hyps[1:] if h.score >= MIN_POSTERIOR), key=lambda h: -h.score)
+    return [hyps[0], *rest]

@@ -1,0 +1,257 @@
+"""The speech service: audio in, n-best utterances out; the robot's words spoken.
+
+Threads: audio arrives on the microphone's thread or on bus callbacks; it is
+split into utterances under a lock, and every decoder operation (decoding,
+swapping the grammar) happens on one worker thread, because PocketSphinx is
+not thread-safe and decoding must never stall a bus callback.
+"""
+
+from __future__ import annotations
+
+import logging
+import queue
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from shared.bus import Bus, BusTimeout, RemoteError
+from shared.codec import MessageError
+from shared.messages import validate
+from services.speech.audio import RATE, AudioError, read_wav, resample, silence
+from services.speech.grammar import SceneWords
+from services.speech.microphone import Microphone, MicrophoneUnavailable
+from services.speech.recogniser import Hypothesis, Recogniser
+from services.speech.vad import UtteranceSplitter
+from services.speech.vocabulary import SpeechVocabulary, nlu_vocabulary
+from services.speech.voice import Speaker
+
+log = logging.getLogger("hfpbd.speech")
+
+NOT_HEARD = "I heard something but could not make out a command. Please say it again or type it."
+WAV_CHUNK_S = 0.1
+
+
+def speech_key(namespace: str, name: str) -> str:
+    """Keys of this service: ``speech/audio``, ``speech/ptt``, ``speech/status``."""
+    return f"pbd/{namespace}/speech/{name}"
+
+
+@dataclass
+class Settings:
+    trigger: str = "vad"             # vad: utterances found by voice activity; ptt: only while talk is pressed
+    microphone: str = "auto"         # auto, on (a missing microphone is an error), off
+    device: str | None = None
+    per_meaning: int | None = 3      # phrases per meaning in the grammar; None: the whole vocabulary
+    wav_files: tuple[Path, ...] = ()
+
+
+class SpeechService:
+    def __init__(self, bus: Bus, settings: Settings, speaker: Speaker | None) -> None:
+        self.bus = bus
+        self.settings = settings
+        self.speaker = speaker
+        self.recogniser = Recogniser(self._vocabulary(None))
+        self.microphone: Microphone | None = None
+        self.microphone_problem: str | None = None
+        self._splitter = UtteranceSplitter()
+        self._audio_lock = threading.Lock()
+        self._talk: list[np.ndarray] | None = None  # audio captured while push-to-talk is held
+        self._tasks: queue.Queue[Callable[[], None] | None] = queue.Queue()
+        self._worker = threading.Thread(target=self._work, name="decoder", daemon=True)
+        ns = bus.keys.namespace
+        self._utterances = bus.publisher(bus.keys.utterance)
+        self._say = bus.publisher(bus.keys.say)
+        self._status = bus.publisher(speech_key(ns, "status"), cached=True)
+        self.decoded = 0
+
+    # -- start and stop ----------------------------------------------------
+    def start(self) -> None:
+        ns = self.bus.keys.namespace
+        self._worker.start()
+        self.bus.subscribe(speech_key(ns, "audio"), self._on_stream, schema="speech_audio")
+        self.bus.serve(speech_key(ns, "ptt"), self._on_ptt)
+        self.bus.subscribe(self.bus.keys.objects, self._on_objects, schema="objects", latest_only=True, history=True)
+        self.bus.watch_alive(self._on_alive)
+        if self.speaker is not None:
+            self.bus.subscribe(self.bus.keys.say, self._on_say, schema="say")
+        self._open_microphone()
+        self._publish_status()
+
+    def close(self) -> None:
+        if self.microphone is not None:
+            self.microphone.close()
+        self._tasks.put(None)
+        self._worker.join(timeout=10)
+        if self.speaker is not None:
+            self.speaker.close()
+
+    def play_files(self) -> None:
+        for path in self.settings.wav_files:
+            try:
+                self.feed_file(path)
+            except AudioError as exc:
+                self._tell(str(exc), "error")
+
+    # -- audio in ------------------------------------------------------------
+    def feed(self, pcm: np.ndarray) -> None:
+        """16 kHz int16 audio from any source: collected for push-to-talk, else split by voice activity."""
+        with self._audio_lock:
+            if self._talk is not None:
+                self._talk.append(pcm)
+                return
+            if self.settings.trigger == "ptt":
+                return
+            utterances = self._splitter.feed(pcm)
+        for utterance in utterances:
+            self._tasks.put(lambda u=utterance: self._decode(u))
+
+    def end_of_stream(self) -> None:
+        with self._audio_lock:
+            utterances = self._splitter.flush()
+        for utterance in utterances:
+            self._tasks.put(lambda u=utterance: self._decode(u))
+
+    def feed_file(self, path: Path) -> None:
+        """A WAV file as if it were spoken now (split into utterances like live audio)."""
+        pcm = np.concatenate([read_wav(path), silence(0.5)])
+        step = int(RATE * WAV_CHUNK_S)
+        for start in range(0, len(pcm), step):
+            self.feed(pcm[start:start + step])
+        self.end_of_stream()
+
+    def _on_microphone(self, pcm: np.ndarray) -> None:
+        if self.speaker is not None and self.speaker.speaking.is_set():
+            return  # do not hear the robot's own voice
+        self.feed(pcm)
+
+    def _on_stream(self, message: dict[str, Any]) -> None:
+        pcm = np.asarray(message["pcm"])
+        if pcm.ndim != 1 or pcm.dtype != np.int16:
+            log.warning("speech/audio chunk ignored: pcm must be 1-D int16, got %s %s", pcm.dtype, pcm.shape)
+            return
+        try:
+            self.feed(resample(pcm, int(message["rate"])))
+        except AudioError as exc:
+            log.warning("speech/audio chunk ignored: %s", exc)
+            return
+        if message.get("end"):
+            self.end_of_stream()
+
+    # -- push to talk ----------------------------------------------------------
+    def _on_ptt(self, request: dict[str, Any]) -> dict[str, Any]:
+        try:
+            validate("speech_ptt", request)
+        except MessageError as exc:
+            raise ValueError(f"push-to-talk request: {exc}") from None
+        self.set_talk(request["on"])
+        return {"ok": True, "listening": request["on"]}
+
+    def set_talk(self, on: bool) -> None:
+        with self._audio_lock:
+            talk, self._talk = self._talk, ([] if on else None)
+            if on:
+                self._splitter = UtteranceSplitter()  # what was half-heard before the press is dropped
+        if not on and talk:
+            pcm = np.concatenate(talk)
+            self._tasks.put(lambda: self._decode(pcm))
+        self._publish_status()
+
+    # -- decoding --------------------------------------------------------------
+    def _work(self) -> None:
+        while (task := self._tasks.get()) is not None:
+            try:
+                task()
+            except Exception:
+                log.exception("speech task failed")
+
+    def _decode(self, pcm: np.ndarray) -> None:
+        started = time.monotonic()
+        hypotheses = self.recogniser.decode(pcm)
+        self.decoded += 1
+        log.info("decoded %.1f s of audio in %.2f s: %s", len(pcm) / RATE, time.monotonic() - started,
+                 " | ".join(f"{h.text} ({h.score:.2f})" for h in hypotheses) or "nothing")
+        if not hypotheses:
+            self._tell(NOT_HEARD, "info")
+            return
+        self._utterances.put(utterance_message(hypotheses))
+
+    # -- vocabulary and scene ---------------------------------------------------
+    def _vocabulary(self, phrases: list[str] | None) -> SpeechVocabulary:
+        vocabulary = nlu_vocabulary(phrases)
+        n = self.settings.per_meaning
+        return vocabulary.core(n) if n else vocabulary
+
+    def _on_alive(self, service: str, alive: bool) -> None:
+        if service == "nlu" and alive:
+            threading.Thread(target=self._fetch_vocabulary, name="vocabulary", daemon=True).start()
+
+    def _fetch_vocabulary(self) -> None:
+        """The running NLU's own phrase list: the grammar follows it when the NLU changes."""
+        try:
+            reply = self.bus.request(self.bus.keys.nlu_query("vocabulary"), {}, timeout=10.0)
+        except (BusTimeout, RemoteError) as exc:
+            log.warning("could not read the NLU's vocabulary (%s); keeping the built-in one", exc)
+            return
+        phrases = reply.get("phrases")
+        if not isinstance(phrases, list) or not phrases:
+            log.warning("the NLU's vocabulary reply has no phrases; keeping the built-in one")
+            return
+        vocabulary = self._vocabulary([str(p) for p in phrases])
+        self._tasks.put(lambda: self._regenerate(vocabulary))
+
+    def _regenerate(self, vocabulary: SpeechVocabulary) -> None:
+        self.recogniser.set_vocabulary(vocabulary)
+        log.info("speech grammar regenerated from the NLU's vocabulary (%d words)", len(vocabulary.words()))
+        self._publish_status()
+
+    def _on_objects(self, message: dict[str, Any]) -> None:
+        scene = SceneWords.of(message["objects"])
+        self._tasks.put(lambda: self.recogniser.set_scene(scene))
+
+    # -- output -------------------------------------------------------------------
+    def _on_say(self, message: dict[str, Any]) -> None:
+        assert self.speaker is not None
+        was_working = self.speaker.working
+        self.speaker.say(message["text"])
+        if was_working and not self.speaker.working:
+            self._publish_status()
+
+    def _open_microphone(self) -> None:
+        if self.settings.microphone == "off":
+            return
+        try:
+            self.microphone = Microphone(self._on_microphone, self.settings.device)
+            log.info("listening on the microphone (%s)", self.settings.trigger)
+        except MicrophoneUnavailable as exc:
+            if self.settings.microphone == "on":
+                raise
+            self.microphone_problem = str(exc)
+            self._tell(f"No microphone: {exc}. Speech works from WAV files and the speech/audio stream; "
+                       "typing works as always.", "info")
+
+    def _tell(self, text: str, kind: str) -> None:
+        """Something the user must know: logged here and shown (and spoken) like the robot's words."""
+        (log.warning if kind == "error" else log.info)("%s", text)
+        self._say.put({"text": text, "kind": kind})
+
+    def _publish_status(self) -> None:
+        self._status.put({
+            "stamp": time.time(),
+            "microphone": self.microphone is not None,
+            "microphone_problem": self.microphone_problem,
+            "voice": self.speaker is not None and self.speaker.working,
+            "voice_problem": self.speaker.problem if self.speaker is not None else None,
+            "trigger": self.settings.trigger,
+            "talking": self._talk is not None,
+            "grammar_words": len(self.recogniser.vocabulary.words()),
+        })
+
+
+def utterance_message(hypotheses: list[Hypothesis]) -> dict[str, Any]:
+    """``dialog/utterance`` for the NLU: the top string plus the n-best to rescore."""
+    return {"text": hypotheses[0].text, "source": "speech", "nbest": [h.to_json() for h in hypotheses]}

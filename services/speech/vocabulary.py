@@ -1,0 +1,92 @@
+"""The NLU's vocabulary, grouped by what each phrase means, for the speech grammar.
+
+Why grouped: a grammar needs to know which phrases can fill which part of a
+sentence (verbs of one procedure, relations, arm phrases, colour words ...).
+The NLU's lexicon already records that as each phrase's readings, so the
+groups are derived from it and the recogniser can only ever produce words the
+NLU understands. Readings the lexicon marks as weak (a second, unlikely sense
+of a word, such as "put" meaning move) are left out: they would let the
+grammar build sentences nobody says.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+from services.nlu.lexicon import FILLERS, NUMBER_WORDS, PHRASES
+from services.nlu.weights import LANGUAGE
+
+Implied = tuple[tuple[str, str], ...]  # options a verb already says ("raise" = direction up)
+
+
+@dataclass(frozen=True)
+class SpeechVocabulary:
+    """Phrases by meaning: ``verbs[procedure]`` and ``options[(slot, value)]``."""
+
+    verbs: dict[str, dict[Implied, tuple[str, ...]]] = field(default_factory=dict)
+    options: dict[tuple[str, str], tuple[str, ...]] = field(default_factory=dict)
+    numbers: dict[int, str] = field(default_factory=dict)
+    fillers: frozenset[str] = frozenset()
+
+    def phrases(self, slot: str, value: str) -> tuple[str, ...]:
+        return self.options.get((slot, value), ())
+
+    def values(self, slot: str) -> list[str]:
+        return sorted({value for s, value in self.options if s == slot})
+
+    def words(self) -> set[str]:
+        """Every word any phrase of this vocabulary uses."""
+        phrases = [p for groups in self.verbs.values() for ps in groups.values() for p in ps]
+        phrases += [p for ps in self.options.values() for p in ps]
+        phrases += list(self.numbers.values())
+        return {w for p in phrases for w in p.split()} | set(self.fillers)
+
+    def core(self, per_meaning: int) -> SpeechVocabulary:
+        """At most ``per_meaning`` phrases per meaning, the lexicon's first (most usual) ones."""
+        verbs = {proc: {implied: ps[:per_meaning] for implied, ps in groups.items()} for proc, groups in self.verbs.items()}
+        options = {key: ps[:per_meaning] for key, ps in self.options.items()}
+        return SpeechVocabulary(verbs, options, dict(self.numbers), self.fillers)
+
+    def restricted(self, known: Iterable[str]) -> SpeechVocabulary:
+        """Only the phrases whose every word is in ``known`` (e.g. the recogniser's dictionary)."""
+        allowed = set(known)
+
+        def keep(phrases: Iterable[str]) -> tuple[str, ...]:
+            return tuple(p for p in phrases if all(w in allowed for w in p.split()))
+
+        verbs = {proc: {implied: kept for implied, ps in groups.items() if (kept := keep(ps))}
+                 for proc, groups in self.verbs.items()}
+        options = {key: kept for key, ps in self.options.items() if (kept := keep(ps))}
+        numbers = {n: w for n, w in self.numbers.items() if w in allowed}
+        return SpeechVocabulary(verbs, options, numbers, frozenset(w for w in self.fillers if w in allowed))
+
+
+def nlu_vocabulary(phrases: Iterable[str] | None = None) -> SpeechVocabulary:
+    """Group the NLU lexicon's phrases (or only ``phrases``, when given) by meaning."""
+    wanted = set(phrases) if phrases is not None else None
+    verbs: dict[str, dict[Implied, list[str]]] = {}
+    options: dict[tuple[str, str], list[str]] = {}
+    for phrase, readings in PHRASES.items():
+        if wanted is not None and phrase not in wanted:
+            continue
+        for reading in readings:
+            head = reading[0]
+            if head.weight == LANGUAGE.weak:
+                continue
+            if head.slot == "procedure":
+                implied = tuple((m.slot, str(m.value)) for m in reading[1:])
+                for procedure in head.value:
+                    verbs.setdefault(procedure, {}).setdefault(implied, []).append(phrase)
+            elif len(reading) == 1:
+                options.setdefault((head.slot, str(head.value)), []).append(phrase)
+    numbers: dict[int, str] = {}
+    for word, value in NUMBER_WORDS.items():  # cardinals come first, ordinals ("third") are left out
+        if 1 <= value <= 20:
+            numbers.setdefault(value, word)
+    return SpeechVocabulary(
+        {proc: {implied: tuple(ps) for implied, ps in groups.items()} for proc, groups in verbs.items()},
+        {key: tuple(ps) for key, ps in options.items()},
+        numbers,
+        frozenset(FILLERS),
+    )

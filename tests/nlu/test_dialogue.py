@@ -1,0 +1,69 @@
+"""Context across utterances: clarification replies, choices, and "it" before the robot reports."""
+
+from __future__ import annotations
+
+from services.nlu.context import Dialogue
+from services.nlu.infer import Clarify, CommandResult, Model
+from services.nlu.world import parse_world
+from tests.nlu.scenes import obj, table_scene, world
+
+
+def tall_scene() -> Model:
+    return Model(parse_world(world(obj("obj0", "red", "cup", 0.6, -0.2, (0.08, 0.08, 0.20)),
+                                   obj("obj1", "blue", "box", 0.6, 0.2, (0.16, 0.08, 0.10)))))
+
+
+def test_paper_dialogue_point_clarify_point_pick_it_up() -> None:
+    model, dialogue = tall_scene(), Dialogue()
+    assert isinstance(dialogue.understand(model, "Point to the biggest object."), Clarify)
+    pointed = dialogue.understand(model, "Point to the tallest object.")
+    assert isinstance(pointed, CommandResult) and pointed.command.arg("object") == "obj0"
+    picked = dialogue.understand(model, "Pick it up")
+    assert isinstance(picked, CommandResult)
+    assert (picked.command.procedure, picked.command.arg("object")) == ("pick_up", "obj0")
+
+
+def test_reply_to_clarification_is_merged() -> None:
+    model, dialogue = tall_scene(), Dialogue()
+    dialogue.understand(model, "point to the biggest object")
+    reply = dialogue.understand(model, "the tallest one")
+    assert isinstance(reply, CommandResult)
+    assert reply.command.procedure == "point_to" and reply.command.arg("object") == "obj0"
+
+
+def test_arm_reply_is_merged() -> None:
+    model, dialogue = Model(parse_world(table_scene(last_arm=None))), Dialogue()
+    assert isinstance(dialogue.understand(model, "point to the red cup"), Clarify)
+    reply = dialogue.understand(model, "left")
+    assert isinstance(reply, CommandResult)
+    assert dict(reply.command.args) == {"arm": "left", "object": "obj0"}
+
+
+def test_new_command_replaces_the_pending_question() -> None:
+    model, dialogue = Model(parse_world(table_scene())), Dialogue()
+    assert isinstance(dialogue.understand(model, "pick up the cup"), Clarify)
+    fresh = dialogue.understand(model, "look at the box")
+    assert isinstance(fresh, CommandResult) and fresh.command.procedure == "look_at"
+    assert dialogue.pending is None
+
+
+def test_choice_picks_a_candidate_and_bad_choice_is_explained() -> None:
+    model, dialogue = Model(parse_world(table_scene())), Dialogue()
+    question = dialogue.understand(model, "pick up the cup")
+    assert isinstance(question, Clarify)
+    wrong = dialogue.understand(model, "", choice=7)
+    assert isinstance(wrong, Clarify) and "no candidate 7" in wrong.question
+    chosen = dialogue.understand(model, "", choice=1)
+    assert isinstance(chosen, CommandResult) and chosen.command == question.candidates[1]
+    assert isinstance(dialogue.understand(model, "", choice=0), Clarify)  # nothing pending any more
+
+
+def test_it_follows_the_command_just_issued_before_the_robot_reports() -> None:
+    model, dialogue = Model(parse_world(table_scene(last_object="obj2"))), Dialogue()
+    dialogue.understand(model, "point to the plate with your left hand")
+    picked = dialogue.understand(model, "pick it up")
+    assert isinstance(picked, CommandResult)
+    assert dict(picked.command.args) == {"arm": "left", "object": "obj3"}
+    dialogue.observe_robot()  # the robot's newer state wins again
+    again = dialogue.understand(model, "pick it up")
+    assert isinstance(again, CommandResult) and again.command.arg("object") == "obj2"

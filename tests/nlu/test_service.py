@@ -1,0 +1,121 @@
+"""The NLU service as a real process on a private Zenoh network."""
+
+from __future__ import annotations
+
+import queue
+import time
+from typing import Any
+
+import pytest
+
+from shared.bus import RemoteError
+from tests.nlu.scenes import table_scene
+from tests.processes import Launcher, Network
+
+
+def collect(network: Network, key: str) -> queue.Queue[dict[str, Any]]:
+    inbox: queue.Queue[dict[str, Any]] = queue.Queue()
+    network.hub.subscribe(key, inbox.put)
+    return inbox
+
+
+def request(network: Network, verb: str, message: dict[str, Any]) -> dict[str, Any]:
+    """A queryable's reply without the codec's version field."""
+    reply = network.hub.request(network.hub.keys.nlu_query(verb), message)
+    return {k: v for k, v in reply.items() if k != "v"}
+
+
+def say(network: Network, **message: Any) -> None:
+    network.hub.publish(network.hub.keys.utterance, message)
+
+
+def next_result(inbox: queue.Queue[dict[str, Any]], timeout: float = 10.0) -> dict[str, Any]:
+    return inbox.get(timeout=timeout)
+
+
+@pytest.fixture
+def live(network: Network, launcher: Launcher) -> Network:
+    """A running NLU with the default scene's objects and robot state published (cached)."""
+    scene = table_scene(last_object=None)
+    keys = network.hub.keys
+    objects = network.hub.publisher(keys.objects, cached=True)
+    executor = network.hub.publisher(keys.executor_state, cached=True)
+    objects.put({"stamp": time.time(), "objects": [{**o, "held_by": None, "confidence": 0.9} for o in scene["objects"]]})
+    executor.put({"stamp": time.time(), "robot": {**scene["robot"], "action": 1, "actions": [0]},
+                  "reach": {"obj1": {"right": {"pick_up": False}, "left": {"pick_up": True}}}})
+    launcher.start("nlu")
+    # the cached world arrives shortly after start; wait until describe sees all objects
+    deadline = time.monotonic() + 20
+    while time.monotonic() < deadline:
+        if len(request(network, "describe", {})) == 4:
+            break
+        time.sleep(0.1)
+    return network
+
+
+def test_utterance_to_command_with_live_world_and_reach(live: Network) -> None:
+    results = collect(live, live.hub.keys.nlu_result)
+    time.sleep(0.3)
+    say(live, text="pick up the blue cup")
+    result = next_result(results)
+    assert result["utterance"] == "pick up the blue cup"
+    assert (result["kind"], result["procedure"]) == ("command", "pick_up")
+    assert result["args"] == {"arm": "left", "object": "obj1"}  # the right arm cannot reach it
+    say(live, text="point to it")  # "it" before any executor report
+    assert next_result(results)["args"] == {"arm": "left", "object": "obj1"}
+
+
+def test_clarification_is_said_and_a_choice_answers_it(live: Network) -> None:
+    results = collect(live, live.hub.keys.nlu_result)
+    spoken = collect(live, live.hub.keys.say)
+    time.sleep(0.3)
+    say(live, text="point to the cup")
+    question = next_result(results)
+    assert question["kind"] == "clarify" and question["params"] == ["object"]
+    line = next_result(spoken)
+    assert line["kind"] == "clarify" and line["text"] == question["question"]
+    assert len(line["candidates"]) == len(question["candidates"]) == 2
+    say(live, text="", choice=0)
+    chosen = next_result(results)
+    assert chosen["kind"] == "command" and {"procedure": chosen["procedure"], "args": chosen["args"]} == question["candidates"][0]
+
+
+def test_nbest_picks_the_plausible_hypothesis(live: Network) -> None:
+    results = collect(live, live.hub.keys.nlu_result)
+    time.sleep(0.3)
+    say(live, text="pick up the read cap", nbest=[{"text": "pick up the read cap", "score": 0.5},
+                                                  {"text": "pick up the red cup", "score": 0.4}])
+    result = next_result(results)
+    assert result["utterance"] == "pick up the red cup" and result["args"]["object"] == "obj0"
+
+
+def test_malformed_messages_do_not_crash_it(live: Network, launcher: Launcher) -> None:
+    keys = live.hub.keys
+    results = collect(live, keys.nlu_result)
+    time.sleep(0.3)
+    live.hub.publish(keys.utterance, {"words": "no text field"})
+    live.hub.publish(keys.objects, {"stamp": 1.0, "objects": [{"id": "bad", "position": "here"}]})
+    live.hub.session.put(keys.utterance, b"\x00not msgpack")
+    say(live, text="up", choice="first")
+    say(live, text="move up")
+    result = next_result(results)
+    assert result["procedure"] == "move_abs_dir"
+    assert len(request(live, "describe", {})) == 4  # the bad objects changed nothing
+    assert launcher.processes[0].popen.poll() is None
+
+
+def test_queryables(live: Network) -> None:
+    keys = live.hub.keys
+    parsed = request(live, "parse", {"text": "look at the box"})
+    assert parsed["procedure"] == "look_at" and parsed["args"] == {"object": "obj2"}
+    other = request(live, "parse", {"text": "pick it up", "world": table_scene(last_object="obj3")})
+    assert other["args"]["object"] == "obj3"
+    grounded = request(live, "ground", {"text": "the plate"})
+    assert max(grounded, key=grounded.get) == "obj3"
+    vocabulary = live.hub.request(keys.nlu_query("vocabulary"), {})
+    assert "grab" in vocabulary["words"] and "to the left of" in vocabulary["phrases"]
+    assert "pick_up" in vocabulary["templates"]["procedures"]
+    with pytest.raises(RemoteError, match="must be a list"):
+        live.hub.request(keys.nlu_query("parse"), {"text": "up", "world": {"objects": 5}})
+    with pytest.raises(RemoteError, match="needs 'text'"):
+        live.hub.request(keys.nlu_query("ground"), {})

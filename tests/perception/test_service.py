@@ -1,0 +1,107 @@
+"""The perception service as a real process on a private Zenoh network."""
+
+from __future__ import annotations
+
+import queue
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from shared.bus import RemoteError
+from services.perception.synthetic import Box, Camera, Cylinder, Scene, render
+
+SMALL = Camera(width=320, height=240)
+SCENE = Scene([Cylinder((0.70, -0.15, 0.80), 0.035, 0.10, "red"),
+               Box((0.85, 0.10, 0.79), (0.08, 0.08, 0.08), "blue")])
+
+
+@pytest.fixture(scope="module")
+def good_cloud() -> dict:
+    return render(SCENE, SMALL)
+
+
+class Feed:
+    """Publishes clouds from the test's hub and collects what perception publishes."""
+
+    def __init__(self, network) -> None:
+        self.bus = network.hub
+        self.keys = network.hub.keys
+        self.cloud = self.bus.publisher(self.keys.cloud, large=True)
+        self.received: queue.Queue[dict] = queue.Queue()
+        self.bus.subscribe(self.keys.objects, self.received.put, schema="objects")
+
+    def until(self, cloud: dict, accept, timeout: float = 20.0) -> dict:
+        """Publish ``cloud`` every 0.2 s until a published object list satisfies ``accept``."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            self.cloud.put({**cloud, "stamp": time.time()})
+            try:
+                message = self.received.get(timeout=0.2)
+            except queue.Empty:
+                continue
+            if accept(message):
+                return message
+        raise AssertionError("perception never published the expected object list")
+
+
+@pytest.fixture
+def feed(network, launcher) -> Feed:
+    launcher.start("perception", "--record-timeout", "2")
+    return Feed(network)
+
+
+def test_publishes_objects_with_ids_and_words(feed, good_cloud):
+    message = feed.until(good_cloud, lambda m: len(m["objects"]) == 2)
+    assert message["status"] == "ok"
+    assert {(o["id"], o["color"], o["type"]) for o in message["objects"]} == {("obj0", "red", "cup"), ("obj1", "blue", "box")}
+    assert message["table"]["height"] == pytest.approx(0.75, abs=0.005)
+
+
+def test_late_joiner_gets_the_current_list_at_once(feed, good_cloud, network):
+    feed.until(good_cloud, lambda m: len(m["objects"]) == 2)
+    late: queue.Queue[dict] = queue.Queue()
+    with network.open_bus() as other:
+        other.subscribe(other.keys.objects, late.put, schema="objects", history=True)
+        message = late.get(timeout=10)
+    assert len(message["objects"]) == 2
+
+
+@pytest.mark.parametrize("bad, status", [
+    ({"xyz": np.full((240, 320, 3), np.nan, np.float32)}, "point cloud is empty"),
+    ({"xyz": np.zeros((240, 320), np.float32)}, "shape (H, W, 3)"),
+    ({"xyz": None}, "rejected cloud"),
+], ids=["all-nan", "flat-array", "wrong-schema"])
+def test_bad_cloud_keeps_the_last_good_list_and_says_why(feed, good_cloud, bad, status):
+    good = feed.until(good_cloud, lambda m: len(m["objects"]) == 2)
+    broken = {**good_cloud, **bad}
+    if bad.get("xyz") is None:
+        del broken["xyz"]
+    message = feed.until(broken, lambda m: m["status"] != "ok")
+    assert status in message["status"]
+    assert [o["id"] for o in message["objects"]] == [o["id"] for o in good["objects"]]
+
+
+def test_record_answers_from_fresh_settled_frames(feed, good_cloud):
+    feed.until(good_cloud, lambda m: len(m["objects"]) == 2)
+    stop = threading.Event()
+
+    def keep_publishing() -> None:
+        while not stop.wait(0.2):
+            feed.cloud.put({**good_cloud, "stamp": time.time()})
+
+    publisher = threading.Thread(target=keep_publishing, daemon=True)
+    publisher.start()
+    try:
+        reply = feed.bus.request(feed.keys.record, {}, timeout=10)
+    finally:
+        stop.set()
+        publisher.join()
+    assert reply["ok"] is True and reply["settled"] is True
+    assert sorted(o["color"] for o in reply["objects"]) == ["blue", "red"]
+
+
+def test_record_without_clouds_names_the_simulator(feed):
+    with pytest.raises(RemoteError, match="no point cloud from the simulator in 2 s"):
+        feed.bus.request(feed.keys.record, {}, timeout=10)

@@ -1,0 +1,66 @@
+"""Accuracy on every shipped scene, judged against the simulator's ground truth.
+
+The scene is built in-process with the simulator's own library (same SAPIEN
+scene, camera and cloud conversion as ``hfpbd sim``), rendered once per scene.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from services.perception.evaluate import Score, score
+from services.perception.pipeline import detect
+
+sim_world = pytest.importorskip("services.sim.world", reason="the simulator library is not available")
+from services.sim.cloud import cloud_message  # noqa: E402
+from services.sim.scene_file import available_scenes, load_scene, with_positions  # noqa: E402
+
+SCENES = available_scenes()
+
+
+# Two cups whose walls are 1 cm apart (the cups are 7.2 cm across at the rim).
+APART = 0.072 + 0.01
+CLOSE_PAIRS = {
+    "side-by-side": {"obj0": [0.55, -APART / 2], "obj1": [0.55, APART / 2]},
+    "one-behind": {"obj0": [0.50, 0.0], "obj1": [0.50 + APART, 0.0]},
+    "diagonal": {"obj0": [0.52, -APART / 2.83], "obj1": [0.52 + APART / 1.414, APART / 2.83]},
+}
+
+
+@pytest.fixture(scope="module")
+def world():
+    return sim_world.SimWorld()
+
+
+def observe(world, scene) -> Score:
+    world.load(scene)
+    world.settle(0.5)
+    message = cloud_message(world.capture(), world.sim_time)
+    return score(detect(message, world.state()).objects, world.truth())
+
+
+@pytest.fixture(scope="module")
+def scores(world) -> dict[str, Score]:
+    return {name: observe(world, load_scene(name)) for name in SCENES}
+
+
+@pytest.mark.parametrize("scene", SCENES)
+def test_all_objects_found_no_phantoms_and_right_words(scores, scene):
+    result = scores[scene]
+    assert result.missed == [] and result.phantoms == 0, f"missed {result.missed}, {result.phantoms} phantoms"
+    assert result.wrong_words == []
+
+
+def test_centre_and_size_errors_over_all_scenes(scores):
+    total = Score()
+    for result in scores.values():
+        total.add(result)
+    assert total.p95(total.centre_errors) <= 0.01
+    assert total.p95(total.size_errors) <= 0.015
+
+
+@pytest.mark.parametrize("placement", sorted(CLOSE_PAIRS))
+def test_cups_one_centimetre_apart_are_two_objects(world, placement):
+    result = observe(world, with_positions(load_scene("refexp_2_cups"), CLOSE_PAIRS[placement]))
+    assert result.found == 2 and result.phantoms == 0
+    assert max(result.centre_errors) <= 0.01

@@ -1,0 +1,114 @@
+"""Stable ids across frames: moving a little, occluded by an arm, held in a gripper, gone."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from services.perception.pipeline import detect
+from services.perception.synthetic import Box, Camera, Cylinder, Scene, reaching_arm, render
+from services.perception.tracking import Tracker, TrackSettings
+
+SMALL = Camera(width=320, height=240)
+TABLE = 0.75
+
+
+def scene_with(*shapes, links=()) -> Scene:
+    return Scene(list(shapes), table_height=TABLE, links=list(links))
+
+
+RED_CUP = Cylinder((0.70, -0.15, TABLE + 0.05), 0.035, 0.10, "red")
+BLUE_BOX = Box((0.85, 0.10, TABLE + 0.04), (0.08, 0.08, 0.08), "blue")
+GREEN_CUP = Cylinder((0.75, 0.30, TABLE + 0.05), 0.035, 0.10, "green")
+
+
+def frame(tracker: Tracker, scene: Scene, now: float, state: dict | None = None) -> dict[str, str]:
+    """Track one rendered frame; return colour word -> id of the visible objects."""
+    items = tracker.update(detect(render(scene, SMALL), state).objects, now, state)
+    return {o["color"]: o["id"] for o in items}
+
+
+def test_new_object_needs_two_frames_then_keeps_its_id():
+    tracker = Tracker()
+    scene = scene_with(RED_CUP, BLUE_BOX)
+    assert frame(tracker, scene, 0.0) == {}
+    ids = frame(tracker, scene, 0.2)
+    assert sorted(ids.values()) == ["obj0", "obj1"]
+    assert frame(tracker, scene, 0.4) == ids
+
+
+def test_ids_stay_while_an_arm_sweeps_over_the_table():
+    tracker = Tracker()
+    scene = scene_with(RED_CUP, BLUE_BOX, GREEN_CUP)
+    frame(tracker, scene, 0.0)
+    before = frame(tracker, scene, 0.2)
+    assert len(before) == 3
+    for step, y in enumerate(np.linspace(-0.35, 0.45, 9)):
+        capsules, state = reaching_arm((0.78, float(y), TABLE + 0.18))
+        ids = frame(tracker, scene_with(RED_CUP, BLUE_BOX, GREEN_CUP, links=capsules), 0.4 + 0.2 * step, state)
+        assert set(ids.items()) == set(before.items()), f"arm at y={y:.2f}"
+    assert frame(tracker, scene, 3.0) == before
+
+
+def test_an_object_that_moves_a_little_keeps_its_id_and_a_new_one_gets_a_new_id():
+    tracker = Tracker()
+    frame(tracker, scene_with(RED_CUP), 0.0)
+    first = frame(tracker, scene_with(RED_CUP), 0.2)["red"]
+    nudged = Cylinder((0.73, -0.13, TABLE + 0.05), 0.035, 0.10, "red")
+    frame(tracker, scene_with(nudged, GREEN_CUP), 0.4)
+    ids = frame(tracker, scene_with(nudged, GREEN_CUP), 0.6)
+    assert ids == {"red": first, "green": "obj1"}
+
+
+@pytest.mark.parametrize("absent_for, kept", [(1.0, True), (5.0, False)])
+def test_an_object_gone_longer_than_forget_after_is_removed(absent_for, kept):
+    tracker = Tracker(TrackSettings(forget_after=3.0))
+    both = scene_with(RED_CUP, BLUE_BOX)
+    frame(tracker, both, 0.0)
+    frame(tracker, both, 0.2)
+    only_box = scene_with(BLUE_BOX)
+    now = 0.2
+    while now < 0.2 + absent_for:
+        now += 0.5
+        items = tracker.update(detect(render(only_box, SMALL)).objects, now)
+    assert any(o["color"] == "red" for o in items) == kept
+    if kept:
+        (red,) = [o for o in items if o["color"] == "red"]
+        assert red["visible"] is False
+
+
+def test_ids_are_never_reused():
+    tracker = Tracker(TrackSettings(forget_after=0.5))
+    frame(tracker, scene_with(RED_CUP), 0.0)
+    assert frame(tracker, scene_with(RED_CUP), 0.2) == {"red": "obj0"}
+    frame(tracker, scene_with(), 1.0)
+    frame(tracker, scene_with(RED_CUP), 2.0)
+    assert frame(tracker, scene_with(RED_CUP), 2.2) == {"red": "obj1"}
+
+
+def test_an_object_in_a_gripper_is_held_not_lost_and_keeps_its_id_when_put_down():
+    tracker = Tracker()
+    cup = RED_CUP
+    frame(tracker, scene_with(cup, BLUE_BOX), 0.0)
+    ids = frame(tracker, scene_with(cup, BLUE_BOX), 0.2)
+    grasp = (cup.center[0], cup.center[1], cup.center[2] + 0.02)
+    capsules, state = reaching_arm(grasp, holding=True)
+    tracker.update(detect(render(scene_with(cup, BLUE_BOX, links=capsules), SMALL), state).objects, 0.4, state)
+    lifted = (grasp[0] + 0.05, grasp[1] + 0.10, grasp[2] + 0.15)
+    capsules, state = reaching_arm(lifted, holding=True)
+    carried = Cylinder((lifted[0], lifted[1], lifted[2] - 0.02), 0.035, 0.10, "red")
+    for step in range(3):
+        items = tracker.update(detect(render(scene_with(carried, BLUE_BOX, links=capsules), SMALL), state).objects,
+                               0.6 + 0.2 * step, state)
+        held = {o["id"]: o for o in items}[ids["red"]]
+        assert held["held_by"] == "right"
+        assert np.linalg.norm(np.subtract(held["position"], carried.center)) < 0.03
+        assert sorted(o["id"] for o in items) == sorted(ids.values())  # no phantom from the held cup
+    placed = Cylinder((lifted[0], lifted[1], cup.center[2]), 0.035, 0.10, "red")
+    capsules, state = reaching_arm((lifted[0], lifted[1], grasp[2]), holding=True)  # lowered onto the table
+    frame(tracker, scene_with(placed, BLUE_BOX, links=capsules), 1.2, state)
+    frame(tracker, scene_with(placed, BLUE_BOX), 1.4)  # gripper opened and arm gone
+    after = tracker.update(detect(render(scene_with(placed, BLUE_BOX), SMALL)).objects, 1.6)
+    red = {o["id"]: o for o in after}[ids["red"]]
+    assert red["held_by"] is None and red["visible"] is True
+    assert np.linalg.norm(np.subtract(red["position"], placed.center)) < 0.01

@@ -1,0 +1,142 @@
+"""The simulator as a real process: streams arrive with their fields, controls work, bad requests are refused."""
+
+from __future__ import annotations
+
+import math
+import queue
+import threading
+
+import numpy as np
+import pytest
+
+from shared.bus import Bus, RemoteError
+from tests.processes import Network, ServiceProcess
+
+
+class Inbox:
+    """Collects the messages of one key for a test to wait on."""
+
+    def __init__(self) -> None:
+        self.items: queue.Queue[dict] = queue.Queue()
+
+    def __call__(self, message: dict) -> None:
+        self.items.put(message)
+
+    def wait(self, predicate=lambda m: True, timeout: float = 20.0) -> dict:
+        deadline = threading.Event()
+        timer = threading.Timer(timeout, deadline.set)
+        timer.start()
+        try:
+            while not deadline.is_set():
+                try:
+                    message = self.items.get(timeout=0.2)
+                except queue.Empty:
+                    continue
+                if predicate(message):
+                    return message
+        finally:
+            timer.cancel()
+        raise AssertionError("no matching message arrived")
+
+
+@pytest.fixture(scope="module")
+def client(sim_network: Network, sim_service: ServiceProcess) -> Bus:
+    return sim_network.hub
+
+
+@pytest.fixture(scope="module")
+def events(client: Bus) -> Inbox:
+    inbox = Inbox()
+    client.subscribe(client.keys.sim_events, inbox, schema="sim_event")
+    return inbox
+
+
+def test_state_carries_every_documented_field(client: Bus) -> None:
+    inbox = Inbox()
+    client.subscribe(client.keys.sim_state, inbox, schema="sim_state", latest_only=True)
+    state = inbox.wait()
+    for field in ("stamp", "sim_time", "joints", "ee", "grippers", "moving", "head", "torso", "links", "rtf"):
+        assert field in state, field
+    assert len(state["joints"]) == 21
+    assert set(state["ee"]) == {"right", "left"} and len(state["ee"]["right"]) == 7
+    assert state["grippers"]["right"]["width"] == pytest.approx(0.08, abs=0.002)
+    assert "r_gripper_tool_frame" in state["links"] and "l_forearm_link" in state["links"]
+
+
+def test_cloud_is_organised_in_the_base_frame(client: Bus) -> None:
+    inbox = Inbox()
+    client.subscribe(client.keys.cloud, inbox, schema="cloud", latest_only=True)
+    cloud = inbox.wait()
+    assert cloud["xyz"].shape == (120, 160, 3) and cloud["xyz"].dtype == np.float32
+    assert cloud["rgb"].shape == (120, 160, 3) and cloud["rgb"].dtype == np.uint8
+    assert (cloud["width"], cloud["height"]) == (160, 120)
+    points = cloud["xyz"][np.isfinite(cloud["xyz"]).all(axis=2)]
+    on_table = np.abs(points[:, 2] - 0.72) < 0.01
+    assert on_table.mean() > 0.3
+    assert 1.6 < cloud["camera_pose"][2] < 2.0      # a Kinect on a raised PR2 head
+
+
+def test_truth_lists_the_default_objects(client: Bus) -> None:
+    inbox = Inbox()
+    client.subscribe(client.keys.truth, inbox, schema="truth", latest_only=True)
+    truth = inbox.wait()
+    kinds = {(o["color"], o["type"]) for o in truth["objects"]}
+    assert {("red", "cup"), ("blue", "cup"), ("green", "box")} <= kinds
+
+
+def test_gripper_motion_replies_at_once_and_reports_completion(client: Bus, events: Inbox) -> None:
+    reply = client.request(client.keys.sim_control("gripper"), {"arm": "left", "width": 0.03})
+    assert reply["ok"] and reply["motion_id"]
+    done = events.wait(lambda e: e["motion_id"] == reply["motion_id"])
+    assert done["status"] == "done"
+
+
+def test_arm_trajectory_is_followed(client: Bus, events: Inbox) -> None:
+    start = [-2.110, 1.230, -2.06, -1.69, 0.3, -1.32, 1.57]
+    goal = [-1.8, 1.0, -2.06, -1.5, 0.3, -1.2, 1.57]
+    points = np.linspace(start, goal, 5)
+    reply = client.request(client.keys.sim_control("arm"),
+                           {"arm": "right", "points": points, "times": np.linspace(0.0, 1.5, 5)})
+    done = events.wait(lambda e: e["motion_id"] == reply["motion_id"])
+    assert done["status"] == "done", done["message"]
+
+
+BAD_REQUESTS = [
+    ("arm", {"arm": "middle", "positions": [0] * 7}, "unknown arm"),
+    ("arm", {"arm": "right", "positions": [0, 3.0, 0, 0, 0, 0, 0]}, "r_shoulder_lift_joint = 3.0000 is outside"),
+    ("arm", {"arm": "right", "positions": [0, math.nan, 0, 0, 0, 0, 0]}, "NaN"),
+    ("arm", {"arm": "right", "positions": [0, 0, 0]}, "7 numbers"),
+    ("arm", {"arm": "right", "joints": ["r_elbow_joint"], "positions": [0] * 7}, "unknown or misplaced"),
+    ("arm", {"arm": "right", "points": [[0] * 7, [0.5] + [0] * 6], "times": [0.0, 0.05]}, "too fast"),
+    ("gripper", {"arm": "left", "width": 0.2}, "width = 0.2 is outside"),
+    ("head", {"pan": 0.0, "tilt": 2.0}, "tilt = 2 is outside"),
+    ("torso", {"height": "high"}, "height must be a number"),
+    ("scene", {"name": "kitchen"}, "unknown scene 'kitchen'"),
+    ("step", {"steps": 10}, "paused"),
+]
+
+
+@pytest.mark.parametrize("name, request_, reason", BAD_REQUESTS, ids=[f"{b[0]}-{b[2][:20]}" for b in BAD_REQUESTS])
+def test_bad_requests_are_refused_with_a_reason(client: Bus, sim_service: ServiceProcess,
+                                                name: str, request_: dict, reason: str) -> None:
+    with pytest.raises(RemoteError, match=reason):
+        client.request(client.keys.sim_control(name), request_)
+    assert sim_service.popen.poll() is None
+    assert client.request(client.keys.sim_control("pause"), {"paused": False})["ok"]
+
+
+def test_pause_and_step_advance_time_exactly(client: Bus) -> None:
+    paused = client.request(client.keys.sim_control("pause"), {"paused": True})
+    stepped = client.request(client.keys.sim_control("step"), {"steps": 50})
+    assert stepped["sim_time"] - paused["sim_time"] == pytest.approx(50 * 0.004, abs=1e-6)
+    client.request(client.keys.sim_control("pause"), {"paused": False})
+
+
+def test_scene_load_with_seed_and_snapshot(client: Bus) -> None:
+    loaded = client.request(client.keys.sim_control("scene"), {"name": "task2_side_by_side", "seed": 3}, timeout=20)
+    assert [o["id"] for o in loaded["objects"]] == ["obj0", "obj1"]
+    again = client.request(client.keys.sim_control("scene"), {"name": "task2_side_by_side", "seed": 3}, timeout=20)
+    assert np.allclose([o["position"] for o in loaded["objects"]], [o["position"] for o in again["objects"]], atol=1e-3)
+    picture = client.request(client.keys.sim_control("snapshot"), {}, timeout=30)
+    assert picture["png"][:8] == b"\x89PNG\r\n\x1a\n"
+    client.request(client.keys.sim_control("scene"), {"name": "default"}, timeout=20)

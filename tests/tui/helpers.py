@@ -1,0 +1,97 @@
+"""Shared pieces of the UI tests: waiting on the app, and world samples as services publish them."""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+from textual.pilot import Pilot
+
+from shared.bus import Bus, Publisher
+from shared.config import SessionOptions
+
+
+async def until(pilot: Pilot, condition: Callable[[], bool], timeout: float = 15.0, what: str = "") -> None:
+    """Let the app run until ``condition()`` holds; fail with ``what`` after ``timeout``."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out waiting for {what or condition}")
+        await pilot.pause(0.05)
+
+
+OBJECTS: list[dict[str, Any]] = [
+    {"id": "obj0", "color": "red", "type": "cup", "position": [0.62, -0.15, 0.80],
+     "size": [0.07, 0.07, 0.10], "held_by": None, "rgb": [200, 30, 30]},
+    {"id": "obj1", "color": "blue", "type": "cup", "position": [0.58, 0.12, 0.80],
+     "size": [0.07, 0.07, 0.12], "held_by": None, "rgb": [40, 60, 210]},
+    {"id": "obj2", "color": "green", "type": "box", "position": [0.75, 0.02, 0.79],
+     "size": [0.10, 0.08, 0.08], "held_by": None, "rgb": [40, 160, 60]},
+    {"id": "obj3", "color": "white", "type": "plate", "position": [0.50, 0.30, 0.76],
+     "size": [0.18, 0.18, 0.02], "held_by": None, "rgb": [230, 230, 230]},
+]
+
+REACH = {
+    "obj0": {"right": {"pick_up": True}, "left": {"pick_up": False}},
+    "obj1": {"right": {"pick_up": True}, "left": {"pick_up": True}},
+    "obj2": {"right": {"pick_up": True}, "left": {"pick_up": True}},
+    "obj3": {"right": {"pick_up": False}, "left": {"pick_up": True}},
+}
+
+ROBOT = {
+    "grippers": {"right": "open", "left": "closed"},
+    "last_arm": "right", "last_object": "obj0", "executing": False,
+    "action": 1, "actions": [2], "steps": ["move your right hand above the red cup", "pick it up"],
+    "progress": None,
+}
+
+SIM_STATE = {
+    "sim_time": 1.0, "joints": {}, "moving": {"right": False, "left": False},
+    "ee": {"right": [0.45, -0.3, 0.95, 1, 0, 0, 0], "left": [0.45, 0.3, 0.95, 1, 0, 0, 0]},
+    "grippers": {"right": {"width": 0.08, "holding": False, "contact": False},
+                 "left": {"width": 0.0, "holding": False, "contact": False}},
+}
+
+DESCRIPTIONS = {"obj0": "the red cup", "obj1": "the blue cup", "obj2": "the green box", "obj3": "the plate"}
+
+
+def stage_world(hub: Bus) -> list[Publisher]:
+    """Publish and serve, from ``hub``, what the four services would: a world with objects to talk about.
+
+    The simulator's state is a plain stream (no late-joiner cache): publish
+    ``SIM_STATE`` once the UI is connected.
+
+    Returns the cached publishers; keep them referenced while the world should stay up.
+    """
+    for service in ("sim", "perception", "nlu", "executor"):
+        hub.declare_alive(service)
+    hub.serve(hub.keys.nlu_query("describe"), lambda _request: dict(DESCRIPTIONS))
+    hub.serve(hub.keys.nlu_query("vocabulary"), lambda _request: {"words": ["move", "pick", "place", "execute"],
+                                                                   "phrases": ["move your right hand"]})
+    objects = hub.publisher(hub.keys.objects, cached=True)
+    objects.put({"stamp": 1.0, "objects": OBJECTS})
+    state = hub.publisher(hub.keys.executor_state, cached=True)
+    state.put({"stamp": 1.0, "robot": ROBOT, "reach": REACH})
+    return [objects, state]
+
+
+@contextmanager
+def fixed_network(name: str) -> Iterator[tuple[Bus, SessionOptions]]:
+    """A private network whose address reads the same on every run (for pictures of the screen).
+
+    A Unix socket under a fixed name replaces a loopback port, whose number
+    would change the status bar from run to run.
+    """
+    path = Path(tempfile.gettempdir()) / f"hfpbd-{name}.sock"
+    path.unlink(missing_ok=True)
+    endpoint = f"unixsock-stream/{path}"
+    hub = Bus(SessionOptions(namespace=name, listen=(endpoint,), multicast_scouting=False))
+    try:
+        yield hub, SessionOptions(namespace=name, connect=(endpoint,), multicast_scouting=False)
+    finally:
+        hub.close()
+        path.unlink(missing_ok=True)

@@ -1,0 +1,309 @@
+"""The hands-free programming dialog in a terminal.
+
+A person types what they would say to the robot ("move your right hand above
+the red cup", "pick it up", "execute"); the conversation shows what the robot
+answers, and the panels show what it sees and does. The app talks to the
+services only over the bus (see ``tui.bridge``), so it starts and stays usable
+with none of them running, and picks them up as they appear.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any, TypeVar
+
+from textual import work
+from textual.app import App, ComposeResult
+from textual.binding import Binding
+from textual.containers import Horizontal, Vertical
+from textual.widgets import Footer, Header, Input
+from textual.worker import get_current_worker
+
+from shared.bus import BusTimeout, RemoteError
+from shared.config import SessionOptions
+from tui import events
+from tui.action_panel import ActionPanel
+from tui.bridge import PROBES, Bridge
+from tui.clarify import ClarifyPrompt
+from tui.command_input import CommandInput
+from tui.conversation import Conversation
+from tui.robot_panel import RobotPanel
+from tui.status_bar import CONSEQUENCES, StatusBar
+from tui.world import WorldView
+from tui.world_panel import TableCanvas, WorldPanel
+
+RECONNECT_SECONDS = 3.0
+T = TypeVar("T")
+
+
+class PbdApp(App[None]):
+    """Program a two-armed robot by talking to it."""
+
+    CSS_PATH = "app.tcss"
+    TITLE = "hands-free PbD"
+    BINDINGS = [
+        Binding("escape", "stop", "Stop robot", priority=True),
+        Binding("f5", "execute", "Execute", priority=True),
+        Binding("f6", "new_action", "New action", priority=True),
+        Binding("f7", "switch_action('previous')", "Prev action", priority=True),
+        Binding("f8", "switch_action('next')", "Next action", priority=True),
+        Binding("ctrl+q", "quit", "Quit", priority=True),
+    ]
+
+    def __init__(self, options: SessionOptions, *, probe_seconds: float | None = 2.0) -> None:
+        """``probe_seconds`` is how often latencies are measured (None: never)."""
+        super().__init__()
+        self.options = options
+        self.bridge = Bridge(options, self)
+        self.world = WorldView()
+        self.probe_seconds = probe_seconds
+        self.sub_title = f"robot {options.namespace!r}"
+        self._lost: set[str] = set()
+        self._phrases: list[str] = []
+
+    def compose(self) -> ComposeResult:
+        prompt = ClarifyPrompt(id="clarify")
+        yield Header()
+        with Horizontal(id="main"):
+            yield Conversation(id="conversation")
+            with Vertical(id="side"):
+                yield WorldPanel(id="world")
+                with Horizontal(id="panels"):
+                    yield RobotPanel(id="robot")
+                    yield ActionPanel(id="action")
+        yield prompt
+        yield CommandInput(prompt, id="input",
+                           placeholder="tell the robot, e.g. “move your right hand above the red cup”")
+        yield StatusBar(id="status")
+        yield Footer()
+
+    def on_mount(self) -> None:
+        self.query_one("#conversation").border_title = "conversation"
+        self.query_one("#world").border_title = "world"
+        self.query_one("#robot").border_title = "robot"
+        self.query_one("#action").border_title = "action"
+        self.query_one("#clarify").border_title = "the robot asks"
+        self.query_one(CommandInput).focus()
+        self.query_one(StatusBar).set_connection(False, f"connecting to {self._where()}…")
+        self._refresh_world()
+        self.query_one(ActionPanel).show({})
+        self.connect()
+        if self.probe_seconds:
+            self.set_interval(self.probe_seconds, self._probe_alive)
+
+    def on_unmount(self) -> None:
+        self.bridge.close()
+
+    def _where(self) -> str:
+        endpoints = self.options.connect or self.options.listen
+        return ", ".join(endpoints) if endpoints else "the local network"
+
+    # -- connection ----------------------------------------------------------
+    @work(thread=True, exclusive=True, group="connect")
+    def connect(self) -> None:
+        try:
+            self.bridge.open()
+        except Exception as exc:  # zenoh raises its own error type for every failure
+            self.post_message(events.BusUnavailable(str(exc).split(" at ")[0]))
+
+    def on_bus_unavailable(self, event: events.BusUnavailable) -> None:
+        self.query_one(StatusBar).set_connection(
+            False, f"cannot reach {self._where()}: {event.reason} — retrying every {RECONNECT_SECONDS:g} s")
+        self.set_timer(RECONNECT_SECONDS, self.connect)
+
+    def on_bus_connected(self, _event: events.BusConnected) -> None:
+        self.query_one(StatusBar).set_connection(True, f"on {self._where()}")
+
+    def on_presence(self, event: events.Presence) -> None:
+        self.query_one(StatusBar).set_alive(event.service, event.alive)
+        conversation = self.query_one(Conversation)
+        if not event.alive and event.service in CONSEQUENCES:
+            self._lost.add(event.service)
+            conversation.add("warning", f"{event.service} stopped: {CONSEQUENCES[event.service]} until it is back")
+        elif event.alive and event.service in self._lost:
+            self._lost.discard(event.service)
+            conversation.add("ui", f"{event.service} is back")
+        if event.alive and event.service == "nlu":
+            self.load_vocabulary()
+            self.describe_objects()
+
+    # -- what the services say -----------------------------------------------
+    def on_said(self, event: events.Said) -> None:
+        self.query_one(Conversation).add(event.kind, event.text)
+        if event.kind == "clarify" and event.candidates:
+            self.query_one(ClarifyPrompt).ask(event.text, event.candidates)
+
+    def on_understood(self, event: events.Understood) -> None:
+        result = event.result
+        if result.get("kind") != "command":
+            return
+        self.query_one(ClarifyPrompt).close()
+        args: dict[str, Any] = result.get("args") or {}
+        object_id = args.get("object")
+        if isinstance(object_id, str):
+            self.world.highlighted = object_id
+            self._refresh_world()
+        shown = ", ".join(f"{k}={self.world.name_of(v) if k == 'object' else v}" for k, v in args.items())
+        self.query_one(Conversation).add("ui", f"understood: {result.get('procedure')}({shown})")
+
+    def on_objects_seen(self, event: events.ObjectsSeen) -> None:
+        before = {k: v.get("position") for k, v in self.world.objects.items()}
+        self.world.objects = {str(o["id"]): o for o in event.objects}
+        self._refresh_world()
+        if {k: v.get("position") for k, v in self.world.objects.items()} != before:
+            self.describe_objects()
+
+    def on_executor_changed(self, event: events.ExecutorChanged) -> None:
+        self.world.robot = event.robot
+        self.world.reach = event.reach
+        self._refresh_world()
+        self.query_one(ActionPanel).show(event.robot)
+
+    def on_sim_moved(self, event: events.SimMoved) -> None:
+        self.world.ee = event.ee
+        self.world.grippers = event.grippers
+        self.query_one(TableCanvas).show(self.world)
+        self.query_one(RobotPanel).show(self.world)
+
+    def on_described(self, event: events.Described) -> None:
+        self.world.descriptions = event.descriptions
+        self._refresh_world()
+        self.query_one(CommandInput).vocabulary.learn(phrases=[*self._phrases, *event.descriptions.values()])
+
+    def on_vocabulary_loaded(self, event: events.VocabularyLoaded) -> None:
+        self._phrases = event.phrases
+        self.query_one(CommandInput).vocabulary.learn(event.words, [*event.phrases, *self.world.descriptions.values()])
+
+    def on_latency(self, event: events.Latency) -> None:
+        self.query_one(StatusBar).set_latency(event.service, event.seconds)
+
+    def on_request_failed(self, event: events.RequestFailed) -> None:
+        self.query_one(Conversation).add("error", f"{event.what} failed: {event.reason}")
+
+    def _refresh_world(self) -> None:
+        self.query_one(WorldPanel).show(self.world)
+        self.query_one(RobotPanel).show(self.world)
+
+    # -- what the user does --------------------------------------------------
+    def on_input_submitted(self, event: Input.Submitted) -> None:
+        line = event.value.strip()
+        entry = self.query_one(CommandInput)
+        entry.value = ""
+        prompt = self.query_one(ClarifyPrompt)
+        if prompt.is_open and not line:
+            prompt.choose_highlighted()
+            return
+        if prompt.is_open and line.isdigit():
+            if not prompt.choose(int(line) - 1):
+                self.query_one(Conversation).add(
+                    "warning", f"there is no answer {line}: choose 1 to {len(prompt.candidates)}, or say what you mean")
+            return
+        if not line:
+            return
+        entry.remember(line)
+        prompt.close()
+        self._send(line, line)
+
+    def on_clarify_prompt_chosen(self, event: ClarifyPrompt.Chosen) -> None:
+        self.query_one(ClarifyPrompt).close()
+        self._send(f"{event.index + 1}. {event.label}", event.label, event.index)
+
+    def _send(self, shown: str, text: str, choice: int | None = None) -> None:
+        conversation = self.query_one(Conversation)
+        conversation.add("user", shown)
+        if not self.bridge.connected:
+            conversation.add("warning", "not connected to the robot yet: this was not sent, say it again once connected")
+            return
+        self.bridge.say(text, choice)
+        if "nlu" not in self.query_one(StatusBar).alive:
+            conversation.add("warning", "the language service (nlu) is not running: nobody understands this yet")
+
+    def action_stop(self) -> None:
+        self.query_one(Conversation).add("user", "[Esc] stop")
+        self.stop_robot()
+
+    def action_execute(self) -> None:
+        self._direct("execute", {}, "[F5] execute")
+
+    def action_new_action(self) -> None:
+        self._direct("create_action", {}, "[F6] new action")
+
+    def action_switch_action(self, target: str) -> None:
+        self._direct("switch_action", {"target": target}, f"[{'F7' if target == 'previous' else 'F8'}] {target} action")
+
+    def _direct(self, procedure: str, args: dict[str, Any], shown: str) -> None:
+        self.query_one(Conversation).add("user", shown)
+        self.run_command(procedure, args)
+
+    # -- blocking requests, off the event loop -------------------------------
+    @work(thread=True, group="stop")
+    def stop_robot(self) -> None:
+        try:
+            message = self.bridge.stop()
+            self.post_message(events.Said(message, "info", []))
+        except (BusTimeout, RemoteError, ConnectionError) as exc:
+            self.post_message(events.RequestFailed("stop", _reason(exc, "robot")))
+
+    @work(thread=True, group="command")
+    def run_command(self, procedure: str, args: dict[str, Any]) -> None:
+        try:
+            self.bridge.command(procedure, args)
+        except (BusTimeout, RemoteError, ConnectionError) as exc:
+            self.post_message(events.RequestFailed(procedure.replace("_", " "), _reason(exc, "executor")))
+
+    @work(thread=True, exclusive=True, group="vocabulary")
+    def load_vocabulary(self) -> None:
+        vocabulary = _patiently(self.bridge.vocabulary)
+        if vocabulary is not None:  # completion is a convenience: without it typing still works
+            self.post_message(events.VocabularyLoaded(*vocabulary))
+
+    @work(thread=True, exclusive=True, group="describe")
+    def describe_objects(self) -> None:
+        """Ask the NLU for referring expressions, retrying briefly while it catches up on new objects."""
+        worker = get_current_worker()
+        for _attempt in range(4):
+            descriptions = _patiently(self.bridge.describe)
+            if descriptions is None or worker.is_cancelled:
+                return
+            self.post_message(events.Described(descriptions))
+            if set(self.world.objects) <= set(descriptions):
+                return
+            time.sleep(0.5)
+
+    def _probe_alive(self) -> None:
+        if self.bridge.connected:
+            self.probe(sorted(self.query_one(StatusBar).alive & set(PROBES)))
+
+    @work(thread=True, exclusive=True, group="probe")
+    def probe(self, services: list[str]) -> None:
+        for service in services:
+            if get_current_worker().is_cancelled:
+                return
+            try:
+                seconds = self.bridge.ping(service)
+            except ConnectionError:
+                return
+            self.post_message(events.Latency(service, seconds))
+
+
+def _patiently(request: Callable[[], T], attempts: int = 6, pause: float = 0.5) -> T | None:
+    """Retry a request for a few seconds: a service's liveliness token can
+    arrive before its queryables are known here (Zenoh propagates them
+    separately), so the first request right after it appears may find no one.
+    """
+    for attempt in range(attempts):
+        try:
+            return request()
+        except BusTimeout:
+            if attempt + 1 < attempts:
+                time.sleep(pause)
+        except (RemoteError, ConnectionError):
+            return None
+    return None
+
+
+def _reason(exc: Exception, service: str) -> str:
+    if isinstance(exc, BusTimeout):
+        return f"the {service} did not answer (is it running?)"
+    return str(exc)
