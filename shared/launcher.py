@@ -86,7 +86,18 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--scene", help="scene for the simulator (default: its default scene)")
     parser.add_argument("--log-dir", type=Path, default=None, help="service logs (default: <data dir>/logs)")
     parser.add_argument("--no-restart", action="store_true", help="report a crashed service but do not restart it")
+    parser.add_argument("--services", default=",".join(BACKGROUND_SERVICES),
+                        help="comma-separated services to run here, when others run elsewhere (default: %(default)s)")
     return parser.parse_args(argv)
+
+
+def _service_list(raw: str) -> list[str]:
+    names = [name.strip() for name in raw.split(",") if name.strip()]
+    unknown = sorted(set(names) - set(BACKGROUND_SERVICES) - {"speech"})
+    if unknown:
+        raise SystemExit(f"hfpbd up: unknown service(s) {', '.join(unknown)}; choose from "
+                         f"{', '.join(BACKGROUND_SERVICES)}, speech")
+    return names
 
 
 def _local_endpoint(listen: str) -> str:
@@ -103,7 +114,7 @@ class Supervisor:
         self.client_argv = SessionOptions(namespace=args.namespace, connect=(_local_endpoint(args.listen),),
                                           multicast_scouting=False).to_argv()
         self.children = [Supervised(name, self._argv(name), self.log_dir / f"{name}.log")
-                         for name in BACKGROUND_SERVICES]
+                         for name in _service_list(args.services)]
         self.stop = threading.Event()
 
     def _argv(self, name: str) -> list[str]:

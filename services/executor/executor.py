@@ -219,9 +219,10 @@ class Executor:
             self._last_arm = args.get("arm", self._last_arm)
             if args.get("object"):
                 self._last_object = args["object"]
-        obj = args.get("object")
-        if obj is not None and obj not in snap.objects:
-            self.say(wording.unknown_object(obj), "error")
+        try:
+            self.procedures.precheck(procedure, args)
+        except StepFailed as exc:
+            self.say(str(exc), "error")
             return False
         held_words = self.procedures.held_description(args["arm"], snap) if "arm" in args else None
         if procedure != "record":

@@ -25,6 +25,7 @@ import numpy as np
 from services.executor import geometry as geo
 from services.executor import targets, wording
 from services.executor.geometry import Box
+from services.executor.grounding import descriptor
 from services.executor.kinematics import ArmKinematics, Trajectory
 from services.executor.reach import sync
 from services.executor.referring import refer
@@ -83,6 +84,37 @@ class Procedures:
         if held is None:
             return None
         return refer(snap.objects, held.object_id)
+
+    # -- preconditions -----------------------------------------------------------------
+    def precheck(self, procedure: str, args: dict[str, Any]) -> None:
+        """Refuse, before anything is said or moved, a command whose preconditions do not hold."""
+        snap = self._snapshot()
+        object_id = args.get("object")
+        if object_id is not None:
+            self._object(snap, object_id)
+        arm = args.get("arm")
+        if arm is None:
+            return
+        gripper = snap.gripper_state(arm)
+        held = self.held()
+        if procedure in ("place_abs", "place_rel"):
+            self._holding(arm, snap)
+        elif procedure == "pick_up":
+            if held[arm] is not None or gripper == "holding":
+                what = refer(snap.objects, held[arm].object_id) if held[arm] else "something"
+                raise StepFailed(wording.sentence(f"My {arm} hand is already holding {what}"))
+            other = "left" if arm == "right" else "right"
+            if (held[other] is not None and held[other].object_id == object_id) or \
+                    snap.objects[object_id].get("held_by") == other:
+                raise StepFailed(wording.sentence(f"My {other} hand is holding {refer(snap.objects, object_id)}"))
+        elif procedure == "open" and gripper == "open":
+            raise StepFailed(wording.sentence(f"My {arm} hand is already open"))
+        elif procedure == "close" and gripper != "open":
+            raise StepFailed(wording.sentence(f"My {arm} hand is already closed" +
+                                              (" on something" if gripper == "holding" else "")))
+        elif procedure in ("move_rel_dest", "move_rel_dir", "point_to") and held[arm] is not None \
+                and held[arm].object_id == object_id:
+            raise StepFailed(wording.sentence(f"I'm holding {refer(snap.objects, object_id)} in my {arm} hand"))
 
     # -- helpers --------------------------------------------------------------------------
     def _snapshot(self) -> SceneSnapshot:
@@ -151,7 +183,6 @@ class Procedures:
         return [*(tool[:3] - box.center).round(4).tolist(), *np.round(tool[3:], 5).tolist()]
 
     def _landmark(self, obj: dict[str, Any]) -> dict[str, Any]:
-        from services.executor.grounding import descriptor
         return descriptor(obj)
 
     # -- p1 ----------------------------------------------------------------------------------
@@ -166,9 +197,6 @@ class Procedures:
         kin, snap = self._ready(arm)
         obj = self._object(snap, object)
         box = Box.of(obj)
-        held = self.held()[arm]
-        if held is not None and held.object_id == object:
-            raise StepFailed(wording.sentence(f"I'm holding {refer(snap.objects, object)} in my {arm} hand"))
         poses = targets.move_relation(relation, box, kin.fk(), self._refreshed(arm, kin, snap), snap.table_z)
         if preferred is not None:
             poses = [np.concatenate([box.center + preferred[:3], preferred[3:7]])] + poses
@@ -211,13 +239,6 @@ class Procedures:
         kin, snap = self._ready(arm)
         obj = self._object(snap, object)
         words = refer(snap.objects, object)
-        held = self.held()
-        if held[arm] is not None:
-            raise StepFailed(wording.sentence(
-                f"My {arm} hand is already holding {refer(snap.objects, held[arm].object_id)}"))
-        other = "left" if arm == "right" else "right"
-        if (held[other] is not None and held[other].object_id == object) or obj.get("held_by") == other:
-            raise StepFailed(wording.sentence(f"My {other} hand is holding {words}"))
         plans = self._grasp_plans(kin, obj)
         if not plans:
             raise StepFailed(wording.cannot_pick(arm, words, "I can't reach around it"))
@@ -227,7 +248,6 @@ class Procedures:
                 self._grip(arm, OPEN_WIDTH)
             self._go(arm, self._plan(kin, pre_q, wording.cannot_pick(arm, words, "I can't find a clear path to it")))
             kin, snap = self._ready(arm)
-            log.info("at pre-grasp: tool %s, goal %s, collisions %s", kin.fk().round(3), grasp.grasp.round(3), kin.collisions(kin.arm_q))
             self._go(arm, self._line(kin, grasp.grasp, wording.cannot_pick(arm, words, "I can't reach down to it"),
                                      ignore=(object,)))
             self._grip(arm, CLOSE_WIDTH)
@@ -375,20 +395,11 @@ class Procedures:
         return Done()
 
     def open(self, arm: str) -> Done:
-        snap = self._snapshot()
-        if snap.gripper_state(arm) == "open":
-            raise StepFailed(wording.sentence(f"My {arm} hand is already open"))
         self._grip(arm, OPEN_WIDTH)
         self._set_held(arm, None)
         return Done()
 
     def close(self, arm: str) -> Done:
-        snap = self._snapshot()
-        state = snap.gripper_state(arm)
-        if state == "closed":
-            raise StepFailed(wording.sentence(f"My {arm} hand is already closed"))
-        if state == "holding":
-            raise StepFailed(wording.sentence(f"My {arm} hand is already closed on something"))
         self._grip(arm, CLOSE_WIDTH)
         snap = self._snapshot()
         if snap.gripper_state(arm) == "holding":

@@ -105,3 +105,14 @@ def test_record_answers_from_fresh_settled_frames(feed, good_cloud):
 def test_record_without_clouds_names_the_simulator(feed):
     with pytest.raises(RemoteError, match="no point cloud from the simulator in 2 s"):
         feed.bus.request(feed.keys.record, {}, timeout=10)
+
+
+@pytest.mark.slow
+def test_record_against_the_running_simulator(network, launcher):
+    """End to end: ``hfpbd sim`` renders the default scene, perception answers ``record``."""
+    launcher.start("sim")
+    launcher.start("perception")
+    reply = network.hub.request(network.hub.keys.record, {}, timeout=30)
+    words = sorted((o["color"], o["type"]) for o in reply["objects"])
+    assert words == [("blue", "cup"), ("green", "box"), ("red", "cup"), ("white", "plate")]
+    assert all(o["held_by"] is None and o["visible"] for o in reply["objects"])
