@@ -38,6 +38,7 @@ from scipy.spatial.transform import Rotation, Slerp
 from services.executor.geometry import Box, rotation_of
 
 log = logging.getLogger("hfpbd.executor.kinematics")
+logging.getLogger("toppra").setLevel(logging.WARNING)  # it logs every parameterisation at INFO
 
 ROBOT_DIR = Path(__file__).resolve().parents[1] / "sim" / "robot"
 URDF = ROBOT_DIR / "pr2.urdf"

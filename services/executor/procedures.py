@@ -140,6 +140,9 @@ class Procedures:
 
     def _object(self, snap: SceneSnapshot, object_id: str) -> dict[str, Any]:
         if object_id not in snap.objects:
+            remembered = (snap.remembered or {}).get(object_id)
+            if remembered is not None:
+                raise StepFailed(wording.gone(refer({}, object_id, remembered)))
             raise StepFailed(wording.unknown_object(object_id))
         return snap.objects[object_id]
 

@@ -23,7 +23,8 @@ MOVED = 0.01  # metres an object must move to count as a change
 ARMS = ("right", "left")
 CLOSED_WIDTH = 0.0025
 SUPPORT_GAP = 0.025  # metres between an object's bottom and what it stands on
-MAX_STACK = 4  # gripper gap below which the fingers met: closed on nothing
+MAX_STACK = 4
+REMEMBER = 256  # objects no longer seen whose descriptions are kept, for "the red cup is gone"  # gripper gap below which the fingers met: closed on nothing
 
 
 @dataclass
@@ -36,6 +37,7 @@ class SceneSnapshot:
     robot: dict[str, Any] | None
     version: int
     robot_version: int = 0
+    remembered: dict[str, dict[str, Any]] | None = None
 
     def box(self, object_id: str) -> Box:
         return Box.of(self.objects[object_id])
@@ -106,6 +108,7 @@ class Scene:
         self._robot: dict[str, Any] | None = None
         self._version = 0
         self._robot_version = 0
+        self._remembered: dict[str, dict[str, Any]] = {}
         self.objects_received = False
 
     def update_objects(self, objects: list[dict[str, Any]], table: dict | None = None) -> bool:
@@ -114,6 +117,9 @@ class Scene:
         with self._lock:
             changed = _differs(self._objects, fresh)
             self._objects = fresh
+            self._remembered.update(copy.deepcopy(fresh))
+            while len(self._remembered) > REMEMBER:
+                del self._remembered[next(iter(self._remembered))]
             self.objects_received = True
             if isinstance(table, dict) and isinstance(table.get("height"), (int, float)):
                 changed |= abs(float(table["height"]) - self._table_z) > MOVED
@@ -132,7 +138,8 @@ class Scene:
     def snapshot(self) -> SceneSnapshot:
         with self._lock:
             return SceneSnapshot(copy.deepcopy(self._objects), self._table_z, table_box(self._table_z),
-                                 copy.deepcopy(self._robot), self._version, self._robot_version)
+                                 copy.deepcopy(self._robot), self._version, self._robot_version,
+                                 {k: v for k, v in self._remembered.items() if k not in self._objects})
 
     def wait_robot(self, after_version: int, timeout: float) -> bool:
         """Wait for a robot state newer than ``after_version``."""
