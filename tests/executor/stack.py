@@ -1,0 +1,136 @@
+"""A running sim + perception + executor, shared by the tests of one module.
+
+Starting the three processes takes tens of seconds on a small machine, so a
+module starts them once; each test then reloads the scene it needs (through
+``sim/control/scene``) and talks to the executor the way the NLU does, by
+publishing commands on ``nlu/result``. Ground truth comes from ``sim/truth``;
+perception's ids are found by position.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tests.processes import Launcher, new_network
+
+
+class Stack:
+    def __init__(self, log_dir: Path, data_dir: Path, sim_args: tuple[str, ...] = ()) -> None:
+        self.network = new_network()
+        self.hub = self.network.hub
+        self.launcher = Launcher(self.network, log_dir)
+        self.data_dir = data_dir
+        self.sim_args = sim_args
+        self.lines: list[dict[str, Any]] = []
+        self.state: dict[str, Any] | None = None
+        self.truth: dict[str, dict[str, Any]] = {}
+        self.robot: dict[str, Any] | None = None
+        self.objects: dict[str, dict[str, Any]] = {}
+        self._changed = threading.Condition()
+        keys = self.hub.keys
+        self.hub.subscribe(keys.say, self._on_say)
+        self.hub.subscribe(keys.executor_state, lambda m: self._store("state", m), latest_only=True, history=True)
+        self.hub.subscribe(keys.truth, lambda m: self._store("truth", {o["id"]: o for o in m["objects"]}), latest_only=True)
+        self.hub.subscribe(keys.sim_state, lambda m: self._store("robot", m), latest_only=True)
+        self.hub.subscribe(keys.objects, lambda m: self._store("objects", {o["id"]: o for o in m["objects"]}),
+                           latest_only=True, history=True)
+
+    # -- processes -------------------------------------------------------------------
+    def start(self) -> None:
+        self.launcher.start("sim", *self.sim_args)
+        self.launcher.start("perception")
+        self.start_executor()
+
+    def start_executor(self) -> None:
+        self.executor = self.launcher.start("executor", "--data-dir", str(self.data_dir))
+        self.wait_for(lambda: self.state is not None and self.state["reach"], 60, "a first reach map")
+
+    def close(self) -> None:
+        self.launcher.stop_all()
+        self.hub.close()
+
+    # -- observations -------------------------------------------------------------------
+    def _store(self, name: str, value: Any) -> None:
+        with self._changed:
+            setattr(self, name, value)
+            self._changed.notify_all()
+
+    def _on_say(self, message: dict[str, Any]) -> None:
+        with self._changed:
+            self.lines.append({"text": message["text"], "kind": message["kind"]})
+            self._changed.notify_all()
+
+    def wait_for(self, condition: Callable[[], Any], timeout: float, what: str) -> Any:
+        deadline = time.monotonic() + timeout
+        with self._changed:
+            while not (result := condition()):
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise AssertionError(f"timed out waiting for {what}; said: {self.lines[-8:]}")
+                self._changed.wait(min(left, 0.5))
+        return result
+
+    def ee(self, arm: str) -> np.ndarray:
+        return np.asarray(self.robot["ee"][arm], float)
+
+    def position(self, truth_id: str) -> np.ndarray:
+        return np.asarray(self.truth[truth_id]["position"], float)
+
+    def pid(self, truth_id: str) -> str:
+        """Perception's id for the simulator's object ``truth_id`` (nearest supported object)."""
+        where = self.position(truth_id)
+        candidates = {k: o for k, o in self.objects.items() if o.get("visible", True) and o.get("type") != "unknown"}
+        return min(candidates, key=lambda k: float(np.linalg.norm(np.asarray(candidates[k]["position"]) - where)))
+
+    # -- driving ---------------------------------------------------------------------------
+    def load_scene(self, name: str = "default", poses: dict[str, list[float]] | None = None) -> None:
+        """Reload a scene, let perception settle on it, and wait for the executor to be idle."""
+        request: dict[str, Any] = {"name": name}
+        if poses:
+            request["poses"] = poses
+        self.hub.request(self.hub.keys.sim_control("scene"), request, timeout=30)
+        self.hub.request(self.hub.keys.record, {}, timeout=30)
+        expected = len(self.truth)
+        self.wait_for(lambda: sum(o.get("type") != "unknown" and o.get("visible", True)
+                                  for o in self.objects.values()) >= expected, 30, "perception to see the scene")
+        self.idle()
+
+    def idle(self, timeout: float = 90.0) -> dict[str, Any]:
+        return self.wait_for(lambda: self.state if self.state and not self.state["robot"]["busy"] else None,
+                             timeout, "the executor to be idle")
+
+    def command(self, procedure: str, args: dict[str, Any] | None = None, *, phrases: dict[str, str] | None = None,
+                utterance: str = "", wait: bool = True, timeout: float = 120.0) -> list[dict[str, Any]]:
+        """Send a command as the NLU does; return what the robot said about it."""
+        start = len(self.lines)
+        self.hub.publish(self.hub.keys.nlu_result, {
+            "kind": "command", "procedure": procedure, "args": args or {}, "phrases": phrases or {},
+            "text": utterance, "utterance": utterance or procedure.replace("_", " ")})
+        if not wait:
+            return []
+        # the command is accepted (busy) or refused (an error line) within a moment, then runs to its end
+        self.wait_for(lambda: len(self.lines) > start or (self.state and self.state["robot"]["busy"]), 10,
+                      f"{procedure} to start")
+        self.idle(timeout)
+        time.sleep(0.3)  # the last line and the next truth sample arrive just after the state
+        return self.lines[start:]
+
+    @contextmanager
+    def unchanged_arms(self, tolerance: float = 0.01) -> Iterator[None]:
+        """Assert that the arms did not move during the block (a refused command moves nothing)."""
+        before = {arm: self.ee(arm) for arm in ("right", "left")}
+        yield
+        time.sleep(0.5)
+        for arm, pose in before.items():
+            assert np.linalg.norm(self.ee(arm)[:3] - pose[:3]) < tolerance, f"the {arm} arm moved"
+
+
+def texts(lines: list[dict[str, Any]], kind: str | None = None) -> list[str]:
+    return [line["text"] for line in lines if kind is None or line["kind"] == kind]
