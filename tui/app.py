@@ -9,6 +9,7 @@ with none of them running, and picks them up as they appear.
 
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Callable
 from typing import Any, TypeVar
@@ -35,6 +36,20 @@ from tui.world_panel import TableCanvas, WorldPanel
 
 RECONNECT_SECONDS = 3.0
 T = TypeVar("T")
+
+
+Handler = TypeVar("Handler", bound=Callable[..., None])
+
+
+def while_running(handler: Handler) -> Handler:
+    """Drop bus news that arrives while the app shuts down: its widgets are already gone."""
+
+    @functools.wraps(handler)
+    def guarded(app: PbdApp, *args: Any) -> None:
+        if app.is_running:
+            handler(app, *args)
+
+    return guarded  # type: ignore[return-value]
 
 
 class PbdApp(App[None]):
@@ -107,14 +122,17 @@ class PbdApp(App[None]):
         except Exception as exc:  # zenoh raises its own error type for every failure
             self.post_message(events.BusUnavailable(str(exc).split(" at ")[0]))
 
+    @while_running
     def on_bus_unavailable(self, event: events.BusUnavailable) -> None:
         self.query_one(StatusBar).set_connection(
             False, f"cannot reach {self._where()}: {event.reason} — retrying every {RECONNECT_SECONDS:g} s")
         self.set_timer(RECONNECT_SECONDS, self.connect)
 
+    @while_running
     def on_bus_connected(self, _event: events.BusConnected) -> None:
         self.query_one(StatusBar).set_connection(True, f"on {self._where()}")
 
+    @while_running
     def on_presence(self, event: events.Presence) -> None:
         self.query_one(StatusBar).set_alive(event.service, event.alive)
         conversation = self.query_one(Conversation)
@@ -129,11 +147,13 @@ class PbdApp(App[None]):
             self.describe_objects()
 
     # -- what the services say -----------------------------------------------
+    @while_running
     def on_said(self, event: events.Said) -> None:
         self.query_one(Conversation).add(event.kind, event.text)
         if event.kind == "clarify" and event.candidates:
             self.query_one(ClarifyPrompt).ask(event.text, event.candidates)
 
+    @while_running
     def on_understood(self, event: events.Understood) -> None:
         result = event.result
         if result.get("kind") != "command":
@@ -147,6 +167,7 @@ class PbdApp(App[None]):
         shown = ", ".join(f"{k}={self.world.name_of(v) if k == 'object' else v}" for k, v in args.items())
         self.query_one(Conversation).add("ui", f"understood: {result.get('procedure')}({shown})")
 
+    @while_running
     def on_objects_seen(self, event: events.ObjectsSeen) -> None:
         before = {k: v.get("position") for k, v in self.world.objects.items()}
         self.world.objects = {str(o["id"]): o for o in event.objects}
@@ -154,30 +175,36 @@ class PbdApp(App[None]):
         if {k: v.get("position") for k, v in self.world.objects.items()} != before:
             self.describe_objects()
 
+    @while_running
     def on_executor_changed(self, event: events.ExecutorChanged) -> None:
         self.world.robot = event.robot
         self.world.reach = event.reach
         self._refresh_world()
         self.query_one(ActionPanel).show(event.robot)
 
+    @while_running
     def on_sim_moved(self, event: events.SimMoved) -> None:
         self.world.ee = event.ee
         self.world.grippers = event.grippers
         self.query_one(TableCanvas).show(self.world)
         self.query_one(RobotPanel).show(self.world)
 
+    @while_running
     def on_described(self, event: events.Described) -> None:
         self.world.descriptions = event.descriptions
         self._refresh_world()
         self.query_one(CommandInput).vocabulary.learn(phrases=[*self._phrases, *event.descriptions.values()])
 
+    @while_running
     def on_vocabulary_loaded(self, event: events.VocabularyLoaded) -> None:
         self._phrases = event.phrases
         self.query_one(CommandInput).vocabulary.learn(event.words, [*event.phrases, *self.world.descriptions.values()])
 
+    @while_running
     def on_latency(self, event: events.Latency) -> None:
         self.query_one(StatusBar).set_latency(event.service, event.seconds)
 
+    @while_running
     def on_request_failed(self, event: events.RequestFailed) -> None:
         self.query_one(Conversation).add("error", f"{event.what} failed: {event.reason}")
 

@@ -35,7 +35,7 @@ class Conversation(RichLog):
     """
 
     def __init__(self, **kwargs: object) -> None:
-        super().__init__(wrap=True, markup=False, highlight=False, **kwargs)  # type: ignore[arg-type]
+        super().__init__(wrap=True, min_width=20, markup=False, highlight=False, **kwargs)  # type: ignore[arg-type]
         self.entries: list[Line] = []
 
     def add(self, kind: str, text: str) -> None:

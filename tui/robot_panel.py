@@ -14,27 +14,39 @@ _GRIPPER_STYLES = {"open": "green", "closed": "yellow", "holding": "bold magenta
 class RobotPanel(Static):
     """The situated robot state as the executor reports it, refined by live gripper readings."""
 
+    def __init__(self, **kwargs: object) -> None:
+        super().__init__(**kwargs)  # type: ignore[arg-type]
+        self.fields: dict[str, str] = {}  # what the panel shows, as plain text
+
     def show(self, world: WorldView) -> None:
         robot = world.robot
-        table = Table.grid(padding=(0, 1))
-        table.add_column(style="dim", no_wrap=True)
-        table.add_column()
         if not robot and not world.grippers:
+            self.fields = {}
             self.update(Text("no robot state yet (executor and sim not heard from)", style="dim"))
             return
+        rows: list[tuple[str, Text]] = []
         states = robot.get("grippers") or {}
         for arm in ARMS:
             state = str(states.get(arm) or _state_from_sim(world.grippers.get(arm)) or "?")
-            reading = world.grippers.get(arm) or {}
-            width = reading.get("width")
+            width = (world.grippers.get(arm) or {}).get("width")
             detail = f" {float(width) * 100:.1f} cm" if isinstance(width, (int, float)) else ""
-            table.add_row(f"{arm} gripper", Text(state, style=_GRIPPER_STYLES.get(state, "")) + Text(detail, style="dim"))
-        table.add_row("last arm", str(robot.get("last_arm") or "—"))
+            rows.append((f"{arm} gripper", Text(state, style=_GRIPPER_STYLES.get(state, "")) + Text(detail, style="dim")))
+        rows.append(("last arm", Text(str(robot.get("last_arm") or "—"))))
         last_object = robot.get("last_object")
         named = last_object in world.descriptions
-        table.add_row("last object", world.name_of(last_object) + (f" ({last_object})" if named else ""))
-        executing = bool(robot.get("executing"))
-        table.add_row("robot", Text("executing", style="bold yellow") if executing else Text("idle", style="green"))
+        rows.append(("last object", Text(world.name_of(last_object) + (f" ({last_object})" if named else ""))))
+        if robot.get("executing"):
+            rows.append(("robot", Text("executing the action", style="bold yellow")))
+        elif robot.get("busy"):
+            rows.append(("robot", Text("moving", style="yellow")))
+        else:
+            rows.append(("robot", Text("idle", style="green")))
+        table = Table.grid(padding=(0, 1))
+        table.add_column(style="dim", no_wrap=True)
+        table.add_column()
+        for label, value in rows:
+            table.add_row(label, value)
+        self.fields = {label: value.plain for label, value in rows}
         self.update(table)
 
 

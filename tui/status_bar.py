@@ -10,8 +10,8 @@ OPTIONAL = ("speech",)
 
 # What the user loses while a service is missing, in their terms.
 CONSEQUENCES: dict[str, str] = {
-    "sim": "the robot cannot move",
-    "perception": "objects not seen",
+    "sim": "nothing moves",
+    "perception": "objects unseen",
     "nlu": "commands not understood",
     "executor": "commands not carried out",
 }
@@ -63,7 +63,11 @@ class StatusBar(Static):
             if up and seconds is not None:
                 line.append(f" {seconds * 1000:.0f} ms", style="dim")
         missing = self.missing()
-        if missing:
+        if len(missing) == len(REQUIRED):
+            line.append("\n")
+            line.append("⚠ no service is running: commands are neither understood nor carried out (start them: hfpbd up)",
+                        style="yellow")
+        elif missing:
             reasons = " · ".join(f"no {s}: {CONSEQUENCES[s]}" for s in missing)
             line.append("\n")
             line.append(f"⚠ {reasons}", style="yellow")

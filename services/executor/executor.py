@@ -27,7 +27,7 @@ import numpy as np
 
 from services.executor import wording
 from services.executor.commands import ADMIN, RECORDED, CommandError, check
-from services.executor.grounding import describe_kind, reground
+from services.executor.grounding import Regrounding, describe_kind, reground
 from services.executor.kinematics import ArmKinematics, joint_names
 from services.executor.procedures import Done, Procedures, StepFailed
 from services.executor.reach import reach_map
@@ -268,8 +268,10 @@ class Executor:
             self.say(f"Stopped action {number} before its first step.", "error")
             return
         snap = self.scene.snapshot()
-        landmarks = [s["landmark"] for s in steps if s.get("landmark")]
-        matched = reground(landmarks, list(snap.objects.values()))
+        matched = reground([s["landmark"] for s in steps if s.get("landmark")], snap.standing_objects())
+        if matched.missing:  # find every landmark before moving at all: no half-done action
+            self.say(f"{next(iter(matched.missing.values()))} I can't run action {number}.", "error")
+            return
         for i, step in enumerate(steps, start=1):
             if self.cancel.is_set():
                 self.say(f"Stopped action {number} at step {i} of {len(steps)}.", "info")
@@ -280,10 +282,11 @@ class Executor:
             args = dict(step["args"])
             landmark = step.get("landmark")
             if landmark and "object" in args:
-                if landmark["id"] in matched.missing:
+                found = self._reground(landmark, matched)
+                if found is None:
                     self.say(matched.missing[landmark["id"]] + f" Stopped action {number} at step {i}.", "error")
                     return
-                args["object"] = matched.mapping[landmark["id"]]
+                args["object"] = found
             context = {"phrases": step.get("phrases", {}), "text": step.get("text", ""), "utterance": step.get("utterance", "")}
             preferred = step.get("relative_pose") if step["procedure"] == "move_rel_dest" else None
             if not self._step(step["procedure"], args, context, keep=False, preferred=preferred):
@@ -291,6 +294,25 @@ class Executor:
                     self.say(f"Action {number} stopped at step {i} of {len(steps)}.", "error")
                 return
         self.say(f"Completed action {number}.", "narration")
+
+    def _reground(self, landmark: dict[str, Any], matched: Regrounding) -> str | None:
+        """The current id of a step's landmark: the one matched at the start if it is still seen, else matched anew.
+
+        Perception may give an object a new id while an arm hides it, so a
+        landmark is re-found by its descriptor whenever its id is gone (the
+        ids taken by the action's other landmarks stay excluded).
+        """
+        snap = self.scene.snapshot()
+        current = matched.mapping.get(landmark["id"])
+        if current in snap.objects:
+            return current
+        taken = {v for k, v in matched.mapping.items() if k != landmark["id"]}
+        again = reground([landmark], [o for o in snap.standing_objects() if o["id"] not in taken])
+        if landmark["id"] in again.mapping:
+            matched.mapping[landmark["id"]] = again.mapping[landmark["id"]]
+            return again.mapping[landmark["id"]]
+        matched.missing.update(again.missing)
+        return None
 
     def _record_objects(self) -> list[dict[str, Any]]:
         """A fresh settled observation from perception, taken into the scene at once."""

@@ -43,7 +43,9 @@ def _mismatch(desc: dict[str, Any], obj: dict[str, Any]) -> list[str]:
     problems = []
     for field in ("color", "type"):
         want, have = desc.get(field, "unknown"), obj.get(field, "unknown")
-        if want != "unknown" and have != "unknown" and want != have:
+        # a type word may be missing for a moment (a partial view); a colour word is always seen
+        wildcard = field == "type" and have == "unknown"
+        if want != "unknown" and want != have and not wildcard:
             problems.append(field)
     want_size = np.asarray(desc["size"], float)
     have_size = np.asarray(obj["size"], float)
@@ -56,7 +58,7 @@ def cost(desc: dict[str, Any], obj: dict[str, Any]) -> float:
     """Lower is better; ``REJECT`` or more means "not this object"."""
     if _mismatch(desc, obj):
         return REJECT
-    unknown_penalty = sum(0.5 for f in ("color", "type") if obj.get(f, "unknown") == "unknown" != desc.get(f, "unknown"))
+    unknown_penalty = 0.5 if obj.get("type", "unknown") == "unknown" != desc.get("type", "unknown") else 0.0
     return float(np.linalg.norm(np.asarray(desc["size"], float) - np.asarray(obj["size"], float))) + unknown_penalty
 
 

@@ -55,6 +55,7 @@ IK_TOLERANCE = 1e-3
 # time in proportion to how far the joints travel (about 0.5 m/s at the hand).
 JOINT_SPEED = 1.0
 JOINT_ACCEL = 1.5
+PLANNING_TIMES = (1.0, 4.0)  # seconds for RRTConnect: a quick try, then a patient one
 CARTESIAN_STEP = 0.01  # straight-line moves are interpolated every centimetre
 ROLL_JOINTS = (4, 6)   # forearm and wrist roll: sampled over one turn only
 
@@ -77,6 +78,16 @@ class Trajectory:
     @property
     def duration(self) -> float:
         return float(self.times[-1]) if len(self.times) else 0.0
+
+
+def _part_name(link_or_object: str) -> str:
+    """"r_forearm_link" -> "right arm", "torso_lift_link" -> "body", obstacles keep their name."""
+    for arm, prefix in PREFIX.items():
+        if link_or_object.startswith(f"{prefix}_"):
+            return f"{arm} arm"
+    if link_or_object.endswith("_link") or link_or_object.startswith(("base", "torso", "head")):
+        return "body"
+    return link_or_object
 
 
 def _to_pose(pose: np.ndarray) -> Pose:
@@ -114,6 +125,7 @@ class ArmKinematics:
         self._obstacles: set[str] = set()
         self.held: str | None = None
         self._build_seeds(seeds, rng_seed)
+        mplib.set_global_seed(rng_seed)  # OMPL's sampling: the same request plans the same path
 
     # -- state ----------------------------------------------------------------
     def set_joints(self, joints: dict[str, float]) -> None:
@@ -265,6 +277,22 @@ class ArmKinematics:
                 return i, q
         return None
 
+    def blockers(self, poses: list[np.ndarray]) -> set[str] | None:
+        """Why none of ``poses`` is reachable: what the IK solutions would hit (None: out of reach).
+
+        Names are obstacle names or ``"right arm"`` / ``"left arm"`` / ``"body"``
+        for the robot itself, so a refusal can say what is in the way.
+        """
+        hits: set[str] = set()
+        for pose in poses:
+            arm_q = self.ik(pose, check_collisions=False)
+            if arm_q is None:
+                continue
+            for pair in self.collisions(arm_q):
+                other = [n for n in pair if not n.startswith(f"{PREFIX[self.arm]}_")]
+                hits.update(_part_name(n) for n in other)
+        return hits or None
+
     # -- motion ------------------------------------------------------------------------
     def _parameterise(self, arm_path: np.ndarray) -> Trajectory:
         """Time a joint path by the speed/acceleration limits (time grows with distance)."""
@@ -294,25 +322,27 @@ class ArmKinematics:
             for name in touched:
                 acm.set_entry(name, self._robot_links, False)
 
-    def plan_to(self, arm_q: np.ndarray, planning_time: float = 1.5) -> Trajectory | None:
-        """A collision-free joint trajectory from the current joints to ``arm_q`` (OMPL RRTConnect)."""
-        with self._tolerating_start_contacts():
-            return self._plan_to(arm_q, planning_time)
+    def plan_to(self, arm_q: np.ndarray) -> Trajectory | None:
+        """A collision-free joint trajectory from the current joints to ``arm_q``.
 
-    def _plan_to(self, arm_q: np.ndarray, planning_time: float) -> Trajectory | None:
-        start = self.full(self.arm_q)
-        goal = self.full(arm_q)
-        if not self.collisions(self.arm_q):
-            straight = self._joint_line(self.arm_q, arm_q)
-            if straight is not None:
-                return self._parameterise(straight)
-        result = self.planner.plan_qpos([goal], start, planning_time=planning_time,
-                                        fixed_joint_indices=[0], rrt_range=0.1)
-        if result["status"] != "Success":
-            log.info("%s arm: no collision-free path (%s)", self.arm, result["status"])
-            return None
-        positions = np.asarray(result["position"])[:, 1:]
-        return Trajectory(positions.copy(), np.asarray(result["time"], float))
+        The straight joint path when it is clear (most moves); otherwise
+        OMPL's RRTConnect, given more time on a second try because a narrow
+        passage (over a tall box with a cup in hand) is sometimes missed in
+        the first second.
+        """
+        with self._tolerating_start_contacts():
+            if not self.collisions(self.arm_q):
+                straight = self._joint_line(self.arm_q, arm_q)
+                if straight is not None:
+                    return self._parameterise(straight)
+            for planning_time in PLANNING_TIMES:
+                result = self.planner.plan_qpos([self.full(arm_q)], self.full(self.arm_q), planning_time=planning_time,
+                                                fixed_joint_indices=[0], rrt_range=0.1)
+                if result["status"] == "Success":
+                    positions = np.asarray(result["position"])[:, 1:]
+                    return Trajectory(positions.copy(), np.asarray(result["time"], float))
+                log.info("%s arm: no collision-free path in %.1f s (%s)", self.arm, planning_time, result["status"])
+        return None
 
     def _joint_line(self, a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
         """The straight joint-space path a → b if it is collision-free (the common, cheap case)."""

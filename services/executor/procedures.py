@@ -89,6 +89,9 @@ class Procedures:
     def precheck(self, procedure: str, args: dict[str, Any]) -> None:
         """Refuse, before anything is said or moved, a command whose preconditions do not hold."""
         snap = self._snapshot()
+        for hand, held_now in self.held().items():
+            if held_now is not None and snap.gripper_state(hand) != "holding":
+                self._set_held(hand, None)  # it fell, or the scene was reset: the hand is empty now
         object_id = args.get("object")
         if object_id is not None:
             self._object(snap, object_id)
@@ -205,11 +208,22 @@ class Procedures:
             poses = [np.concatenate([box.center + preferred[:3], preferred[3:7]])] + poses
         found = kin.first_reachable(poses)
         if found is None:
-            raise StepFailed(wording.cannot_reach(arm, relation, refer(snap.objects, object)))
+            raise StepFailed(self._unreachable(kin, snap, poses, wording.cannot_reach(arm, relation, refer(snap.objects, object))))
         self._go(arm, self._plan(kin, found[1], wording.sentence(
             f"I can't find a clear path for my {arm} hand to {wording.RELATION_WORDS[relation]} {refer(snap.objects, object)}")))
         kin.set_joints(self._snapshot().joints())
         return Done(landmark=self._landmark(obj), relative_pose=self._relative(kin, box))
+
+    def _unreachable(self, kin: ArmKinematics, snap: SceneSnapshot, poses: list[np.ndarray], sentence: str) -> str:
+        """The refusal, with what is in the way when something is (another object, the other arm)."""
+        blockers = kin.blockers(poses)
+        log.info("%s: blocked by %s", sentence, blockers)
+        if not blockers:
+            return sentence
+        names = sorted(refer(snap.objects, b) if b in snap.objects else ("the table" if b == "table" else f"my {b}")
+                       for b in blockers)
+        verb = "is" if len(names) == 1 else "are"
+        return f"{sentence[:-1]}: {' and '.join(names)} {verb} in the way."
 
     def _refreshed(self, arm: str, kin: ArmKinematics, snap: SceneSnapshot) -> Held | None:
         held = self.held()[arm]

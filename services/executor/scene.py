@@ -55,6 +55,15 @@ class SceneSnapshot:
                       if oid not in skip and self.supported(oid)})
         return boxes
 
+    def standing_objects(self) -> list[dict[str, Any]]:
+        """Objects in view now that rest on something (see :meth:`obstacles`): candidates for re-grounding.
+
+        Perception keeps reporting an object for a few seconds after it was
+        last seen (``visible`` false), so a cup that was just taken away
+        does not stand in for the one the action needs.
+        """
+        return [o for oid, o in self.objects.items() if o.get("visible", True) and self.supported(oid)]
+
     def supported(self, object_id: str, depth: int = 0) -> bool:
         """Whether the object rests on the table, or on an object that is itself supported (a stack)."""
         box = Box.of(self.objects[object_id])

@@ -134,7 +134,7 @@ def build_jsgf(vocabulary: SpeechVocabulary, scene: SceneWords = SceneWords()) -
         body = rules.define(f"command_{procedure}", alternatives)
         if body:
             bodies.append(body)
-    polite = rules.define("polite", (w for w in ("please", "now", "okay", "robot") if w in vocabulary.fillers))
+    polite = rules.define("polite", (w for w in ("please",) if w in vocabulary.fillers))
     lines = ["#JSGF V1.0;", f"grammar {GRAMMAR_NAME};",
              f"public <command> = {seq(optional(polite), '(' + ' | '.join(bodies) + ')', optional(polite))};"]
     lines += [f"<{name}> = {body};" for name, body in rules.bodies.items()]

@@ -36,7 +36,8 @@ class Stack:
         self._changed = threading.Condition()
         keys = self.hub.keys
         self.hub.subscribe(keys.say, self._on_say)
-        self.hub.subscribe(keys.executor_state, lambda m: self._store("state", m), latest_only=True, history=True)
+        self.runs = 0  # states seen with a command running, counted so no start or end is missed
+        self.hub.subscribe(keys.executor_state, self._on_state, history=True)
         self.hub.subscribe(keys.truth, lambda m: self._store("truth", {o["id"]: o for o in m["objects"]}), latest_only=True)
         self.hub.subscribe(keys.sim_state, lambda m: self._store("robot", m), latest_only=True)
         self.hub.subscribe(keys.objects, lambda m: self._store("objects", {o["id"]: o for o in m["objects"]}),
@@ -60,6 +61,12 @@ class Stack:
     def _store(self, name: str, value: Any) -> None:
         with self._changed:
             setattr(self, name, value)
+            self._changed.notify_all()
+
+    def _on_state(self, message: dict[str, Any]) -> None:
+        with self._changed:
+            self.state = message
+            self.runs += bool(message["robot"]["busy"])
             self._changed.notify_all()
 
     def _on_say(self, message: dict[str, Any]) -> None:
@@ -90,16 +97,19 @@ class Stack:
         return min(candidates, key=lambda k: float(np.linalg.norm(np.asarray(candidates[k]["position"]) - where)))
 
     # -- driving ---------------------------------------------------------------------------
-    def load_scene(self, name: str = "default", poses: dict[str, list[float]] | None = None) -> None:
-        """Reload a scene, let perception settle on it, and wait for the executor to be idle."""
-        request: dict[str, Any] = {"name": name}
+    def load_scene(self, name: str | dict[str, Any] = "default", poses: dict[str, list[float]] | None = None) -> None:
+        """Reload a scene (by name, or an inline scene map), let perception settle on it, wait until idle."""
+        request: dict[str, Any] = {"scene": name} if isinstance(name, dict) else {"name": name}
         if poses:
             request["poses"] = poses
         self.hub.request(self.hub.keys.sim_control("scene"), request, timeout=30)
         self.hub.request(self.hub.keys.record, {}, timeout=30)
         expected = len(self.truth)
+        # every object of the scene seen, and the previous scene's objects forgotten (perception keeps
+        # an unseen object for a few seconds, and the executor rightly treats it as an obstacle until then)
         self.wait_for(lambda: sum(o.get("type") != "unknown" and o.get("visible", True)
-                                  for o in self.objects.values()) >= expected, 30, "perception to see the scene")
+                                  for o in self.objects.values()) >= expected
+                      and all(o.get("visible", True) for o in self.objects.values()), 30, "perception to see the scene")
         self.idle()
 
     def idle(self, timeout: float = 90.0) -> dict[str, Any]:
@@ -109,14 +119,14 @@ class Stack:
     def command(self, procedure: str, args: dict[str, Any] | None = None, *, phrases: dict[str, str] | None = None,
                 utterance: str = "", wait: bool = True, timeout: float = 120.0) -> list[dict[str, Any]]:
         """Send a command as the NLU does; return what the robot said about it."""
-        start = len(self.lines)
+        start, runs = len(self.lines), self.runs
         self.hub.publish(self.hub.keys.nlu_result, {
             "kind": "command", "procedure": procedure, "args": args or {}, "phrases": phrases or {},
             "text": utterance, "utterance": utterance or procedure.replace("_", " ")})
         if not wait:
             return []
-        # the command is accepted (busy) or refused (an error line) within a moment, then runs to its end
-        self.wait_for(lambda: len(self.lines) > start or (self.state and self.state["robot"]["busy"]), 10,
+        # the command is accepted (a busy state) or refused (an error line) within a moment, then runs to its end
+        self.wait_for(lambda: self.runs > runs or any(line["kind"] == "error" for line in self.lines[start:]), 10,
                       f"{procedure} to start")
         self.idle(timeout)
         time.sleep(0.3)  # the last line and the next truth sample arrive just after the state

@@ -49,6 +49,11 @@ def test_one_object_cannot_stand_for_two_landmarks() -> None:
     assert "only find one red cup" in next(iter(result.missing.values()))
 
 
-def test_unknown_colour_seen_now_still_matches_but_costs_more() -> None:
-    now = [obj("x", "unknown", "cup", (0.07, 0.07, 0.1)), obj("y", "red", "cup", (0.08, 0.08, 0.11))]
+def test_a_missing_type_word_still_matches_but_costs_more() -> None:
+    now = [obj("x", "red", "unknown", (0.07, 0.07, 0.1)), obj("y", "red", "cup", (0.08, 0.08, 0.11))]
     assert reground([descriptor(RED_CUP)], now).mapping == {"a": "y"}
+    assert reground([descriptor(RED_CUP)], now[:1]).mapping == {"a": "x"}
+
+
+def test_an_unknown_colour_is_no_match_for_a_known_one() -> None:
+    assert reground([descriptor(RED_CUP)], [obj("x", "unknown", "cup", (0.07, 0.07, 0.1))]).mapping == {}

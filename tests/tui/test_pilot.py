@@ -22,6 +22,7 @@ from tui.app import PbdApp
 from tui.clarify import ClarifyPrompt
 from tui.command_input import CommandInput
 from tui.conversation import Conversation
+from tui.robot_panel import RobotPanel
 from tui.status_bar import StatusBar
 from tui.world_panel import ObjectTable, TableCanvas
 
@@ -69,7 +70,7 @@ async def test_without_services_the_ui_says_what_cannot_work_and_connects_when_t
         summary = status(app).summary()
         for service in ("sim", "perception", "nlu", "executor"):
             assert f"○ {service}" in summary
-        assert "no nlu: commands not understood" in summary
+        assert "no service is running" in summary
         # typing still works and nothing is lost silently
         await pilot.press(*"hello", "enter")
         assert conversation(app).texts("user") == ["hello"]
@@ -83,6 +84,7 @@ async def test_without_services_the_ui_says_what_cannot_work_and_connects_when_t
             await until(pilot, lambda: len(app.world.objects) == len(OBJECTS), what="objects")
             assert "● nlu" in status(app).summary()
             assert "no nlu" not in status(app).summary()
+            assert "no executor: commands not carried out" in status(app).summary()
 
 
 async def test_a_typed_command_is_published_and_shown(network: Network) -> None:
@@ -239,14 +241,16 @@ async def test_robot_and_action_panels_follow_the_executor(network: Network) -> 
         state.put({"stamp": time.time(), "robot": running, "reach": REACH})
         await until(pilot, lambda: app.world.robot.get("executing"), what="executing state")
         await pilot.pause(0.1)
-        robot_text = str(app.query_one("#robot").render())
+        robot = app.query_one(RobotPanel).fields
         panel = app.query_one(ActionPanel)
         steps = str(panel.query_one("#action-steps").render())
         assert "▶ 2. pick it up" in steps
         assert "action 1 of 1" in str(panel.query_one("#action-title").render())
         assert panel.query_one("#action-progress").display
-        assert robot_text  # rendered without error
-        assert app.world.robot["grippers"]["right"] == "holding"
+        assert robot["right gripper"] == "holding"
+        assert robot["left gripper"] == "open"
+        assert robot["last object"] == "obj0"  # no referring expression known: the id
+        assert robot["robot"] == "executing the action"
 
 
 KEYS = [

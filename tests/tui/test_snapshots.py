@@ -24,6 +24,7 @@ def settled(app: PbdApp, hub: Bus, then: Callable[[Pilot], Awaitable[Any]] | Non
     """Wait until the staged world is on screen, then run ``then``."""
 
     async def run_before(pilot: Pilot) -> None:
+        app.query_one("#input").cursor_blink = False  # a blinking cursor would make two pictures differ
         await until(pilot, lambda: len(app.query_one(StatusBar).alive) == 4, what="presence")
         for _ in range(100):  # the sim streams; keep publishing until the UI has a sample
             if app.world.ee:
@@ -41,20 +42,25 @@ def settled(app: PbdApp, hub: Bus, then: Callable[[Pilot], Awaitable[Any]] | Non
     return run_before
 
 
+async def pick_up_the_red_cup(app: PbdApp, hub: Bus, pilot: Pilot) -> None:
+    """The user asks for a pick-up; the NLU's result and the executor's narration come back."""
+    await pilot.pause(0.3)
+    await pilot.press(*"pick up the red cup", "enter")
+    hub.publish(hub.keys.nlu_result, {"kind": "command", "procedure": "pick_up", "utterance": "pick up the red cup",
+                                      "args": {"arm": "right", "object": "obj0"}, "confidence": 0.93})
+    await until(pilot, lambda: app.world.highlighted == "obj0", what="the highlight")
+    # the result and the narration travel on different keys: send the second after the first is shown
+    hub.publish(hub.keys.say, {"text": "Picking up the red cup with my right hand.", "kind": "narration"})
+    await until(pilot, lambda: len(app.query_one("#conversation").entries) >= 3, what="the narration")
+
+
 def test_main_screen(snap_compare: Any) -> None:
     with fixed_network("snapmain") as (hub, options):
         world = stage_world(hub)
         app = PbdApp(options, probe_seconds=None)
 
         async def dialog(pilot: Pilot) -> None:
-            await pilot.pause(0.3)
-            await pilot.press(*"pick up the red cup", "enter")
-            hub.publish(hub.keys.nlu_result, {"kind": "command", "procedure": "pick_up", "utterance": "pick up the red cup",
-                                              "args": {"arm": "right", "object": "obj0"}, "confidence": 0.93})
-            await until(pilot, lambda: app.world.highlighted == "obj0", what="the highlight")
-            # the result and the narration travel on different keys: send the second after the first is shown
-            hub.publish(hub.keys.say, {"text": "Picking up the red cup with my right hand.", "kind": "narration"})
-            await until(pilot, lambda: len(app.query_one("#conversation").entries) >= 3, what="the narration")
+            await pick_up_the_red_cup(app, hub, pilot)
 
         assert snap_compare(app, terminal_size=SIZE, run_before=settled(app, hub, dialog))
         del world

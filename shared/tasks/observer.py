@@ -1,0 +1,119 @@
+"""Everything a task run watches on the bus, behind one condition variable.
+
+Why one object: a step is over only when several streams agree (the NLU
+answered, the executor went busy and idle again, what was said), and motion
+start is read from ``sim/state`` while the runner waits. Handlers run on the
+bus's worker threads; the runner waits on :meth:`Observer.wait_for`.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, TypeVar
+
+from shared.bus import Bus
+
+T = TypeVar("T")
+
+
+class WaitTimeout(TimeoutError):
+    """A condition did not hold in time; the message says what was awaited."""
+
+
+@dataclass(frozen=True)
+class Line:
+    """Something the robot said, with when it arrived here."""
+
+    at: float
+    text: str
+    kind: str
+
+
+class Observer:
+    def __init__(self, bus: Bus) -> None:
+        self._changed = threading.Condition()
+        self.lines: list[Line] = []
+        self.results: list[tuple[float, dict[str, Any]]] = []
+        self.executor: dict[str, Any] | None = None
+        self.busy_states = 0                     # executor states seen with a command running
+        self.sim: dict[str, Any] | None = None
+        self.truth: dict[str, dict[str, Any]] = {}
+        self.truth_at = 0.0
+        self.objects: dict[str, dict[str, Any]] = {}
+        self.objects_at = 0.0
+        self._motion_since: float | None = None
+        self.motion_at: float | None = None      # sim stamp of the first arm motion after motion_since
+        keys = bus.keys
+        bus.subscribe(keys.say, self._on_say, schema="say")
+        bus.subscribe(keys.nlu_result, self._on_result, schema="nlu_result")
+        bus.subscribe(keys.executor_state, self._on_executor, schema="executor_state", history=True)
+        bus.subscribe(keys.sim_state, self._on_sim, schema="sim_state", latest_only=True)
+        bus.subscribe(keys.truth, self._on_truth, schema="truth", latest_only=True)
+        bus.subscribe(keys.objects, self._on_objects, schema="objects", latest_only=True, history=True)
+
+    # -- handlers (bus worker threads) ---------------------------------------------------
+    def _on_say(self, message: dict[str, Any]) -> None:
+        with self._changed:
+            self.lines.append(Line(time.time(), message["text"], message["kind"]))
+            self._changed.notify_all()
+
+    def _on_result(self, message: dict[str, Any]) -> None:
+        with self._changed:
+            self.results.append((time.time(), message))
+            self._changed.notify_all()
+
+    def _on_executor(self, message: dict[str, Any]) -> None:
+        with self._changed:
+            self.executor = message
+            self.busy_states += bool(message["robot"].get("busy"))
+            self._changed.notify_all()
+
+    def _on_sim(self, message: dict[str, Any]) -> None:
+        with self._changed:
+            self.sim = message
+            moving = message.get("moving") or {}
+            if self._motion_since is not None and self.motion_at is None and any(moving.values()):
+                stamp = float(message.get("stamp", time.time()))
+                if stamp >= self._motion_since:
+                    self.motion_at = stamp
+            self._changed.notify_all()
+
+    def _on_truth(self, message: dict[str, Any]) -> None:
+        with self._changed:
+            self.truth = {o["id"]: o for o in message["objects"] if isinstance(o, dict) and "id" in o}
+            self.truth_at = time.time()
+            self._changed.notify_all()
+
+    def _on_objects(self, message: dict[str, Any]) -> None:
+        with self._changed:
+            self.objects = {o["id"]: o for o in message["objects"] if isinstance(o, dict) and "id" in o}
+            self.objects_at = time.time()
+            self._changed.notify_all()
+
+    # -- queries ---------------------------------------------------------------------------
+    def watch_motion(self, since: float) -> None:
+        """Start looking for the first arm motion stamped at or after ``since`` (wall clock)."""
+        with self._changed:
+            self._motion_since, self.motion_at = since, None
+
+    def busy(self) -> bool:
+        return bool(self.executor and self.executor["robot"].get("busy"))
+
+    def lines_since(self, since: float) -> list[Line]:
+        with self._changed:
+            return [line for line in self.lines if line.at >= since]
+
+    def wait_for(self, condition: Callable[[], T], timeout: float, what: str) -> T:
+        """Wait until ``condition()`` (called under the lock) is truthy; return its value."""
+        deadline = time.monotonic() + timeout
+        with self._changed:
+            while not (value := condition()):
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    said = "; ".join(f"{l.kind}: {l.text}" for l in self.lines[-4:]) or "nothing"
+                    raise WaitTimeout(f"timed out after {timeout:g} s waiting for {what} (last said: {said})")
+                self._changed.wait(min(left, 0.5))
+            return value

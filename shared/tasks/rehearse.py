@@ -1,0 +1,110 @@
+"""A dry run of a task script through the language model alone (no robot, no network).
+
+Why: a script is only worth running on the robot if each utterance, in the
+context the previous steps leave, means what the script intends. Here the
+world state starts from the scene file and each expected command changes it
+the way the robot would (a picked-up object is held and lifted, a placed one
+lands by its landmark, the last arm and object are remembered); the NLU's own
+:class:`Dialogue` carries the conversation exactly as the service does.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+from typing import Any
+
+from services.nlu.context import Dialogue
+from services.nlu.infer import Clarify, Model
+from services.nlu.world import parse_world
+from services.sim.scene_file import load_scene
+from shared.tasks.scripts import Task, Utterance
+
+ADMIN = {"record", "create_action", "switch_action", "execute", "stop"}
+LIFT = 0.12          # a picked-up object rises about this much
+GAP = 0.05           # a placed object lands this far from its landmark's side
+
+
+@dataclass(frozen=True)
+class Rehearsed:
+    """One utterance: what the model made of it, and whether that is what the script expects."""
+
+    utterance: Utterance
+    understood: dict[str, Any]        # the parse JSON (command or clarify)
+
+    @property
+    def ok(self) -> bool:
+        return (self.understood.get("kind") == "command"
+                and self.understood.get("procedure") == self.utterance.expect.procedure
+                and self.understood.get("args") == self.utterance.expect.args)
+
+    def explain(self) -> str:
+        if self.understood.get("kind") != "command":
+            return f"{self.utterance.text!r}: the robot asked {self.understood.get('question')!r}"
+        got = {"procedure": self.understood["procedure"], "args": self.understood["args"]}
+        return f"{self.utterance.text!r}: understood {got}, expected {self.utterance.expect.as_dict()}"
+
+
+def initial_world(scene_name: str) -> dict[str, Any]:
+    """The world-state JSON perception and the executor would report for a freshly loaded scene."""
+    scene = load_scene(scene_name)
+    objects = [{"id": o.id, "color": o.color, "type": o.type, "position": list(o.position), "size": list(o.size),
+                "held_by": None} for o in scene.objects]
+    robot = {"grippers": {"right": "open", "left": "open"}, "last_arm": None, "last_object": None, "executing": False}
+    return {"objects": objects, "robot": robot}
+
+
+def rehearse(task: Task, style: str) -> list[Rehearsed]:
+    """Parse every utterance of one script in order; the world follows the *expected* commands."""
+    world = initial_world(task.scene)
+    dialogue = Dialogue()
+    results = []
+    for utterance in task.script(style):
+        result = dialogue.understand(Model(parse_world(world)), utterance.text)
+        results.append(Rehearsed(utterance, result.to_json()))
+        if isinstance(result, Clarify):
+            dialogue.pending = None  # the script does not answer questions; the next line starts afresh
+        world = after(world, utterance.expect.procedure, utterance.expect.args)
+        dialogue.observe_robot()  # the executor's state report takes over the history
+    return results
+
+
+def after(world: dict[str, Any], procedure: str, args: dict[str, Any]) -> dict[str, Any]:
+    """The world state once the robot has done ``procedure`` (only what the language model looks at)."""
+    world = copy.deepcopy(world)
+    robot, objects = world["robot"], {o["id"]: o for o in world["objects"]}
+    arm, target = args.get("arm"), args.get("object")
+    if procedure not in ADMIN:
+        robot["last_arm"] = arm or robot["last_arm"]
+        robot["last_object"] = target or robot["last_object"]
+    held = next((o for o in objects.values() if o["held_by"] == arm), None) if arm else None
+    if procedure == "pick_up":
+        objects[target]["held_by"] = arm
+        objects[target]["position"][2] += LIFT
+        robot["grippers"][arm] = "holding"
+    elif procedure in ("place_rel", "place_abs", "open") and held is not None:
+        if procedure == "place_rel":
+            held["position"] = _placed(held, objects[target], args["relation"])
+        else:
+            held["position"][2] -= LIFT
+        held["held_by"] = None
+        robot["grippers"][arm] = "open"
+    elif procedure == "open":
+        robot["grippers"][arm] = "open"
+    elif procedure == "close":
+        robot["grippers"][arm] = "closed"
+    return world
+
+
+def _placed(held: dict[str, Any], landmark: dict[str, Any], relation: str) -> list[float]:
+    """Where a placed object ends up relative to its landmark (centre of its box)."""
+    (x, y, z), (lx, ly, lz) = landmark["position"], landmark["size"]
+    hx, hy, hz = held["size"]
+    table_z = z - lz / 2
+    if relation in ("on_top_of", "above"):
+        return [x, y, z + lz / 2 + hz / 2]
+    offsets = {"left_of": (0.0, ly / 2 + GAP + hy / 2), "next_to": (0.0, -(ly / 2 + GAP + hy / 2)),
+               "right_of": (0.0, -(ly / 2 + GAP + hy / 2)), "near": (0.0, -(ly / 2 + GAP + hy / 2)),
+               "in_front_of": (-(lx / 2 + GAP + hx / 2), 0.0), "behind": (lx / 2 + GAP + hx / 2, 0.0)}
+    dx, dy = offsets[relation]
+    return [x + dx, y + dy, table_z + hz / 2]

@@ -1,0 +1,98 @@
+"""The real ``hfpbd tui`` program in a real terminal (tmux), used as a person would."""
+
+from __future__ import annotations
+
+import queue
+import shutil
+import subprocess
+import sys
+import time
+import uuid
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from tests.processes import ROOT, Network
+
+pytestmark = pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is not installed")
+
+HFPBD = str(Path(sys.executable).with_name("hfpbd"))
+
+
+class Terminal:
+    """A detached 120×40 tmux session on a private server socket, running one command."""
+
+    def __init__(self, command: list[str]) -> None:
+        self.socket = "hfpbd-test-" + uuid.uuid4().hex[:8]
+        self._tmux("new-session", "-d", "-x", "120", "-y", "40", "-s", "ui", subprocess.list2cmdline(command))
+
+    def _tmux(self, *args: str) -> str:
+        return subprocess.run(["tmux", "-L", self.socket, "-f", "/dev/null", *args], cwd=ROOT, check=True,
+                              capture_output=True, text=True, timeout=10).stdout
+
+    def screen(self) -> str:
+        return self._tmux("capture-pane", "-p", "-t", "ui")
+
+    def type(self, *keys: str) -> None:
+        self._tmux("send-keys", "-t", "ui", *keys)
+
+    def wait_for(self, text: str, timeout: float = 30.0) -> str:
+        deadline = time.monotonic() + timeout
+        while True:
+            screen = self.screen()
+            if text in screen:
+                return screen
+            if time.monotonic() > deadline:
+                raise AssertionError(f"{text!r} never appeared on the terminal:\n{screen}")
+            time.sleep(0.2)
+
+    def running(self) -> bool:
+        return subprocess.run(["tmux", "-L", self.socket, "has-session", "-t", "ui"],
+                              capture_output=True, timeout=10).returncode == 0
+
+    def close(self) -> None:
+        subprocess.run(["tmux", "-L", self.socket, "kill-server"], capture_output=True, timeout=10)
+
+
+@pytest.fixture
+def terminal(network: Network) -> Iterator[Terminal]:
+    # COLUMNS/LINES from the test runner's environment would override the real terminal size
+    term = Terminal(["env", "-u", "COLUMNS", "-u", "LINES", HFPBD, "tui", *network.client_argv()])
+    try:
+        yield term
+    finally:
+        term.close()
+
+
+def test_a_person_at_the_terminal(network: Network, terminal: Terminal) -> None:
+    hub = network.hub
+    heard: queue.Queue[dict[str, Any]] = queue.Queue()
+    hub.subscribe(hub.keys.utterance, heard.put)
+    stops: queue.Queue[dict[str, Any]] = queue.Queue()
+    hub.serve(hub.keys.sim_control("stop"), lambda request: (stops.put(request), {"ok": True})[1])
+
+    screen = terminal.wait_for("no service is running")
+    assert "○ sim" in screen and "○ executor" in screen
+
+    hub.declare_alive("nlu")
+    terminal.wait_for("no executor: commands not carried out")
+    assert "● nlu" in terminal.screen()
+
+    terminal.type("move your right hand up", "Enter")
+    assert heard.get(timeout=20)["text"] == "move your right hand up"
+    terminal.wait_for("you   › move your right hand up")
+
+    hub.publish(hub.keys.say, {"text": "Moving my right hand up.", "kind": "narration"})
+    terminal.wait_for("robot › Moving my right hand up.")
+
+    terminal.type("Escape")  # stop: the executor is not running, so the arms are stopped directly
+    assert stops.get(timeout=20) == {"v": 1}
+    terminal.wait_for("stopped the arms directly")
+
+    terminal.type("C-q")
+    deadline = time.monotonic() + 20
+    while terminal.running() and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not terminal.running(), "the UI did not quit on ctrl+q"
