@@ -12,7 +12,7 @@ BENCHMARKS: dict[str, str] = {
     "sim": "services.sim.bench",
     "perception": "services.perception.bench",
     "executor": "services.executor.bench",
-    "tasks": "services.executor.bench_tasks",
+    "tasks": "shared.tasks.bench",
     "speech": "services.speech.bench",
 }
 

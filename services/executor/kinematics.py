@@ -32,6 +32,7 @@ import mplib
 import numpy as np
 from mplib import Pose
 from mplib.collision_detection import fcl
+from mplib.planning.ompl import FixedJoint
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation, Slerp
 
@@ -55,8 +56,11 @@ IK_TOLERANCE = 1e-3
 # time in proportion to how far the joints travel (about 0.5 m/s at the hand).
 JOINT_SPEED = 1.0
 JOINT_ACCEL = 1.5
-PLANNING_TIMES = (1.0, 4.0)  # seconds for RRTConnect: a quick try, then a patient one
-CARTESIAN_STEP = 0.01  # straight-line moves are interpolated every centimetre
+OBJECT_PADDING = 0.01  # metres added around each object: a margin for perception's error and path sampling
+TABLE_PADDING = 0.005
+PLANNING_TIMES = (1.0, 2.0, 4.0)  # seconds for RRTConnect: a quick try, then a patient one
+CARTESIAN_STEP = 0.01
+JOINT_RESOLUTION = 0.05  # rad between checked waypoints of a planned path  # straight-line moves are interpolated every centimetre
 ROLL_JOINTS = (4, 6)   # forearm and wrist roll: sampled over one turn only
 
 
@@ -78,6 +82,15 @@ class Trajectory:
     @property
     def duration(self) -> float:
         return float(self.times[-1]) if len(self.times) else 0.0
+
+
+def _densified(path: np.ndarray, resolution: float) -> np.ndarray:
+    """Waypoints at most ``resolution`` rad apart, so the timing spline stays on the checked segments."""
+    out = [path[0]]
+    for a, b in zip(path[:-1], path[1:]):
+        steps = max(1, int(np.ceil(np.max(np.abs(b - a)) / resolution)))
+        out.extend(np.linspace(a, b, steps + 1)[1:])
+    return np.asarray(out)
 
 
 def _part_name(link_or_object: str) -> str:
@@ -185,7 +198,8 @@ class ArmKinematics:
         for name, box in boxes.items():
             if name == self.held:
                 continue
-            shape = fcl.CollisionObject(fcl.Box(np.maximum(box.size, 1e-3)))
+            padding = TABLE_PADDING if name == "table" else OBJECT_PADDING
+            shape = fcl.CollisionObject(fcl.Box(np.maximum(box.size + 2 * padding, 1e-3)))
             world.add_object(fcl.FCLObject(name, Pose(box.center, [1, 0, 0, 0]), [shape], [Pose()]))
         self._obstacles = set(boxes) - ({self.held} if self.held else set())
 
@@ -335,14 +349,48 @@ class ArmKinematics:
                 straight = self._joint_line(self.arm_q, arm_q)
                 if straight is not None:
                     return self._parameterise(straight)
+            start = self.full(self.arm_q)
+            fixed = {FixedJoint(0, self.torso_idx, float(start[self.torso_idx]))}
             for planning_time in PLANNING_TIMES:
-                result = self.planner.plan_qpos([self.full(arm_q)], self.full(self.arm_q), planning_time=planning_time,
-                                                fixed_joint_indices=[0], rrt_range=0.1)
-                if result["status"] == "Success":
-                    positions = np.asarray(result["position"])[:, 1:]
-                    return Trajectory(positions.copy(), np.asarray(result["time"], float))
-                log.info("%s arm: no collision-free path in %.1f s (%s)", self.arm, planning_time, result["status"])
+                # OMPL checks edges at a resolution relative to the whole joint space (coarse, with the
+                # rolls' two turns), so its raw RRT path (short edges) is taken and shortcut here with
+                # dense checks instead of OMPL's own simplification.
+                status, path = self.planner.planner.plan(start[self.group_idx], [self.full(arm_q)[self.group_idx]],
+                                                         time=planning_time, range=0.1, fixed_joints=fixed,
+                                                         simplify=False)
+                if status != "Exact solution":
+                    log.info("%s arm: no collision-free path in %.1f s (%s)", self.arm, planning_time, status)
+                    continue
+                raw = _densified(np.asarray(path)[:, 1:], JOINT_RESOLUTION)
+                if not self._clear(raw):
+                    log.info("%s arm: the planned path grazes an obstacle; planning again", self.arm)
+                    continue
+                return self._parameterise(self._shortcut(raw))
         return None
+
+    def _shortcut(self, path: np.ndarray) -> np.ndarray:
+        """Greedy shortcutting: from each waypoint jump to the farthest one reachable by a clear straight line."""
+        out, i = [path[0]], 0
+        while i < len(path) - 1:
+            j = len(path) - 1
+            while j > i + 1 and not self._clear(_densified(path[[i, j]], JOINT_RESOLUTION)):
+                j = i + 1 + (j - i - 1) // 2
+            out.append(path[j])
+            i = j
+        return _densified(np.asarray(out), JOINT_RESOLUTION)
+
+    def _clear(self, points: np.ndarray, subdivisions: int = 4) -> bool:
+        """Every pose along the trajectory, including between its samples, is collision-free.
+
+        The planner checks its own path at a coarse resolution and the timing
+        spline may cut corners, so the path actually sent is checked densely.
+        """
+        for a, b in zip(points[:-1], points[1:]):
+            for q in np.linspace(a, b, subdivisions, endpoint=False):
+                if hit := self.collisions(q):
+                    log.debug("%s arm: path point collides: %s", self.arm, hit)
+                    return False
+        return not self.collisions(points[-1])
 
     def _joint_line(self, a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
         """The straight joint-space path a → b if it is collision-free (the common, cheap case)."""

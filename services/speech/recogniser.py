@@ -67,7 +67,7 @@ class Recogniser:
         """Regenerate the grammar; words missing from the pronunciation dictionary are left out."""
         words = vocabulary.words()
         self.unpronounceable = {w for w in words if not self._pronounceable(w)}
-        usable = vocabulary.restricted(words - self.unpronounceable)
+        usable = vocabulary.restricted(words - self.unpronounceable).without_homophones(self._sound)
         scene = self.scene if scene is None else scene
         jsgf = build_jsgf(usable, scene)
         if jsgf == self.jsgf:
@@ -93,6 +93,9 @@ class Recogniser:
                 self._decoder.add_word(word, f"{head} {tail}", True)
                 return True
         return False
+
+    def _sound(self, phrase: str) -> str:
+        return " ".join(self._decoder.lookup_word(word) or word for word in phrase.split())
 
     def set_scene(self, scene: SceneWords) -> None:
         if scene != self.scene:

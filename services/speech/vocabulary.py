@@ -11,7 +11,7 @@ grammar build sentences nobody says.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
 from services.nlu.lexicon import FILLERS, NUMBER_WORDS, PHRASES
@@ -47,6 +47,21 @@ class SpeechVocabulary:
         verbs = {proc: {implied: ps[:per_meaning] for implied, ps in groups.items()} for proc, groups in self.verbs.items()}
         options = {key: ps[:per_meaning] for key, ps in self.options.items()}
         return SpeechVocabulary(verbs, options, dict(self.numbers), self.fillers)
+
+    def without_homophones(self, sound: Callable[[str], str]) -> SpeechVocabulary:
+        """Within each meaning, only the first of phrases that sound alike ("pick up" / "pickup").
+
+        Why: two spellings of one sound split the recogniser's probability
+        between them and make the n-best list repeat itself.
+        """
+        def keep(phrases: tuple[str, ...]) -> tuple[str, ...]:
+            first: dict[str, str] = {}
+            for phrase in phrases:
+                first.setdefault(sound(phrase), phrase)
+            return tuple(first.values())
+
+        verbs = {proc: {implied: keep(ps) for implied, ps in groups.items()} for proc, groups in self.verbs.items()}
+        return SpeechVocabulary(verbs, {key: keep(ps) for key, ps in self.options.items()}, dict(self.numbers), self.fillers)
 
     def restricted(self, known: Iterable[str]) -> SpeechVocabulary:
         """Only the phrases whose every word is in ``known`` (e.g. the recogniser's dictionary)."""

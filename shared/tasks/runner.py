@@ -25,7 +25,7 @@ import numpy as np
 from shared.bus import Bus, BusTimeout, RemoteError
 from shared.tasks.judge import Verdict, judge
 from shared.tasks.observer import Observer, WaitTimeout
-from shared.tasks.scripts import Task, Utterance
+from shared.tasks.scripts import Expected, Task, Utterance
 
 log = logging.getLogger("hfpbd.tasks")
 
@@ -234,7 +234,6 @@ class TaskRunner:
         """Move the objects (seeded scene reload), say "execute", judge again."""
         self.load_scene(task.scene, seed=task.replay_seed)
         started = time.time()
-        from shared.tasks.scripts import Expected
         step = self.say(Utterance("execute", Expected("execute", {})), timeout=REPLAY_TIMEOUT)
         took = time.time() - started
         if not step.ok:

@@ -68,8 +68,8 @@ def test_reach_follows_objects_that_move(arms: dict[str, ArmKinematics]) -> None
 def test_a_held_object_is_carried_around_obstacles(arms: dict[str, ArmKinematics]) -> None:
     """Moving a cup in hand over a tall box: no pose along the plan makes the cup (or arm) hit it."""
     kin = arms["right"]
-    tall = {"id": "wall", "color": "green", "type": "box", "position": [0.55, -0.10, TABLE_TOP_Z + 0.125],
-            "size": [0.10, 0.08, 0.25]}
+    tall = {"id": "wall", "color": "green", "type": "box", "position": [0.55, -0.10, TABLE_TOP_Z + 0.075],
+            "size": [0.10, 0.08, 0.15]}
     scene = scene_with(tall, cup("held", 0.55, -0.30))
     snap = scene.snapshot()
     kin.set_joints(snap.joints())
@@ -95,7 +95,7 @@ def test_a_held_object_is_carried_around_obstacles(arms: dict[str, ArmKinematics
 def test_moves_take_longer_the_further_they_go(arms: dict[str, ArmKinematics]) -> None:
     kin = arms["left"]
     sync(kin, scene_with().snapshot(), None)
-    short = kin.straight_line(geo.direction_target(kin.fk(), "up", 0.05))
-    long = kin.straight_line(geo.direction_target(kin.fk(), "up", 0.20))
+    short = kin.straight_line(geo.direction_target(kin.fk(), "down", 0.05))
+    long = kin.straight_line(geo.direction_target(kin.fk(), "down", 0.20))
     assert short is not None and long is not None
     assert long.duration > 2 * short.duration

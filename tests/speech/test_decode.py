@@ -1,0 +1,99 @@
+"""Real espeak-ng speech, generated at test time, decoded by PocketSphinx into commands."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from services.nlu.infer import CommandResult, Model
+from services.nlu.world import parse_world
+from services.speech import espeak
+from services.speech.audio import AudioError, read_wav, seconds, silence, write_wav
+from services.speech.grammar import SceneWords
+from services.speech.recogniser import Recogniser
+from services.speech.vad import UtteranceSplitter
+from services.speech.vocabulary import nlu_vocabulary
+
+pytestmark = pytest.mark.skipif(not espeak.available(), reason="espeak-ng is not installed")
+
+WORLD = {"objects": [
+    {"id": "obj0", "color": "red", "type": "cup", "position": [0.55, -0.15, 0.77], "size": [0.07, 0.07, 0.1]},
+    {"id": "obj1", "color": "blue", "type": "cup", "position": [0.6, 0.15, 0.77], "size": [0.07, 0.07, 0.1]},
+    {"id": "obj2", "color": "green", "type": "box", "position": [0.5, 0.0, 0.76], "size": [0.08, 0.08, 0.08]},
+], "robot": {"grippers": {"right": "open", "left": "open"}, "last_arm": "right"}}
+
+CASES = [
+    ("move your right hand above the red cup", "en-us", 150,
+     {"procedure": "move_rel_dest", "args": {"arm": "right", "relation": "above", "object": "obj0"}}),
+    ("move your left arm next to the blue cup", "en-gb", 150,
+     {"procedure": "move_rel_dest", "args": {"arm": "left", "relation": "next_to", "object": "obj1"}}),
+    ("pick up the green box with your right hand", "en-us", 140,
+     {"procedure": "pick_up", "args": {"arm": "right", "object": "obj2"}}),
+    ("look at the blue cup", "en-gb", 150, {"procedure": "look_at", "args": {"object": "obj1"}}),
+]
+
+
+@pytest.fixture(scope="module")
+def recogniser() -> Recogniser:
+    return Recogniser(nlu_vocabulary().core(3), SceneWords.of(WORLD["objects"]))
+
+
+@pytest.mark.parametrize(("text", "voice", "speed", "expected"), CASES)
+def test_spoken_command_decodes_to_its_text_and_command(recogniser, tmp_path, text, voice, speed, expected):
+    path = tmp_path / "said.wav"
+    espeak.write(text, path, voice, speed)
+    hypotheses = recogniser.decode(np.concatenate([silence(0.3), read_wav(path), silence(0.3)]))
+    assert hypotheses[0].text == text
+    assert 0.0 < sum(h.score for h in hypotheses) <= 1.0 + 1e-9
+    assert len({h.text for h in hypotheses}) == len(hypotheses)
+    result = Model(parse_world(WORLD)).parse(hypotheses[0].text)
+    assert isinstance(result, CommandResult) and result.command.as_dict() == expected
+
+
+def test_voice_activity_splits_a_stream_into_its_utterances():
+    first = espeak.synthesise("pick it up", "en-us", 150)
+    second = espeak.synthesise("move your right hand up", "en-gb", 150)
+    stream = np.concatenate([silence(0.8), first, silence(1.0), second, silence(0.8)])
+    splitter = UtteranceSplitter()
+    utterances = []
+    for start in range(0, len(stream), 1234):  # chunk sizes that fit no frame boundary
+        utterances += splitter.feed(stream[start:start + 1234])
+    utterances += splitter.flush()
+    assert len(utterances) == 2
+    assert seconds(utterances[0]) == pytest.approx(seconds(first), abs=0.35)
+    assert seconds(utterances[1]) == pytest.approx(seconds(second), abs=0.35)
+
+
+def test_silence_gives_no_utterance():
+    splitter = UtteranceSplitter()
+    assert splitter.feed(silence(3.0)) + splitter.flush() == []
+
+
+@pytest.mark.parametrize(("content", "message"), [
+    (None, "no such WAV file"),
+    (b"not a wav file at all", "is not a readable WAV file"),
+])
+def test_unreadable_audio_is_a_clear_error(tmp_path: Path, content, message):
+    path = tmp_path / "bad.wav"
+    if content is not None:
+        path.write_bytes(content)
+    with pytest.raises(AudioError, match=message):
+        read_wav(path)
+
+
+def test_wav_at_another_rate_and_in_stereo_is_converted(tmp_path: Path):
+    mono = espeak.synthesise("stop", "en-us", 150)
+    path = tmp_path / "stereo.wav"
+    import wave
+    stereo = np.repeat(mono, 2)  # 16 kHz stereo, written as 8 kHz to test resampling too
+    with wave.open(str(path), "wb") as wav:
+        wav.setnchannels(2)
+        wav.setsampwidth(2)
+        wav.setframerate(8000)
+        wav.writeframes(stereo.astype("<i2").tobytes())
+    back = read_wav(path)
+    assert len(back) == pytest.approx(2 * len(mono), rel=0.01)
+    write_wav(tmp_path / "again.wav", back)
+    assert len(read_wav(tmp_path / "again.wav")) == len(back)

@@ -1,0 +1,121 @@
+"""The task scripts, checked without a robot: every utterance means what the script intends, word budgets, judging, outputs."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import pytest
+
+from services.sim.layout import TABLE_TOP_Z
+from services.sim.scene_file import load_scene
+from shared.tasks import figures
+from shared.tasks.judge import judge
+from shared.tasks.rehearse import rehearse
+from shared.tasks.scripts import STYLES, ScriptError, load_tasks, word_count
+
+BOOK = load_tasks()
+RUNS = [(task.id, style) for task in BOOK.tasks for style in STYLES]
+
+
+def test_the_five_tasks_of_the_paper_are_scripted_in_both_styles() -> None:
+    assert [t.id for t in BOOK.tasks] == ["task1", "task2", "task3", "task4", "task5"]
+    for task in BOOK.tasks:
+        assert set(task.styles) == set(STYLES)
+        assert load_scene(task.scene).ids, f"{task.scene} has no objects"
+
+
+@pytest.mark.parametrize(("task_id", "style"), RUNS)
+def test_every_utterance_is_understood_as_intended(task_id: str, style: str) -> None:
+    problems = [r.explain() for r in rehearse(BOOK.task(task_id), style) if not r.ok]
+    assert problems == []
+
+
+@pytest.mark.parametrize("task_id", ["task1", "task2", "task3", "task5"])
+def test_minimal_language_uses_less_than_half_the_words(task_id: str) -> None:
+    task = BOOK.task(task_id)
+    assert task.words("minimal") < task.words("full") / 2
+
+
+def test_task4_minimal_language_still_saves_words() -> None:
+    task = BOOK.task("task4")
+    assert task.words("minimal") < task.words("full")
+
+
+@pytest.mark.parametrize(("text", "words"), [("Move your right hand above the red cup.", 8), ("above blue", 2),
+                                             ("pick it up", 3), ("  side ", 1)])
+def test_words_are_counted_as_typed(text: str, words: int) -> None:
+    assert word_count(text) == words
+
+
+def test_a_broken_task_file_is_named(tmp_path: Path) -> None:
+    bad = tmp_path / "tasks.json"
+    bad.write_text('{"tasks": [{"id": "t", "title": "x", "scene": "default", "success": {"kind": "teleported"},'
+                   ' "replay_seed": 1, "styles": {}}]}')
+    with pytest.raises(ScriptError, match="task t: success.kind must be one of"):
+        load_tasks(bad)
+
+
+def _truth(**boxes: tuple[tuple[float, float, float], tuple[float, float, float]]) -> dict:
+    """Truth items from (centre, size) pairs, as ``sim/truth`` reports them."""
+    items = {}
+    for oid, (centre, size) in boxes.items():
+        low = [c - s / 2 for c, s in zip(centre, size)]
+        high = [c + s / 2 for c, s in zip(centre, size)]
+        items[oid] = {"id": oid, "position": list(centre), "size": list(size), "aabb": [low, high]}
+    return items
+
+
+Z = TABLE_TOP_Z
+CUP = (0.07, 0.07, 0.10)
+
+
+@pytest.mark.parametrize(("criterion", "truth", "grippers", "expected"), [
+    ({"kind": "stacked", "top": "a", "base": "b"}, _truth(a=((0.55, 0.1, Z + 0.09), CUP), b=((0.55, 0.1, Z + 0.05), CUP)), {}, True),
+    ({"kind": "stacked", "top": "a", "base": "b"}, _truth(a=((0.55, 0.0, Z + 0.05), CUP), b=((0.55, 0.1, Z + 0.05), CUP)), {}, False),
+    ({"kind": "side_by_side", "moved": "a", "landmark": "b"},
+     _truth(a=((0.55, 0.02, Z + 0.05), CUP), b=((0.56, 0.12, Z + 0.03), (0.06, 0.06, 0.06))), {}, True),
+    ({"kind": "side_by_side", "moved": "a", "landmark": "b"},
+     _truth(a=((0.45, -0.2, Z + 0.05), CUP), b=((0.56, 0.12, Z + 0.03), (0.06, 0.06, 0.06))), {}, False),
+    ({"kind": "inside", "object": "a", "container": "b"},
+     _truth(a=((0.58, 0.1, Z + 0.04), (0.06, 0.06, 0.06)), b=((0.58, 0.1, Z + 0.05), (0.2, 0.2, 0.1))), {}, True),
+    ({"kind": "inside", "object": "a", "container": "b"},
+     _truth(a=((0.58, 0.1, Z + 0.14), (0.06, 0.06, 0.06)), b=((0.58, 0.1, Z + 0.05), (0.2, 0.2, 0.1))), {}, False),
+    ({"kind": "lifted", "object": "a", "height": 0.10}, _truth(a=((0.58, 0.0, Z + 0.21), (0.2, 0.3, 0.18))), {}, True),
+    ({"kind": "lifted", "object": "a", "height": 0.10}, _truth(a=((0.58, 0.0, Z + 0.15), (0.2, 0.3, 0.18))), {}, False),
+    ({"kind": "off_table_in_gripper", "object": "a", "height": 0.03},
+     _truth(a=((0.40, 0.0, Z + 0.10), (0.22, 0.22, 0.012))), {"right": {"holding": "a"}, "left": {"holding": None}}, True),
+    ({"kind": "off_table_in_gripper", "object": "a", "height": 0.03},
+     _truth(a=((0.40, 0.0, Z + 0.006), (0.22, 0.22, 0.012))), {"right": {"holding": None}}, False),
+])
+def test_success_is_judged_from_ground_truth(criterion: dict, truth: dict, grippers: dict, expected: bool) -> None:
+    verdict = judge(criterion, truth, grippers)
+    assert verdict.success is expected, verdict.reason
+
+
+def test_a_missing_object_fails_with_its_name() -> None:
+    verdict = judge({"kind": "inside", "object": "a", "container": "b"}, _truth(a=((0.5, 0, Z), CUP)))
+    assert not verdict.success and verdict.reason == "the simulator reports no object b"
+
+
+def _run(task: str, style: str, words: int, seconds: float, ok: bool, latency: float) -> dict:
+    return {"task": task, "title": "t", "style": style, "utterances": 3, "words": words, "programming_s": seconds,
+            "success": ok, "replay": ok, "steps": [{"motion_latency_s": latency}, {"motion_latency_s": None}]}
+
+
+def test_outputs_are_written_and_compared_with_the_paper(tmp_path: Path) -> None:
+    runs = [_run("task1", "full", 33, 40.0, True, 0.12), _run("task1", "minimal", 10, 30.0, True, 0.25),
+            _run("task4", "full", 53, 60.0, False, 0.1), _run("task4", "minimal", 24, 50.0, False, 0.1)]
+    rows = figures.table_rows(runs)
+    figures.write_csv(rows, tmp_path / "tasks.csv")
+    figures.chart(runs, tmp_path / "tasks.png")
+    with open(tmp_path / "tasks.csv") as handle:
+        read = list(csv.DictReader(handle))
+    assert [r["words"] for r in read] == ["33", "10", "53", "24"]
+    assert read[1]["median_latency_ms"] == "250"
+    assert (tmp_path / "tasks.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    lines = figures.comparison(runs, BOOK.paper)
+    assert lines[0].startswith("task1: words 33 -> 10 (30%); paper: under half (holds here)")
+    assert "paper: 42 -> 27 words" in lines[1]
+    assert lines[-1].endswith("3/4 within the 200 ms target")
+    assert "| task1 t | minimal | 3 | 10 | yes | 30.0 | yes | 250 |" in figures.markdown_table(rows)
