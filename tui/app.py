@@ -25,7 +25,7 @@ from shared.bus import BusTimeout, RemoteError
 from shared.config import SessionOptions
 from tui import events
 from tui.action_panel import ActionPanel
-from tui.bridge import PROBES, Bridge
+from tui.bridge import Bridge
 from tui.clarify import ClarifyPrompt
 from tui.command_input import CommandInput
 from tui.conversation import Conversation
@@ -299,8 +299,9 @@ class PbdApp(App[None]):
             time.sleep(0.5)
 
     def _probe_alive(self) -> None:
-        if self.bridge.connected:
-            self.probe(sorted(self.query_one(StatusBar).alive & set(PROBES)))
+        bars = self.query(StatusBar)  # empty while the screen is being torn down
+        if self.bridge.connected and bars:
+            self.probe(sorted(bars.first().alive))
 
     @work(thread=True, exclusive=True, group="probe")
     def probe(self, services: list[str]) -> None:

@@ -52,7 +52,7 @@ class Executor:
         self.store = store
         self.scene = Scene()
         self.cancel = threading.Event()
-        self.robot = SimRobot(bus, self.cancel)
+        self.robot = SimRobot(bus, self.cancel, self.scene.sim_time)
         self.procedures = Procedures(self.scene, self.robot, {arm: ArmKinematics(arm) for arm in ARMS},
                                      self._record_objects)
         self._reach_arms = {arm: ArmKinematics(arm, rng_seed=1) for arm in ARMS}

@@ -31,6 +31,7 @@ POINT_DISTANCE = 0.14
 RELEASE_CLEARANCE = 0.015  # a placed object's bottom is released this far above its support
 ROTATE_STEP = 1.6  # rad, the paper's wrist-roll increment
 MAX_GRIP_WIDTH = 0.085  # widest object the open gripper can close around, with margin
+SIDE_GRASP_HEIGHT = 0.7  # share of an object's height at which a side grasp squeezes it
 
 RELATIONS = ("above", "next_to", "left_of", "right_of", "in_front_of", "behind", "on_top_of", "near")
 DIRECTIONS = {
@@ -275,7 +276,8 @@ def grasp_candidates(box: Box, *, round_shape: bool = False, approach_distance: 
                      lift_height: float = 0.12) -> list[Grasp]:
     """Grasps for an upright object: from the side facing the robot, then top-down.
 
-    A side grasp squeezes the object at about 60 % of its height; a top-down
+    A side grasp squeezes the object at 70 % of its height (high enough that
+    the forearm behind the hand clears the table); a top-down
     grasp closes the fingers across the object a few centimetres below its
     top. A direction is offered only when the object's width across the
     fingers fits the open gripper (``round_shape``: cups and bowls are as
@@ -285,7 +287,7 @@ def grasp_candidates(box: Box, *, round_shape: bool = False, approach_distance: 
     outward = _toward_robot(box.center)
     up = np.array([0.0, 0.0, lift_height])
     height = box.size[2]
-    z = box.bottom + min(max(0.6 * height, 0.025), height - 0.015)
+    z = box.bottom + min(max(SIDE_GRASP_HEIGHT * height, 0.025), height - 0.015)
     directions = [outward, np.array([1.0, 0.0, 0.0])]
     directions += [Rotation.from_euler("z", a).apply(outward) for a in (0.35, -0.35)]
     for direction in directions:

@@ -51,7 +51,8 @@ TORSO = "torso_lift_joint"
 SEED_COUNT = 24000
 NEIGHBOURS = 5
 APPROACH_WEIGHT, FINGER_WEIGHT = 0.2, 0.1   # metres per unit axis difference in the seed index
-IK_TOLERANCE = 1e-3
+IK_ITERATIONS = 25  # Newton steps per start: a start that converges does so in about ten
+ARM_REACH = 1.0     # metres from the shoulder pan axis to the farthest tool position (0.1 + 0.4 + 0.321 + 0.18)
 # Joint speed and acceleration limits for time parameterisation: moves take
 # time in proportion to how far the joints travel (about 0.5 m/s at the hand).
 JOINT_SPEED = 1.0
@@ -135,10 +136,11 @@ class ArmKinematics:
         self._ik_mask = [i not in set(self.arm_idx) for i in range(len(self.names))]
         self._gripper_links = [n for n in self.planner.user_link_names if n.startswith(f"{PREFIX[arm]}_gripper")]
         self._robot_links = list(self.planner.user_link_names)
+        self._shoulder_link = self.planner.link_name_2_idx[f"{PREFIX[arm]}_shoulder_pan_link"]
         self._obstacles: set[str] = set()
         self.held: str | None = None
         self._build_seeds(seeds, rng_seed)
-        mplib.set_global_seed(rng_seed)  # OMPL's sampling: the same request plans the same path
+        mplib.set_global_seed(rng_seed + 1)  # (OMPL refuses 0) OMPL's sampling: the same request plans the same path
 
     # -- state ----------------------------------------------------------------
     def set_joints(self, joints: dict[str, float]) -> None:
@@ -157,6 +159,11 @@ class ArmKinematics:
         q = self.qpos.copy()
         q[self.arm_idx] = arm_q
         return q
+
+    def shoulder(self) -> np.ndarray:
+        """Where the shoulder pan axis meets the shoulder lift height, at the current torso height."""
+        self.model.compute_forward_kinematics(self.qpos)
+        return np.asarray(self.model.get_link_pose(self._shoulder_link).p)
 
     def fk(self, arm_q: np.ndarray | None = None) -> np.ndarray:
         """Tool pose ``[x, y, z, qw, qx, qy, qz]`` for ``arm_q`` (default: the current joints)."""
@@ -247,11 +254,13 @@ class ArmKinematics:
         unbounded (bounding it mid-iteration traps it at the limits far more
         often) and the answer is checked against the limits afterwards.
         """
+        if np.linalg.norm(np.asarray(pose[:3], float) - self.shoulder()) > ARM_REACH:
+            return None
         goal = _to_pose(pose)
         starts = list(seeds or []) + [self.arm_q] + self._seeds_for(pose, neighbours)
         for start in starts:
             q, ok, _ = self.model.compute_IK_CLIK(self.link, goal, self.full(start), self._ik_mask,
-                                                  eps=1e-4, max_iter=100, dt=1.0)
+                                                  eps=1e-4, max_iter=IK_ITERATIONS, dt=1.0)
             if not ok:
                 continue
             arm_q = self._wrapped(q[self.arm_idx])

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import logging
 import threading
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -19,7 +21,9 @@ from shared.bus import Bus, BusTimeout, RemoteError
 
 log = logging.getLogger("hfpbd.executor.robot")
 
-EVENT_SLACK = 8.0      # seconds a motion may take beyond its planned duration before we give up on it
+EVENT_SLACK = 8.0      # simulated seconds a motion may take beyond its planned duration before we give up on it
+WAIT_SLICE = 0.25      # wall seconds between checks of the simulation clock
+SIM_SILENCE = 10.0     # wall seconds without a new simulator state before it counts as gone
 REQUEST_TIMEOUT = 5.0
 
 
@@ -40,9 +44,10 @@ class Outcome:
 class SimRobot:
     """Motion requests to ``sim/control/*`` and their completions from ``sim/events``."""
 
-    def __init__(self, bus: Bus, cancel: threading.Event) -> None:
+    def __init__(self, bus: Bus, cancel: threading.Event, sim_clock: Callable[[], float | None]) -> None:
         self.bus = bus
         self.cancel = cancel
+        self.sim_clock = sim_clock
         self._events: dict[str, Outcome] = {}
         self._cond = threading.Condition()
         bus.subscribe(bus.keys.sim_events, self._on_event)
@@ -69,16 +74,30 @@ class SimRobot:
         except RemoteError as exc:
             raise MotionError(str(exc)) from exc
 
-    def _wait(self, motion_id: str, timeout: float) -> Outcome:
-        with self._cond:
-            ready = self._cond.wait_for(lambda: motion_id in self._events or self.cancel.is_set(), timeout)
-            if motion_id in self._events:
-                return self._events.pop(motion_id)
-        if self.cancel.is_set():
-            raise Stopped()
-        if not ready:
-            raise MotionError("the motion did not finish in time")
-        raise MotionError("the motion ended without a report")
+    def _wait(self, motion_id: str, expected: float) -> Outcome:
+        """Wait for the motion's report, timing out in *simulated* seconds.
+
+        The simulator may run slower than real time on a busy machine, so a
+        motion is overdue only when the simulation clock has run past its
+        planned duration plus a margin; a simulator that stops reporting its
+        clock altogether is a failure of its own.
+        """
+        start_sim = last_sim = self.sim_clock()
+        last_progress = time.monotonic()
+        while True:
+            with self._cond:
+                self._cond.wait_for(lambda: motion_id in self._events or self.cancel.is_set(), WAIT_SLICE)
+                if motion_id in self._events:
+                    return self._events.pop(motion_id)
+            if self.cancel.is_set():
+                raise Stopped()
+            now_sim = self.sim_clock()
+            if now_sim != last_sim:
+                last_sim, last_progress = now_sim, time.monotonic()
+            if time.monotonic() - last_progress > SIM_SILENCE:
+                raise MotionError("the simulator stopped reporting its state")
+            if start_sim is not None and now_sim is not None and now_sim - start_sim > expected + EVENT_SLACK:
+                raise MotionError("the motion did not finish in time")
 
     def _run(self, name: str, payload: dict[str, Any], expected: float) -> Outcome:
         if self.cancel.is_set():
@@ -87,7 +106,7 @@ class SimRobot:
         motion_id = reply.get("motion_id")
         if not isinstance(motion_id, str):
             return Outcome("done", "")
-        outcome = self._wait(motion_id, expected + EVENT_SLACK)
+        outcome = self._wait(motion_id, expected)
         if outcome.status == "stopped" and self.cancel.is_set():
             raise Stopped()
         return outcome

@@ -150,6 +150,12 @@ class Scene:
                                  copy.deepcopy(self._robot), self._version, self._robot_version,
                                  {k: v for k, v in self._remembered.items() if k not in self._objects})
 
+    def sim_time(self) -> float | None:
+        """The simulation clock of the latest robot state (None before the first)."""
+        with self._lock:
+            value = (self._robot or {}).get("sim_time")
+            return float(value) if isinstance(value, (int, float)) else None
+
     def wait_robot(self, after_version: int, timeout: float) -> bool:
         """Wait for a robot state newer than ``after_version``."""
         with self._lock:

@@ -25,7 +25,7 @@ from rapidfuzz.distance import Levenshtein
 from services.nlu.infer import CommandResult, Model, Result
 from services.nlu.world import parse_world
 from services.speech import espeak
-from services.speech.audio import RATE, silence
+from services.speech.audio import RATE, read_wav, silence
 from services.speech.corpus import Item, corpus
 from services.speech.grammar import SceneWords
 from services.speech.recogniser import ACOUSTIC_SCALE, Hypothesis, Recogniser, posteriors
@@ -73,11 +73,10 @@ def run(vocabulary: str, limit: int | None, out: Path) -> list[Outcome]:
     for n, item in enumerate(items):
         path = out / f"{n:03d}.wav"
         espeak.write(item.text, path, item.voice, item.speed)
-        from services.speech.audio import read_wav
         pcm = np.concatenate([silence(0.3), read_wav(path), silence(0.3)])
         recogniser.set_scene(SceneWords.of(item.world["objects"]))
         started = time.perf_counter()
-        hypotheses = recogniser.decode(pcm)
+        hypotheses = recogniser.decode(pcm, acoustic_scale=0.0)  # keep every alternative; re-weighted below
         decode_s = time.perf_counter() - started
         model = Model(parse_world(item.world))
         outcome = Outcome(item, hypotheses, len(pcm) / RATE, decode_s, [model.parse(h.text) for h in hypotheses])

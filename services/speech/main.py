@@ -11,8 +11,11 @@ from pathlib import Path
 
 from shared.bus import Bus
 from shared.service import run_service, wait_until_stopped
-from services.speech.audio import AudioError
+from services.speech.audio import AudioError, read_wav
+from services.speech.recogniser import Recogniser
 from services.speech.service import Settings, SpeechService
+from services.speech.vad import UtteranceSplitter
+from services.speech.vocabulary import nlu_vocabulary
 from services.speech.voice import Speaker
 
 DESCRIPTION = "Spoken commands in (microphone, WAV files, speech/audio stream), spoken feedback out (espeak-ng)."
@@ -59,11 +62,6 @@ def decode_files(argv: Sequence[str]) -> int:
     parser.add_argument("files", nargs="+", type=Path)
     parser.add_argument("--vocabulary", choices=("core", "full"), default="core")
     args = parser.parse_args(argv)
-    from services.speech.audio import read_wav
-    from services.speech.recogniser import Recogniser
-    from services.speech.vad import UtteranceSplitter
-    from services.speech.vocabulary import nlu_vocabulary
-
     vocabulary = nlu_vocabulary()
     recogniser = Recogniser(vocabulary if args.vocabulary == "full" else vocabulary.core(3))
     status = 0

@@ -34,6 +34,7 @@ log = logging.getLogger("hfpbd.speech")
 
 NOT_HEARD = "I heard something but could not make out a command. Please say it again or type it."
 WAV_CHUNK_S = 0.1
+RELEASE_TAIL_S = 0.4
 
 
 def speech_key(namespace: str, name: str) -> str:
@@ -152,11 +153,26 @@ class SpeechService:
         return {"ok": True, "listening": request["on"]}
 
     def set_talk(self, on: bool) -> None:
+        """Press: collect all audio from now on. Release: decode it, after a short tail.
+
+        Why the tail: people let go of the key while finishing the last word,
+        and audio streamed over the bus may still be in flight.
+        """
+        if on:
+            with self._audio_lock:
+                if self._talk is None:
+                    self._talk = []
+                    self._splitter = UtteranceSplitter()  # what was half-heard before the press is dropped
+        else:
+            release = threading.Timer(RELEASE_TAIL_S, self._release)
+            release.daemon = True
+            release.start()
+        self._publish_status()
+
+    def _release(self) -> None:
         with self._audio_lock:
-            talk, self._talk = self._talk, ([] if on else None)
-            if on:
-                self._splitter = UtteranceSplitter()  # what was half-heard before the press is dropped
-        if not on and talk:
+            talk, self._talk = self._talk, None
+        if talk:
             pcm = np.concatenate(talk)
             self._tasks.put(lambda: self._decode(pcm))
         self._publish_status()

@@ -27,9 +27,12 @@ from shared.tasks.runner import RunError, TaskRunner
 from shared.tasks.scripts import STYLES, ScriptError, load_tasks
 from shared.tasks.stack import LocalStack
 
+DESCRIPTION = ("Program the paper's five tasks in full and minimal language through the real services, "
+               "judge them from ground truth, replay them on moved objects, and compare with the paper.")
+
 
 def _parse(argv: Sequence[str]) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(prog="hfpbd bench tasks", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="hfpbd bench tasks", description=DESCRIPTION)
     parser.add_argument("--tasks", default="", help="comma-separated task ids (default: all)")
     parser.add_argument("--styles", default=",".join(STYLES), help="comma-separated styles (default: %(default)s)")
     parser.add_argument("--out", type=Path, default=Path("bench-results"), help="output folder (default: %(default)s)")

@@ -40,6 +40,7 @@ class Observer:
         self.executor: dict[str, Any] | None = None
         self.busy_states = 0                     # executor states seen with a command running
         self.sim: dict[str, Any] | None = None
+        self.rtf: list[float] = []               # the simulator's real-time factor, one per state
         self.truth: dict[str, dict[str, Any]] = {}
         self.truth_at = 0.0
         self.objects: dict[str, dict[str, Any]] = {}
@@ -74,6 +75,8 @@ class Observer:
     def _on_sim(self, message: dict[str, Any]) -> None:
         with self._changed:
             self.sim = message
+            if isinstance(message.get("rtf"), (int, float)):
+                self.rtf.append(float(message["rtf"]))
             moving = message.get("moving") or {}
             if self._motion_since is not None and self.motion_at is None and any(moving.values()):
                 stamp = float(message.get("stamp", time.time()))

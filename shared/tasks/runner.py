@@ -67,6 +67,7 @@ class RunReport:
     success: Verdict = Verdict(False, "not run")
     replay: Verdict = Verdict(False, "not run")
     replay_s: float = 0.0
+    sim_rtf: float | None = None      # median real-time factor of the simulator during the run
 
     @property
     def programmed(self) -> bool:
@@ -81,6 +82,7 @@ class RunReport:
                 "words": self.words, "programmed": self.programmed, "programming_s": round(self.programming_s, 2),
                 "success": self.success.success, "success_reason": self.success.reason,
                 "replay": self.replay.success, "replay_reason": self.replay.reason, "replay_s": round(self.replay_s, 2),
+                "sim_rtf": None if self.sim_rtf is None else round(self.sim_rtf, 2),
                 "steps": [vars(s) for s in self.steps]}
 
 
@@ -101,11 +103,17 @@ class TaskRunner:
             if time.monotonic() > deadline:
                 raise RunError(f"these services are not running: {', '.join(missing)} (start them with 'hfpbd up --headless')")
             time.sleep(0.5)
-        self.watch.wait_for(lambda: self.watch.sim and self.watch.executor, 30, "the simulator's and executor's first states")
+        try:
+            self.watch.wait_for(lambda: self.watch.sim and self.watch.executor, 30, "the simulator's and executor's first states")
+        except WaitTimeout as exc:
+            raise RunError(str(exc)) from exc
 
     def load_scene(self, scene: str, seed: int | None = None) -> dict[str, dict[str, Any]]:
         """Load (or reload) a scene and wait until perception sees exactly its objects and the robot is idle."""
-        self.watch.wait_for(lambda: not self.watch.busy(), STEP_TIMEOUT, "the executor to finish what it is doing")
+        try:
+            self.watch.wait_for(lambda: not self.watch.busy(), STEP_TIMEOUT, "the executor to finish what it is doing")
+        except WaitTimeout as exc:
+            raise RunError(str(exc)) from exc
         request: dict[str, Any] = {"name": scene}
         if seed is not None:
             request["seed"] = seed
@@ -115,11 +123,14 @@ class TaskRunner:
             raise RunError(f"the simulator did not load scene {scene!r}: {exc}") from exc
         placed = {o["id"]: o for o in reply["objects"]}
         loaded = time.time()
-        self.watch.wait_for(lambda: self.watch.truth_at > loaded and set(self.watch.truth) == set(placed), 30,
-                            "ground truth of the new scene")
-        self.watch.wait_for(lambda: self.watch.objects_at > loaded and self._perceived(), 60,
-                            f"perception to see exactly the {len(placed)} object(s) of {scene}")
-        self.watch.wait_for(lambda: self._reach_covers(), 60, "the executor's reachability map of the new objects")
+        try:
+            self.watch.wait_for(lambda: self.watch.truth_at > loaded and set(self.watch.truth) == set(placed), 30,
+                                "ground truth of the new scene")
+            self.watch.wait_for(lambda: self.watch.objects_at > loaded and self._perceived(), 60,
+                                f"perception to see exactly the {len(placed)} object(s) of {scene}")
+            self.watch.wait_for(lambda: self._reach_covers(), 60, "the executor's reachability map of the new objects")
+        except WaitTimeout as exc:
+            raise RunError(f"scene {scene!r} is not ready: {exc}") from exc
         return dict(self.watch.truth)
 
     def _perceived(self) -> bool:
@@ -212,7 +223,19 @@ class TaskRunner:
     def run(self, task: Task, style: str, replay: bool = True) -> RunReport:
         script = task.script(style)
         report = RunReport(task.id, task.title, style, len(script), task.words(style))
-        self.load_scene(task.scene)
+        first_state = len(self.watch.rtf)
+        try:
+            return self._run(task, style, script, report, replay)
+        finally:
+            rtf = self.watch.rtf[first_state:]
+            report.sim_rtf = float(np.median(rtf)) if rtf else None
+
+    def _run(self, task: Task, style: str, script: tuple[Utterance, ...], report: RunReport, replay: bool) -> RunReport:
+        try:
+            self.load_scene(task.scene)
+        except RunError as exc:
+            report.success = Verdict(False, str(exc))
+            return report
         started = time.time()
         for utterance in script:
             step = self.say(utterance)
@@ -220,19 +243,22 @@ class TaskRunner:
             if not step.ok:
                 break
         report.programming_s = time.time() - started
-        report.success = self.judge_now(task)
         if not report.programmed:
             failed = report.steps[-1]
             report.success = Verdict(False, f"programming stopped at {failed.text!r}: {failed.problem}")
             report.replay = Verdict(False, "not replayed: programming did not finish")
             return report
+        report.success = self.judge_now(task)
         if replay:
             report.replay, report.replay_s = self.replay(task)
         return report
 
     def replay(self, task: Task) -> tuple[Verdict, float]:
         """Move the objects (seeded scene reload), say "execute", judge again."""
-        self.load_scene(task.scene, seed=task.replay_seed)
+        try:
+            self.load_scene(task.scene, seed=task.replay_seed)
+        except RunError as exc:
+            return Verdict(False, str(exc)), 0.0
         started = time.time()
         step = self.say(Utterance("execute", Expected("execute", {})), timeout=REPLAY_TIMEOUT)
         took = time.time() - started

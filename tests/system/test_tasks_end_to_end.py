@@ -25,10 +25,14 @@ BOOK = load_tasks()
 
 # Tasks the robot side cannot do yet, each for a reason named in the executor's own words.
 NOT_YET = {
-    "task4": "the executor has no motion that presses a hand against an object: 'towards' stops 5 cm short, "
-             "directional moves refuse to touch it (can_move is false), so the box cannot be squeezed between both hands",
-    "task5": "the executor's pick-up only offers grasps across an object narrower than the gripper, "
-             "so the plate's overhang is never grasped",
+    "task3": "the executor's pick-up of the small yellow box fails before touching it: every straight descent to "
+             "its grasps collides the wrist (r_wrist_flex_link) with the table, 'I can't reach down to it.'",
+    "task4": "the executor has no motion that presses a hand against an object: 'towards' stops 5 cm short and "
+             "directional moves that would touch the box are refused (can_move false, so 'right hand left' is "
+             "read as a wrist rotation), so the box cannot be squeezed between both hands",
+    "task5": "the executor refuses every directional move that would touch something ('Move your right hand down.' "
+             "onto the plate: 'I can't move my right hand down any further.'), so the plate cannot be pushed; "
+             "and its pick-up offers grasps only across objects narrower than the gripper, not a plate's overhang",
 }
 
 

@@ -1,0 +1,96 @@
+"""The speech service as a real process: audio on the bus in, NLU commands out, voice out."""
+
+from __future__ import annotations
+
+import queue
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from services.speech import espeak
+from services.speech.audio import RATE, read_wav, silence
+from services.speech.service import speech_key
+from shared.bus import RemoteError
+
+pytestmark = pytest.mark.skipif(not espeak.available(), reason="espeak-ng is not installed")
+
+OBJECTS = [
+    {"id": "obj0", "color": "red", "type": "cup", "position": [0.55, -0.15, 0.77], "size": [0.07, 0.07, 0.1]},
+    {"id": "obj1", "color": "blue", "type": "cup", "position": [0.6, 0.15, 0.77], "size": [0.07, 0.07, 0.1]},
+    {"id": "obj2", "color": "green", "type": "box", "position": [0.5, 0.0, 0.76], "size": [0.08, 0.08, 0.08]},
+]
+
+
+def stream(bus, pcm: np.ndarray, chunk_s: float = 0.1) -> None:
+    """Send audio on speech/audio the way a remote microphone would."""
+    key = speech_key(bus.keys.namespace, "audio")
+    step = int(RATE * chunk_s)
+    for start in range(0, len(pcm), step):
+        bus.publish(key, {"pcm": pcm[start:start + step], "rate": RATE})
+
+
+def collect(bus, key: str, **options) -> queue.Queue:
+    inbox: queue.Queue = queue.Queue()
+    bus.subscribe(key, inbox.put, **options)
+    return inbox
+
+
+def test_spoken_command_reaches_the_nlu_as_a_command(network, launcher):
+    hub = network.hub
+    hub.publisher(hub.keys.objects, cached=True).put({"stamp": time.time(), "objects": OBJECTS})
+    utterances = collect(hub, hub.keys.utterance)
+    results = collect(hub, hub.keys.nlu_result)
+    launcher.start("nlu")
+    launcher.start("speech", "--microphone", "off", "--no-voice")
+    said = espeak.synthesise("pick up the green box with your right hand", "en-us", 140)
+    stream(hub, np.concatenate([silence(0.5), said, silence(1.0)]))
+
+    utterance = utterances.get(timeout=60)
+    assert utterance["source"] == "speech"
+    assert utterance["text"] == "pick up the green box with your right hand"
+    assert utterance["nbest"][0]["text"] == utterance["text"] and utterance["nbest"][0]["score"] > 0
+    result = results.get(timeout=30)
+    assert result["kind"] == "command"
+    assert (result["procedure"], result["args"]) == ("pick_up", {"arm": "right", "object": "obj2"})
+
+
+def test_missing_microphone_is_reported_once_and_push_to_talk_still_works(network, launcher):
+    hub = network.hub
+    says = collect(hub, hub.keys.say)
+    utterances = collect(hub, hub.keys.utterance)
+    proc = launcher.start("speech", "--trigger", "ptt", "--device", "no-such-device", "--no-voice")
+    report = says.get(timeout=10)
+    assert report["kind"] == "info" and report["text"].startswith("No microphone:")
+    assert "typing works" in report["text"]
+    status = collect(hub, speech_key(network.namespace, "status"), history=True).get(timeout=10)
+    assert status["microphone"] is False and status["microphone_problem"]
+    assert "Traceback" not in proc.log()
+
+    said = np.concatenate([silence(0.3), espeak.synthesise("look at the red cup", "en-gb", 150), silence(0.3)])
+    stream(hub, said)  # push-to-talk not held: ignored
+    with pytest.raises(queue.Empty):
+        utterances.get(timeout=3)
+    ptt = speech_key(network.namespace, "ptt")
+    assert hub.request(ptt, {"on": True})["listening"] is True
+    stream(hub, said)
+    assert hub.request(ptt, {"on": False})["listening"] is False
+    assert utterances.get(timeout=60)["text"] == "look at the red cup"
+    with pytest.raises(RemoteError, match="on"):
+        hub.request(ptt, {"on": "yes"})
+    with pytest.raises(queue.Empty):
+        says.get(timeout=1)  # the missing microphone was not reported a second time
+
+
+def test_robot_words_are_spoken(network, launcher, tmp_path: Path):
+    folder = tmp_path / "voice"
+    launcher.start("speech", "--microphone", "off", "--voice-dir", str(folder))
+    network.hub.publish(network.hub.keys.say, {"text": "I picked up the green box.", "kind": "narration"})
+    deadline = time.monotonic() + 20
+    while time.monotonic() < deadline and not list(folder.glob("say-*.wav")):
+        time.sleep(0.2)
+    spoken = sorted(folder.glob("say-*.wav"))
+    assert len(spoken) == 1
+    time.sleep(0.5)  # let espeak-ng finish writing
+    assert len(read_wav(spoken[0])) / RATE > 0.8
