@@ -39,6 +39,7 @@ from shared.stats import markdown_table
 
 OBJECT_COUNTS = (1, 2, 5, 10, 15)
 MOTION_LIMIT = 30.0  # simulated seconds before a motion counts as hung
+STATE_PERIOD = 0.02  # simulated seconds between the simulator's state messages
 
 
 # -- reachability ---------------------------------------------------------------------------
@@ -123,6 +124,8 @@ class WorldRobot:
             for motion, status, message in self.world.step():
                 if motion.motion_id == motion_id:
                     self.motion_seconds += self.world.sim_time - start
+                    self.publish()
+                    self.world.settle(STATE_PERIOD)  # the simulator keeps streaming its state after a report
                     self.publish()
                     return Outcome(status, message)
         return Outcome("failed", "the motion did not finish")
