@@ -65,6 +65,10 @@ class Keys:
     def executor_control(self, name: str) -> str:
         return self._key(f"executor/control/{name}")
 
+    def speech(self, name: str) -> str:
+        """``speech/audio`` (PCM in), ``speech/ptt`` (push-to-talk), ``speech/status``."""
+        return self._key(f"speech/{name}")
+
     def alive(self, service: str) -> str:
         return self._key(f"alive/{service}")
 

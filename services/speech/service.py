@@ -37,11 +37,6 @@ WAV_CHUNK_S = 0.1
 RELEASE_TAIL_S = 0.4
 
 
-def speech_key(namespace: str, name: str) -> str:
-    """Keys of this service: ``speech/audio``, ``speech/ptt``, ``speech/status``."""
-    return f"pbd/{namespace}/speech/{name}"
-
-
 @dataclass
 class Settings:
     trigger: str = "vad"             # vad: utterances found by voice activity; ptt: only while talk is pressed
@@ -64,18 +59,16 @@ class SpeechService:
         self._talk: list[np.ndarray] | None = None  # audio captured while push-to-talk is held
         self._tasks: queue.Queue[Callable[[], None] | None] = queue.Queue()
         self._worker = threading.Thread(target=self._work, name="decoder", daemon=True)
-        ns = bus.keys.namespace
         self._utterances = bus.publisher(bus.keys.utterance)
         self._say = bus.publisher(bus.keys.say)
-        self._status = bus.publisher(speech_key(ns, "status"), cached=True)
+        self._status = bus.publisher(bus.keys.speech("status"), cached=True)
         self.decoded = 0
 
     # -- start and stop ----------------------------------------------------
     def start(self) -> None:
-        ns = self.bus.keys.namespace
         self._worker.start()
-        self.bus.subscribe(speech_key(ns, "audio"), self._on_stream, schema="speech_audio")
-        self.bus.serve(speech_key(ns, "ptt"), self._on_ptt)
+        self.bus.subscribe(self.bus.keys.speech("audio"), self._on_stream, schema="speech_audio")
+        self.bus.serve(self.bus.keys.speech("ptt"), self._on_ptt)
         self.bus.subscribe(self.bus.keys.objects, self._on_objects, schema="objects", latest_only=True, history=True)
         self.bus.watch_alive(self._on_alive)
         if self.speaker is not None:

@@ -11,7 +11,7 @@ import pytest
 
 from services.speech import espeak
 from services.speech.audio import RATE, read_wav, silence
-from services.speech.service import speech_key
+from shared.keys import Keys
 from shared.bus import RemoteError
 
 pytestmark = pytest.mark.skipif(not espeak.available(), reason="espeak-ng is not installed")
@@ -25,7 +25,7 @@ OBJECTS = [
 
 def stream(bus, pcm: np.ndarray, chunk_s: float = 0.1) -> None:
     """Send audio on speech/audio the way a remote microphone would."""
-    key = speech_key(bus.keys.namespace, "audio")
+    key = Keys(bus.keys.namespace).speech("audio")
     step = int(RATE * chunk_s)
     for start in range(0, len(pcm), step):
         bus.publish(key, {"pcm": pcm[start:start + step], "rate": RATE})
@@ -64,7 +64,7 @@ def test_missing_microphone_is_reported_once_and_push_to_talk_still_works(networ
     report = says.get(timeout=10)
     assert report["kind"] == "info" and report["text"].startswith("No microphone:")
     assert "typing works" in report["text"]
-    status = collect(hub, speech_key(network.namespace, "status"), history=True).get(timeout=10)
+    status = collect(hub, Keys(network.namespace).speech("status"), history=True).get(timeout=10)
     assert status["microphone"] is False and status["microphone_problem"]
     assert "Traceback" not in proc.log()
 
@@ -72,7 +72,7 @@ def test_missing_microphone_is_reported_once_and_push_to_talk_still_works(networ
     stream(hub, said)  # push-to-talk not held: ignored
     with pytest.raises(queue.Empty):
         utterances.get(timeout=3)
-    ptt = speech_key(network.namespace, "ptt")
+    ptt = Keys(network.namespace).speech("ptt")
     assert hub.request(ptt, {"on": True})["listening"] is True
     stream(hub, said)
     assert hub.request(ptt, {"on": False})["listening"] is False
