@@ -32,6 +32,7 @@ RELEASE_CLEARANCE = 0.015  # a placed object's bottom is released this far above
 ROTATE_STEP = 1.6  # rad, the paper's wrist-roll increment
 MAX_GRIP_WIDTH = 0.085  # widest object the open gripper can close around, with margin
 SIDE_GRASP_HEIGHT = 0.7  # share of an object's height at which a side grasp squeezes it
+SIDE_GRASP_PITCH = 0.35  # rad: the tilted-down variant of each side grasp
 
 RELATIONS = ("above", "next_to", "left_of", "right_of", "in_front_of", "behind", "on_top_of", "near")
 DIRECTIONS = {
@@ -290,14 +291,16 @@ def grasp_candidates(box: Box, *, round_shape: bool = False, approach_distance: 
     z = box.bottom + min(max(SIDE_GRASP_HEIGHT * height, 0.025), height - 0.015)
     directions = [outward, np.array([1.0, 0.0, 0.0])]
     directions += [Rotation.from_euler("z", a).apply(outward) for a in (0.35, -0.35)]
-    for direction in directions:
-        if _across(box, direction, round_shape) > MAX_GRIP_WIDTH:
-            continue
-        depth = _across(box, np.array([-direction[1], direction[0], 0.0]), round_shape) / 2
-        grasp_point = np.array([box.center[0], box.center[1], z]) - direction * max(depth - 0.025, 0.0)
-        rot = facing(direction)
-        grasp = make_pose(grasp_point, rot)
-        grasps.append(Grasp(make_pose(grasp_point - approach_distance * direction, rot), grasp, shifted(grasp, up)))
+    for pitch in (0.0, SIDE_GRASP_PITCH):  # level, then tilted down: lifts the forearm off the table
+        for direction in directions:
+            if _across(box, direction, round_shape) > MAX_GRIP_WIDTH:
+                continue
+            depth = _across(box, np.array([-direction[1], direction[0], 0.0]), round_shape) / 2
+            grasp_point = np.array([box.center[0], box.center[1], z]) - direction * max(depth - 0.025, 0.0)
+            approach = tilted(direction, DOWN, pitch)
+            rot = facing(approach)
+            grasp = make_pose(grasp_point, rot)
+            grasps.append(Grasp(make_pose(grasp_point - approach_distance * approach, rot), grasp, shifted(grasp, up)))
     top_point = np.array([box.center[0], box.center[1], box.top - min(0.035, 0.6 * height)])
     yaw_robot = float(np.arctan2(outward[1], outward[0]))
     for yaw in (yaw_robot, yaw_robot + np.pi / 2):

@@ -277,10 +277,12 @@ class Procedures:
             tool = kin.fk()
             self._set_held(arm, Held(object, Box.of(obj), tool))
             kin, snap = self._ready(arm)
-            lift = geo.shifted(kin.fk(), [0.0, 0.0, grasp.lift[2] - grasp.grasp[2]])
-            trajectory = kin.straight_line(lift, check_collisions=False)
-            if trajectory is not None:
-                self._go(arm, trajectory)
+            trajectory = self._lift(kin, grasp.lift[2] - grasp.grasp[2])
+            if trajectory is None:
+                reason = "I can't lift it from there"
+                self._release_and_back_off(arm)
+                continue
+            self._go(arm, trajectory)
             snap = self._snapshot()
             if snap.gripper_state(arm) == "holding":
                 return Done(landmark=self._landmark(obj), relative_pose=None,
@@ -289,6 +291,15 @@ class Procedures:
             reason = "it slipped out of my fingers when I lifted it"
             self._release_and_back_off(arm)
         raise StepFailed(wording.cannot_pick(arm, words, reason))
+
+    @staticmethod
+    def _lift(kin: ArmKinematics, height: float) -> Trajectory | None:
+        """Straight up by ``height``, or by less where the wrist cannot go that high in this orientation."""
+        for share in (1.0, 0.66, 0.4):
+            trajectory = kin.straight_line(geo.shifted(kin.fk(), [0.0, 0.0, share * height]), check_collisions=False)
+            if trajectory is not None:
+                return trajectory
+        return None
 
     def _grasp_plans(self, kin: ArmKinematics, obj: dict[str, Any]) -> list[tuple[geo.Grasp, np.ndarray]]:
         """Grasps whose pre-grasp and grasp both have IK solutions, in preference order."""
@@ -302,9 +313,19 @@ class Procedures:
                 grasp_q = kin.ik(grasp.grasp, seeds=[pre_q])
             finally:
                 kin.allow_touching(obj["id"], False)
-            if grasp_q is not None:
+            if grasp_q is not None and self._descent_clear(kin, pre_q, grasp.grasp, obj["id"]):
                 plans.append((grasp, pre_q))
         return plans
+
+    @staticmethod
+    def _descent_clear(kin: ArmKinematics, pre_q: np.ndarray, grasp_pose: np.ndarray, object_id: str) -> bool:
+        """Whether the straight approach from the pre-grasp to the grasp is free (checked before moving at all)."""
+        now = kin.arm_q
+        kin.set_joints(dict(zip([kin.names[i] for i in kin.arm_idx], pre_q)))
+        try:
+            return kin.straight_line(grasp_pose, ignore=(object_id,)) is not None
+        finally:
+            kin.set_joints(dict(zip([kin.names[i] for i in kin.arm_idx], now)))
 
     def _release_and_back_off(self, arm: str) -> None:
         self._grip(arm, OPEN_WIDTH)

@@ -34,6 +34,7 @@ NLU_TIMEOUT = 15.0        # s for the NLU to answer an utterance
 START_TIMEOUT = 10.0      # s for the executor to take a command up (or refuse it)
 STEP_TIMEOUT = 240.0      # s for one programmed step
 REPLAY_TIMEOUT = 900.0    # s for a whole replay
+TAKEN_UP_GRACE = 0.5    # s for a busy state sent just after the first line to arrive
 SETTLE = 1.0              # s to let objects come to rest before judging
 SEEN_WITHIN = 0.04        # m: perception's object must be this close to the simulator's
 
@@ -176,9 +177,10 @@ class TaskRunner:
         if step.understood != step.expected:
             step.problem = f"understood {step.understood} instead of {step.expected}"
         try:
-            self.watch.wait_for(lambda: self.watch.busy_states > busy_before
-                                or any(l.kind == "error" for l in self.watch.lines_since(sent)),
+            # taken up: a busy state, or a line about it (a quick command can be over before its busy state is sent)
+            self.watch.wait_for(lambda: self.watch.busy_states > busy_before or self.watch.lines_since(sent),
                                 START_TIMEOUT, f"the executor to take up {utterance.text!r}")
+            time.sleep(TAKEN_UP_GRACE)
             self.watch.wait_for(lambda: not self.watch.busy(), timeout, f"the executor to finish {utterance.text!r}")
         except WaitTimeout as exc:
             step.problem = step.problem or str(exc)

@@ -25,8 +25,6 @@ BOOK = load_tasks()
 
 # Tasks the robot side cannot do yet, each for a reason named in the executor's own words.
 NOT_YET = {
-    "task3": "the executor's pick-up of the small yellow box fails before touching it: every straight descent to "
-             "its grasps collides the wrist (r_wrist_flex_link) with the table, 'I can't reach down to it.'",
     "task4": "the executor has no motion that presses a hand against an object: 'towards' stops 5 cm short and "
              "directional moves that would touch the box are refused (can_move false, so 'right hand left' is "
              "read as a wrist rotation), so the box cannot be squeezed between both hands",
