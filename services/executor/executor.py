@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from services.executor import wording
+from services.executor.actions_cli import apply_action_op
 from services.executor.commands import ADMIN, RECORDED, CommandError, check
 from services.executor.grounding import Regrounding, describe_kind, reground
 from services.executor.kinematics import ArmKinematics, joint_names
@@ -329,7 +330,6 @@ class Executor:
 
     def _on_control_actions(self, request: dict[str, Any]) -> dict[str, Any]:
         """List, show, rename and delete actions for the TUI (errors become error replies)."""
-        from services.executor.actions_cli import apply_action_op
         reply = apply_action_op(self.store, request)
         self.publish_state()
         return reply

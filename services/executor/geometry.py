@@ -257,10 +257,11 @@ def point_candidates(box: Box, shoulder: np.ndarray) -> list[np.ndarray]:
     """Tool poses aiming the gripper at the object's centre from above and in front of it."""
     outward = _toward_robot(box.center - np.asarray(shoulder, float) * [1, 1, 0])
     poses = []
-    for elevation in (0.65, 0.9, 0.4):
-        aim = np.cos(elevation) * outward + np.sin(elevation) * DOWN
-        point = box.center - POINT_DISTANCE * aim - aim * np.linalg.norm(box.half * aim)
-        poses.append(make_pose(point, facing(aim)))
+    for distance in (POINT_DISTANCE, 1.5 * POINT_DISTANCE):
+        for elevation in (0.65, 0.9, 1.2, 0.4):
+            aim = np.cos(elevation) * outward + np.sin(elevation) * DOWN
+            point = box.center - distance * aim - aim * np.linalg.norm(box.half * aim)
+            poses.append(make_pose(point, facing(aim)))
     return poses
 
 

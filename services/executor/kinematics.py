@@ -62,7 +62,9 @@ TABLE_PADDING = 0.005
 PLANNING_TIMES = (1.0, 2.0, 4.0)  # seconds for RRTConnect: a quick try, then a patient one
 CARTESIAN_STEP = 0.01
 JOINT_RESOLUTION = 0.05  # rad between checked waypoints of a planned path  # straight-line moves are interpolated every centimetre
-ROLL_JOINTS = (4, 6)   # forearm and wrist roll: sampled over one turn only
+ROLL_JOINTS = (4, 6)
+# The ready posture (the PR2 "untucked" arm: bent in front of the body, above the table's near edge).
+READY = {"right": (-0.4, 1.0, 0.0, -2.05, 0.0, -0.1, 0.0), "left": (0.4, 1.0, 0.0, -2.05, 0.0, -0.1, 0.0)}   # forearm and wrist roll: sampled over one turn only
 
 
 def joint_names(arm: str) -> list[str]:
@@ -360,6 +362,9 @@ class ArmKinematics:
                     return self._parameterise(straight)
             start = self.full(self.arm_q)
             fixed = {FixedJoint(0, self.torso_idx, float(start[self.torso_idx]))}
+            via = self._via_ready(arm_q)
+            if via is not None:
+                return self._parameterise(via)
             for planning_time in PLANNING_TIMES:
                 # OMPL checks edges at a resolution relative to the whole joint space (coarse, with the
                 # rolls' two turns), so its raw RRT path (short edges) is taken and shortcut here with
@@ -376,6 +381,22 @@ class ArmKinematics:
                     continue
                 return self._parameterise(self._shortcut(raw))
         return None
+
+    def _via_ready(self, arm_q: np.ndarray) -> np.ndarray | None:
+        """Two clear joint-space lines through the ready posture (arm bent in front of the body).
+
+        Most moves between awkward postures (reaching across the body, coming
+        back from the side) are solved this way at once; the random planner
+        is left for the cluttered cases.
+        """
+        ready = np.clip(np.asarray(READY[self.arm], float), self.limits[self.arm_idx, 0], self.limits[self.arm_idx, 1])
+        if self.collisions(ready):
+            return None
+        first = self._joint_line(self.arm_q, ready)
+        second = self._joint_line(ready, arm_q) if first is not None else None
+        if second is None:
+            return None
+        return np.vstack([first, second[1:]])
 
     def _shortcut(self, path: np.ndarray) -> np.ndarray:
         """Greedy shortcutting: from each waypoint jump to the farthest one reachable by a clear straight line."""

@@ -118,7 +118,6 @@ class Scene:
         self._version = 0
         self._robot_version = 0
         self._remembered: dict[str, dict[str, Any]] = {}
-        self.objects_received = False
 
     def update_objects(self, objects: list[dict[str, Any]], table: dict | None = None) -> bool:
         """Take a perception message's objects; True when something changed that matters."""
@@ -129,7 +128,6 @@ class Scene:
             self._remembered.update(copy.deepcopy(fresh))
             while len(self._remembered) > REMEMBER:
                 del self._remembered[next(iter(self._remembered))]
-            self.objects_received = True
             if isinstance(table, dict) and isinstance(table.get("height"), (int, float)):
                 changed |= abs(float(table["height"]) - self._table_z) > MOVED
                 self._table_z = float(table["height"])

@@ -1,15 +1,22 @@
-"""A JSGF grammar of the commands, generated from the NLU's vocabulary.
+"""A JSGF grammar of the commands, generated from the NLU's templates and vocabulary.
 
 Why a grammar and not a free language model: the recogniser then only ever
 hears sentences of the command language, so a misrecognition is another
 command's sentence, which the NLU can still weigh against the scene (n-best
 rescoring), rather than free text it cannot read at all.
 
-Each procedure has a sentence pattern (verb, optional arm, its parameters);
-the phrases filling each part come from :class:`SpeechVocabulary`. Colour and
-type words of objects that are in the current scene get a higher weight than
-the others, which stay possible: the user may name an object that is not
-there and should hear the NLU say so, not be misheard as something else.
+The sentence shapes are the NLU's own (``services.nlu.templates``), loosened
+the way people actually say commands: the arm may be left out ("move up"),
+"your"/"the" are optional, "it" may be any object ("place the cup on the
+table"), a particle may follow the object ("pick the cup up"), and "please"
+may open or close the sentence. The phrases filling each slot come from
+:class:`SpeechVocabulary`.
+
+Scene: when the objects in view are known, the object words are only those
+that can name one of them (their colours and types, and the labels that
+single one out), which removes most of the ways a command can be misheard.
+Naming an absent object is still heard by the recogniser's second search
+(the n-gram model of :mod:`services.speech.ngram`), so the NLU can say so.
 """
 
 from __future__ import annotations
@@ -17,30 +24,76 @@ from __future__ import annotations
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from itertools import combinations
 
 from services.nlu.commands import PROCEDURES
+from services.nlu.refexp import LABELS, Scene
+from services.nlu.templates import sentence_templates
+from services.nlu.world import WorldError, parse_world
 from services.speech.vocabulary import Implied, SpeechVocabulary
 
-SCENE_WEIGHT = 4.0  # a colour or type word in the scene vs. one that is not
 GRAMMAR_NAME = "hfpbd"
-ARM_FIRST = ("move_abs_dest", "move_rel_dest", "move_abs_dir", "move_rel_dir", "rotate", "open", "close")
-SPLIT_VERBS = {"pick_up": ("pick", "up")}  # "pick the cup up"
+SHAPES: dict[str, list[str]] = sentence_templates()["procedures"]  # type: ignore[assignment]
+# the word a parameterless command may end with ("create a new action", "record the objects")
+COMPLEMENTS: dict[str, tuple[str, ...]] = {
+    "create_action": ("a new action", "an action", "action"),
+    "execute": ("the action",),
+    "record": ("the objects", "objects", "the table"),
+}
+PARTICLES = ("up", "down")  # a two-word verb whose particle may follow the object: "pick the cup up"
+SCENE_LABELS = (*LABELS, "middle")
 _DETERMINERS = ("your", "the")
 _RULE_WORD = re.compile(r"<[^>]*>|/[0-9.]+/|[()\[\]|;=*+]")
+_SLOT = re.compile(r"<(\w+)>")
 
 
 @dataclass(frozen=True)
 class SceneWords:
-    """The colour and type values of the objects in view (empty: no scene known)."""
+    """The words that can name an object in view: colours, types, salient labels (empty: no scene known)."""
 
     colors: frozenset[str] = frozenset()
     types: frozenset[str] = frozenset()
+    labels: frozenset[str] = frozenset()
+
+    @property
+    def known(self) -> bool:
+        return bool(self.colors or self.types)
 
     @classmethod
     def of(cls, objects: Iterable[dict]) -> SceneWords:
         items = [o for o in objects if isinstance(o, dict)]
-        return cls(frozenset(str(o.get("color")) for o in items if o.get("color")),
-                   frozenset(str(o.get("type")) for o in items if o.get("type")))
+        return cls(frozenset(str(o["color"]) for o in items if o.get("color") not in (None, "unknown")),
+                   frozenset(str(o["type"]) for o in items if o.get("type") not in (None, "unknown")),
+                   salient_labels(items))
+
+
+def salient_labels(objects: list[dict]) -> frozenset[str]:
+    """Labels that single out one object, among all objects or those of one colour and/or type.
+
+    Why: these are the only labels a referring expression of this scene needs
+    (``refexp.Scene.describe`` picks from them); others can only be misheard.
+    """
+    try:
+        scene = Scene(parse_world({"objects": objects}, strict=False))
+    except WorldError:
+        return frozenset()
+    contexts = {scene.everyone}
+    for color in set(scene.colors):
+        contexts.add(scene.matching({color}, set()))
+        for kind in set(scene.types):
+            contexts.add(scene.matching({color}, {kind}))
+    for kind in set(scene.types):
+        contexts.add(scene.matching(set(), {kind}))
+    labels = set()
+    for context in contexts:
+        if len(context) < 2:
+            continue
+        fitting = [label for label in SCENE_LABELS if len(scene.group(context, label)) == 1]
+        labels.update(fitting)
+        for first, second in combinations(SCENE_LABELS, 2):
+            if len(scene.group(context, first) & scene.group(context, second)) == 1:
+                labels.update((first, second))
+    return frozenset(labels)
 
 
 @dataclass
@@ -57,87 +110,128 @@ class _Rules:
         return f"<{name}>"
 
 
-def build_jsgf(vocabulary: SpeechVocabulary, scene: SceneWords = SceneWords()) -> str:
-    """The grammar text; every word in it is a word of ``vocabulary``."""
-    rules = _Rules()
-    words = vocabulary.words()
+def _optional(item: str | None) -> str:
+    return f"[{item}]" if item else ""
 
-    def literal(phrase: str) -> str:
-        return phrase if all(w in words for w in phrase.split()) else ""
 
-    def optional(item: str | None) -> str:
-        return f"[{item}]" if item else ""
+def _seq(*parts: str | None) -> str:
+    """Parts in order; empty when a required part (None) has no phrases in this vocabulary."""
+    if any(p is None for p in parts):
+        return ""
+    return " ".join(p for p in parts if p)
 
-    def seq(*parts: str | None) -> str:
-        if any(p is None for p in parts):
-            return ""  # a required part has no phrases in this vocabulary
-        return " ".join(p for p in parts if p)
 
-    def group(name: str, slot: str, values: Iterable[str]) -> str | None:
-        return rules.define(name, (p for v in values for p in vocabulary.phrases(slot, v)))
+class _Builder:
+    """One grammar: the shared rules (arm, object, ...) and one sentence rule per procedure."""
 
-    det = optional(" | ".join(d for d in _DETERMINERS if literal(d)))
-    the = optional(literal("the"))
-    arm_side = [p for side in ("right", "left", "*") for p in vocabulary.phrases("arm", side)]
-    arm = rules.define("arm", (p if p.split()[0] in _DETERMINERS else seq(det, p) for p in arm_side))
-    with_arm = optional(seq(literal("with"), arm)) if literal("with") and arm else ""
-    color = rules.define("color", _weighted(vocabulary, "color", scene.colors))
-    kind = rules.define("type", _weighted(vocabulary, "type", scene.types))
-    generic = group("generic", "generic", vocabulary.values("generic"))
-    label = group("label", "label", vocabulary.values("label"))
-    anaphor = group("anaphor", "anaphor", vocabulary.values("anaphor"))
-    noun = rules.define("noun", [kind or "", generic or ""])
-    described = seq(the, optional(label), optional(color), noun) if noun else None
-    obj = rules.define("object", [anaphor or "", described or ""])
-    relation = group("relation", "relation", PROCEDURES["move_rel_dest"]["relation"])
-    number = rules.define("number", vocabulary.numbers.values())
-    action = literal("action")
-    target_word = group("target_word", "target", PROCEDURES["switch_action"]["target"])
-    target = rules.define("target", [
-        seq(the, target_word, optional(action)) if target_word else "",
-        seq(optional(action), number) if number else "",
-    ])
+    def __init__(self, vocabulary: SpeechVocabulary, scene: SceneWords) -> None:
+        self.vocabulary = vocabulary
+        self.rules = _Rules()
+        det = _optional(" | ".join(d for d in _DETERMINERS if self.literal(d)))
+        self.the = _optional(self.literal("the"))
+        arm_side = [p for side in ("right", "left", "*") for p in vocabulary.phrases("arm", side)]
+        self.arm = self.rules.define("arm", (p if p.split()[0] in _DETERMINERS else _seq(det, p) for p in arm_side))
+        self.object = self._object(scene)
+        number = self.rules.define("number", vocabulary.numbers.values())
+        target_word = self.group("target_word", "target", PROCEDURES["switch_action"]["target"])
+        self.target = self.rules.define("target", [
+            _seq(self.the, target_word, _optional(self.literal("action"))) if target_word else "",
+            _seq(_optional(self.literal("action")), number) if number else "",
+        ])
+        self.number = number
 
-    def parameter(procedure: str, slot: str) -> str | None:
+    def literal(self, phrase: str) -> str:
+        return phrase if self.vocabulary.knows(phrase) else ""
+
+    def group(self, name: str, slot: str, values: Iterable[str]) -> str | None:
+        return self.rules.define(name, (p for v in values for p in self.vocabulary.phrases(slot, v)))
+
+    def _object(self, scene: SceneWords) -> str | None:
+        def in_scene(slot: str, present: frozenset[str]) -> list[str]:
+            values = self.vocabulary.values(slot)
+            return [v for v in values if v in present] if scene.known else values
+
+        color = self.group("color", "color", in_scene("color", scene.colors))
+        kind = self.group("type", "type", in_scene("type", scene.types))
+        generic = self.group("generic", "generic", self.vocabulary.values("generic"))
+        labels = self.vocabulary.values("label")
+        label = self.group("label", "label", [v for v in labels if v in scene.labels] if scene.known else labels)
+        anaphor = self.group("anaphor", "anaphor", self.vocabulary.values("anaphor"))
+        noun = self.rules.define("noun", [kind or "", generic or ""])
+        described = _seq(self.the, _optional(label), _optional(color), noun) if noun else None
+        return self.rules.define("object", [anaphor or "", described or ""])
+
+    def parameter(self, procedure: str, slot: str) -> str | None:
         if slot == "object":
-            return obj
-        if slot == "relation":
-            return relation
+            return self.object
         if slot == "target":
-            return target
-        return group(f"{procedure}_{slot}", slot, [str(v) for v in PROCEDURES[procedure][slot]])
+            return self.target
+        if slot == "number":
+            return self.number
+        if slot == "relation":
+            return self.group("relation", "relation", PROCEDURES["move_rel_dest"]["relation"])
+        return self.group(f"{procedure}_{slot}", slot, [str(v) for v in PROCEDURES[procedure][slot]])
 
-    bodies: list[str] = []
-    for procedure, params in PROCEDURES.items():
+    def sentence(self, procedure: str, shape: str, verb: str, said: set[str]) -> str:
+        """One NLU shape as a grammar alternative, loosened the way people speak."""
+        tokens = shape.split()
+        parts: list[str | None] = []
+        i = 0
+        while i < len(tokens):
+            token, slot = tokens[i], _SLOT.fullmatch(tokens[i])
+            if token == "with" and i + 1 < len(tokens) and tokens[i + 1] == "<arm>":
+                parts.append(_optional(_seq(self.literal("with"), self.arm)) if self.arm else "")
+                i += 2
+                continue
+            if slot is None:
+                parts.append(_optional(self.object) if token == "it" else self.literal(token) or None)
+            elif slot[1] == "verb":
+                parts.append(verb)
+            elif slot[1] == "arm":
+                parts.append(_optional(self.arm))
+            elif slot[1] not in said:
+                parts.append(self.parameter(procedure, slot[1]))
+            i += 1
+        return _seq(*parts)
+
+    def command(self, procedure: str) -> str | None:
         alternatives = []
-        for implied, phrases in vocabulary.verbs.get(procedure, {}).items():
+        for implied, phrases in self.vocabulary.verbs.get(procedure, {}).items():
             if not _fits(procedure, implied):
                 continue
-            verb = rules.define(f"verb_{procedure}{_suffix(implied)}", phrases)
+            verb = self.rules.define(f"verb_{procedure}{_suffix(implied)}", phrases)
             said = {slot for slot, _ in implied}
-            rest = [parameter(procedure, slot) for slot in params if slot not in ("arm", *said)]
-            if procedure == "place_abs" or procedure == "place_rel":
-                rest = [optional(obj)] + rest
-            if "arm" not in params:
-                alternatives.append(seq(verb, *rest))
-            elif procedure in ARM_FIRST:
-                alternatives.append(seq(verb, optional(arm), *rest))
-            else:
-                alternatives.append(seq(verb, *rest, with_arm))
-        split = SPLIT_VERBS.get(procedure)
-        if split and all(literal(w) for w in split) and obj:
-            alternatives.append(seq(split[0], obj, split[1], with_arm))
-        if procedure == "create_action" and action:
-            alternatives = [seq(a, optional(seq(literal("a"), literal("new"), action))) for a in alternatives]
-        if procedure == "execute" and action:
-            alternatives = [seq(a, optional(seq(the, action))) for a in alternatives]
-        body = rules.define(f"command_{procedure}", alternatives)
-        if body:
-            bodies.append(body)
-    polite = rules.define("polite", (w for w in ("please",) if w in vocabulary.fillers))
+            for shape in SHAPES.get(procedure, ["<verb>"]):
+                if "target" in said and "<number>" in shape:
+                    continue  # "next action" already says which action
+                alternatives.append(self.sentence(procedure, shape, verb, said))
+                alternatives += self._split_particles(procedure, shape, phrases, said)
+        complements = [c for c in COMPLEMENTS.get(procedure, ()) if self.literal(c)]
+        if complements:
+            alternatives = [_seq(a, _optional(" | ".join(complements))) for a in alternatives]
+        return self.rules.define(f"command_{procedure}", alternatives)
+
+    def _split_particles(self, procedure: str, shape: str, phrases: Iterable[str], said: set[str]) -> list[str]:
+        """"pick the cup up": a verb ending in a particle, the object in between."""
+        if not shape.startswith("<verb> <object>"):
+            return []
+        out = []
+        for phrase in phrases:
+            words = phrase.split()
+            if len(words) == 2 and words[1] in PARTICLES and self.literal(words[0]):
+                rest = shape.replace("<verb> <object>", f"{words[0]} <object> {words[1]}", 1)
+                out.append(self.sentence(procedure, rest, "", said))
+        return out
+
+
+def build_jsgf(vocabulary: SpeechVocabulary, scene: SceneWords = SceneWords()) -> str:
+    """The grammar text; every word in it is a word of ``vocabulary``."""
+    builder = _Builder(vocabulary, scene)
+    bodies = [body for procedure in PROCEDURES if (body := builder.command(procedure))]
+    polite = builder.rules.define("polite", (w for w in ("please",) if w in vocabulary.fillers))
     lines = ["#JSGF V1.0;", f"grammar {GRAMMAR_NAME};",
-             f"public <command> = {seq(optional(polite), '(' + ' | '.join(bodies) + ')', optional(polite))};"]
-    lines += [f"<{name}> = {body};" for name, body in rules.bodies.items()]
+             f"public <command> = {_seq(_optional(polite), '(' + ' | '.join(bodies) + ')', _optional(polite))};"]
+    lines += [f"<{name}> = {body};" for name, body in builder.rules.bodies.items()]
     return "\n".join(lines) + "\n"
 
 
@@ -145,14 +239,6 @@ def grammar_words(jsgf: str) -> set[str]:
     """The words a grammar text can produce (for checking it against a vocabulary)."""
     body = "\n".join(line.split("=", 1)[1] for line in jsgf.splitlines() if "=" in line)
     return set(_RULE_WORD.sub(" ", body).split())
-
-
-def _weighted(vocabulary: SpeechVocabulary, slot: str, present: frozenset[str]) -> list[str]:
-    """Alternatives of a colour/type rule, those in the scene weighted up (all weighted, as JSGF requires)."""
-    values = vocabulary.values(slot)
-    if not present:
-        return [p for v in values for p in vocabulary.phrases(slot, v)]
-    return [f"/{SCENE_WEIGHT if v in present else 1.0:g}/ {p}" for v in values for p in vocabulary.phrases(slot, v)]
 
 
 def _fits(procedure: str, implied: Implied) -> bool:

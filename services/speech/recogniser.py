@@ -19,6 +19,7 @@ from services.speech.grammar import SceneWords, build_jsgf
 from services.speech.vocabulary import SpeechVocabulary
 
 NBEST = 5
+PER_MEANING = 3  # phrases per meaning in the grammar: the plain, usual ones (None: every phrase)
 NBEST_SEARCH = 50  # lattice paths read to find NBEST distinct sentences
 # PocketSphinx scores acoustic frames as if independent, which overstates how
 # sure it is; this scale turns score differences into usable probabilities
@@ -51,10 +52,12 @@ class Recogniser:
     """
 
     def __init__(self, vocabulary: SpeechVocabulary, scene: SceneWords = SceneWords(),
-                 nbest: int = NBEST, acoustic_scale: float = ACOUSTIC_SCALE) -> None:
+                 per_meaning: int | None = PER_MEANING, nbest: int = NBEST,
+                 acoustic_scale: float = ACOUSTIC_SCALE) -> None:
         self._decoder = Decoder(lm=None, loglevel="FATAL")
         self._nbest = nbest
         self._scale = acoustic_scale
+        self._per_meaning = per_meaning
         self._search: str | None = None
         self._version = 0
         self.vocabulary = vocabulary
@@ -68,6 +71,8 @@ class Recogniser:
         words = vocabulary.words()
         self.unpronounceable = {w for w in words if not self._pronounceable(w)}
         usable = vocabulary.restricted(words - self.unpronounceable).without_homophones(self._sound)
+        if self._per_meaning:
+            usable = usable.core(self._per_meaning)
         scene = self.scene if scene is None else scene
         jsgf = build_jsgf(usable, scene)
         if jsgf == self.jsgf:

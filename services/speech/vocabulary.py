@@ -7,6 +7,10 @@ groups are derived from it and the recogniser can only ever produce words the
 NLU understands. Readings the lexicon marks as weak (a second, unlikely sense
 of a word, such as "put" meaning move) are left out: they would let the
 grammar build sentences nobody says.
+
+Within a meaning, phrases that mean only this come before phrases that also
+mean something else ("open" before "release", which may also mean place), so
+a grammar taking the first few phrases per meaning keeps the plain ones.
 """
 
 from __future__ import annotations
@@ -28,6 +32,8 @@ class SpeechVocabulary:
     options: dict[tuple[str, str], tuple[str, ...]] = field(default_factory=dict)
     numbers: dict[int, str] = field(default_factory=dict)
     fillers: frozenset[str] = frozenset()
+    # every word of the NLU's phrases, also those trimmed away by core(): the fixed words of sentence shapes
+    known: frozenset[str] = frozenset()
 
     def phrases(self, slot: str, value: str) -> tuple[str, ...]:
         return self.options.get((slot, value), ())
@@ -42,11 +48,15 @@ class SpeechVocabulary:
         phrases += list(self.numbers.values())
         return {w for p in phrases for w in p.split()} | set(self.fillers)
 
+    def knows(self, phrase: str) -> bool:
+        """Whether every word of ``phrase`` is a word of the NLU (kept or not by :meth:`core`)."""
+        return all(w in self.known or w in self.fillers for w in phrase.split())
+
     def core(self, per_meaning: int) -> SpeechVocabulary:
         """At most ``per_meaning`` phrases per meaning, the lexicon's first (most usual) ones."""
         verbs = {proc: {implied: ps[:per_meaning] for implied, ps in groups.items()} for proc, groups in self.verbs.items()}
         options = {key: ps[:per_meaning] for key, ps in self.options.items()}
-        return SpeechVocabulary(verbs, options, dict(self.numbers), self.fillers)
+        return SpeechVocabulary(verbs, options, dict(self.numbers), self.fillers, self.known)
 
     def without_homophones(self, sound: Callable[[str], str]) -> SpeechVocabulary:
         """Within each meaning, only the first of phrases that sound alike ("pick up" / "pickup").
@@ -61,7 +71,8 @@ class SpeechVocabulary:
             return tuple(first.values())
 
         verbs = {proc: {implied: keep(ps) for implied, ps in groups.items()} for proc, groups in self.verbs.items()}
-        return SpeechVocabulary(verbs, {key: keep(ps) for key, ps in self.options.items()}, dict(self.numbers), self.fillers)
+        return SpeechVocabulary(verbs, {key: keep(ps) for key, ps in self.options.items()}, dict(self.numbers),
+                                self.fillers, self.known)
 
     def restricted(self, known: Iterable[str]) -> SpeechVocabulary:
         """Only the phrases whose every word is in ``known`` (e.g. the recogniser's dictionary)."""
@@ -74,7 +85,8 @@ class SpeechVocabulary:
                  for proc, groups in self.verbs.items()}
         options = {key: kept for key, ps in self.options.items() if (kept := keep(ps))}
         numbers = {n: w for n, w in self.numbers.items() if w in allowed}
-        return SpeechVocabulary(verbs, options, numbers, frozenset(w for w in self.fillers if w in allowed))
+        return SpeechVocabulary(verbs, options, numbers, frozenset(w for w in self.fillers if w in allowed),
+                                self.known & allowed)
 
 
 def nlu_vocabulary(phrases: Iterable[str] | None = None) -> SpeechVocabulary:
@@ -82,9 +94,11 @@ def nlu_vocabulary(phrases: Iterable[str] | None = None) -> SpeechVocabulary:
     wanted = set(phrases) if phrases is not None else None
     verbs: dict[str, dict[Implied, list[str]]] = {}
     options: dict[tuple[str, str], list[str]] = {}
+    known: set[str] = set()
     for phrase, readings in PHRASES.items():
         if wanted is not None and phrase not in wanted:
             continue
+        known.update(phrase.split())
         for reading in readings:
             head = reading[0]
             if head.weight == LANGUAGE.weak:
@@ -95,13 +109,17 @@ def nlu_vocabulary(phrases: Iterable[str] | None = None) -> SpeechVocabulary:
                     verbs.setdefault(procedure, {}).setdefault(implied, []).append(phrase)
             elif len(reading) == 1:
                 options.setdefault((head.slot, str(head.value)), []).append(phrase)
+    def plain_first(phrases: list[str]) -> tuple[str, ...]:
+        return tuple(sorted(phrases, key=lambda p: len(PHRASES[p])))  # stable: lexicon order within a rank
+
     numbers: dict[int, str] = {}
     for word, value in NUMBER_WORDS.items():  # cardinals come first, ordinals ("third") are left out
         if 1 <= value <= 20:
             numbers.setdefault(value, word)
     return SpeechVocabulary(
-        {proc: {implied: tuple(ps) for implied, ps in groups.items()} for proc, groups in verbs.items()},
-        {key: tuple(ps) for key, ps in options.items()},
+        {proc: {implied: plain_first(ps) for implied, ps in groups.items()} for proc, groups in verbs.items()},
+        {key: plain_first(ps) for key, ps in options.items()},
         numbers,
         frozenset(FILLERS),
+        frozenset(known),
     )
