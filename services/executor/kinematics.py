@@ -330,6 +330,18 @@ class ArmKinematics:
         return Trajectory(positions[:, 1:].copy(), np.asarray(times, float))
 
     @contextmanager
+    def tolerating(self, name: str, others: list[str]) -> Iterator[None]:
+        """Allow contact between ``name`` (e.g. the held object) and ``others`` for the block."""
+        acm = self.planner.planning_world.get_allowed_collision_matrix()
+        if others:
+            acm.set_entry(name, others, True)
+        try:
+            yield
+        finally:
+            if others:
+                acm.set_entry(name, others, False)
+
+    @contextmanager
     def _tolerating_start_contacts(self) -> Iterator[None]:
         """Let the arm leave objects it already touches (a grasped object, a misperceived blob).
 

@@ -42,6 +42,7 @@ GRIP_FORCE = 30.0
 RETREAT = 0.08          # after releasing, the hand backs off this far
 STATE_WAIT = 1.0        # seconds to wait for a robot state newer than a finished motion
 PICK_ATTEMPTS = 2
+FLAT_MARGIN = 0.01      # metres: how far a "flat" object's top may reach above a released object's bottom
 
 
 class StepFailed(RuntimeError):
@@ -351,8 +352,20 @@ class Procedures:
         support = self._support_below(held, snap) if destination == "here" else snap.table_z
         _, release = targets.place_table(kin.fk(), held, support)
         where = "here" if destination == "here" else "on the table"
-        self._go(arm, self._line(kin, release, wording.sentence(f"I can't lower my {arm} hand to put it down {where}")))
+        with kin.tolerating(held.object_id, self._flat_below(held, release, snap)):
+            self._go(arm, self._line(kin, release, wording.sentence(f"I can't lower my {arm} hand to put it down {where}")))
         return self._release(arm, held)
+
+    @staticmethod
+    def _flat_below(held: Held, release: np.ndarray, snap: SceneSnapshot) -> list[str]:
+        """Objects no higher than the held object's bottom at release (a plate's rim it may land on).
+
+        Their padded boxes would otherwise forbid putting a cup back where it
+        was picked from, right beside a plate.
+        """
+        bottom = float(release[2] + held.offset[2] - held.box.size[2] / 2)
+        return [oid for oid, obj in snap.objects.items()
+                if oid != held.object_id and Box.of(obj).top <= bottom + FLAT_MARGIN]
 
     def _support_below(self, held: Held, snap: SceneSnapshot) -> float:
         """Top of whatever is under the held object: another object's top, else the table."""
@@ -381,7 +394,8 @@ class Procedures:
             self._go(arm, self._plan(kin, hover_q, wording.sentence(
                 f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}")))
             kin, snap = self._ready(arm)
-            self._go(arm, self._line(kin, release, wording.cannot_reach(arm, relation, words)))
+            with kin.tolerating(held.object_id, self._flat_below(held, release, snap)):
+                self._go(arm, self._line(kin, release, wording.cannot_reach(arm, relation, words)))
             done = self._release(arm, held)
             done.landmark = self._landmark(obj)
             return done

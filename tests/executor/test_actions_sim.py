@@ -69,7 +69,7 @@ def test_action_replays_on_moved_cups_and_after_a_restart(stack: Stack) -> None:
     assert stack.state["robot"]["actions"][number - 1] == 2
     stack.load_scene("default")
     said = stack.command("execute")
-    assert texts(said, "narration")[-1] == f"Completed action {number}."
+    assert texts(said, "narration")[-1] == f"Completed action {number}.", (said, stack.objects)
     assert 0.02 < red_left_of_blue(stack) < 0.09
 
 
