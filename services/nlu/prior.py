@@ -58,6 +58,8 @@ def _situation(world: World, objects: dict[str, WorldObject], command: Command) 
 
     if procedure == "move_rel_dest":
         unreachable_if(command.arg("relation"))
+        if gripper == "holding":
+            score += PRIOR.holding_move
     elif procedure == "move_rel_dir":
         unreachable_if(command.arg("direction"))
     elif procedure == "move_abs_dir":

@@ -6,8 +6,12 @@ and tested at a glance.
 
 Prior P(C|S) (log scale, added to a command's score; 0 = no opinion):
 
-    unused arm + novel object  (-1.0)  <  unreachable (-2.5)  <  impossible (-6.0)
+    holding move (-0.2)  <  unused arm + novel object  (-1.0)  <  unreachable (-2.5)  <  impossible (-6.0)
 
+- ``holding_move``: a relative destination move with a hand that holds
+  something; with no verb said, "on the blue cup" then means placing there
+  (the paper's gripper-state rule between move, pick up and place). Smaller
+  than any other penalty, so it only breaks ties.
 - ``novel_object``: the command refers to an object other than the last referred one.
 - ``unused_arm``: the command uses the arm that was not used last.
 - ``unreachable``: the reachability map says that arm cannot do that with that
@@ -34,6 +38,7 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class PriorWeights:
+    holding_move: float = -0.2
     novel_object: float = -0.5
     unused_arm: float = -0.5
     unreachable: float = -2.5

@@ -154,6 +154,22 @@ def test_holding_turns_put_into_place_and_empty_hand_into_move() -> None:
     assert command("above the box", table_scene())["procedure"] == "move_rel_dest"
 
 
+@pytest.mark.parametrize("utterance, relation", [
+    ("on the blue cup", "on_top_of"), ("in blue", "on_top_of"), ("next to the blue cup", "next_to"),
+    ("above blue", "above"),
+])
+def test_holding_hand_turns_a_bare_destination_into_place(utterance: str, relation: str) -> None:
+    held = table_scene(grippers={"right": "holding", "left": "open"}, last_arm="right")
+    assert command(utterance, held) == {"procedure": "place_rel", "arm": "right", "relation": relation,
+                                        "object": "obj1"}
+    assert command(utterance, table_scene(last_arm="right"))["procedure"] == "move_rel_dest"
+
+
+def test_move_verb_still_moves_a_holding_hand() -> None:
+    held = table_scene(grippers={"right": "holding", "left": "open"}, last_arm="right")
+    assert command("move your right hand above the blue cup", held)["procedure"] == "move_rel_dest"
+
+
 def test_held_object_named_by_its_words() -> None:
     scene = table_scene(grippers={"right": "holding", "left": "open"})
     scene["objects"][0]["held_by"] = "right"
