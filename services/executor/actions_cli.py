@@ -66,26 +66,31 @@ def _print_action(reply: dict[str, Any]) -> None:
 
 
 def main(argv: Sequence[str]) -> int:
-    parser = argparse.ArgumentParser(prog="hfpbd executor actions", description="list, show, rename and delete programmed actions")
-    parser.add_argument("--data-dir", default=None, help=f"where actions are stored (default: {default_data_dir()})")
-    parser.add_argument("--json", action="store_true", help="print the reply as JSON")
+    # --data-dir and --json are accepted before or after the operation word
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--data-dir", default=argparse.SUPPRESS,
+                        help=f"where actions are stored (default: {default_data_dir()})")
+    common.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the reply as JSON")
+    parser = argparse.ArgumentParser(prog="hfpbd executor actions", parents=[common],
+                                     description="list, show, rename and delete programmed actions")
     sub = parser.add_subparsers(dest="op", required=True)
-    sub.add_parser("list", help="one line per action")
-    show = sub.add_parser("show", help="the steps of one action")
+    sub.add_parser("list", parents=[common], help="one line per action")
+    show = sub.add_parser("show", parents=[common], help="the steps of one action")
     show.add_argument("number", type=int)
-    rename = sub.add_parser("rename", help="give an action a name")
+    rename = sub.add_parser("rename", parents=[common], help="give an action a name")
     rename.add_argument("number", type=int)
     rename.add_argument("name")
-    delete = sub.add_parser("delete", help="remove an action (later ones move down by one)")
+    delete = sub.add_parser("delete", parents=[common], help="remove an action (later ones move down by one)")
     delete.add_argument("number", type=int)
     args = parser.parse_args(list(argv))
+    data_dir, as_json = getattr(args, "data_dir", None), getattr(args, "json", False)
     request = {k: v for k, v in vars(args).items() if k not in ("data_dir", "json")}
     try:
-        reply = apply_action_op(ActionStore(args.data_dir), request)
+        reply = apply_action_op(ActionStore(data_dir), request)
     except StoreError as exc:
         print(f"hfpbd executor actions: {exc}", file=sys.stderr)
         return 1
-    if args.json:
+    if as_json:
         print(json.dumps(reply, indent=1))
     elif args.op == "list":
         _print_list(reply)

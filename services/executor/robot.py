@@ -50,14 +50,13 @@ class SimRobot:
         self.sim_clock = sim_clock
         self._events: dict[str, Outcome] = {}
         self._cond = threading.Condition()
-        bus.subscribe(bus.keys.sim_events, self._on_event)
+        bus.subscribe(bus.keys.sim_events, self._on_event, schema="sim_event")
 
     def _on_event(self, message: dict[str, Any]) -> None:
-        motion_id = message.get("motion_id")
-        status = message.get("status")
-        if not isinstance(motion_id, str) or status not in ("done", "stopped", "failed"):
+        motion_id, status = message["motion_id"], message["status"]
+        if status not in ("done", "stopped", "failed"):
             self.bus.rejected[self.bus.keys.sim_events] += 1
-            log.warning("ignored malformed sim event %r", {k: v for k, v in message.items() if k != "_key"})
+            log.warning("ignored a sim event with unknown status %r", status)
             return
         with self._cond:
             self._events[motion_id] = Outcome(status, str(message.get("message", "")))

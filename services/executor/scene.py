@@ -24,6 +24,7 @@ ARMS = ("right", "left")
 CLOSED_WIDTH = 0.0025
 SUPPORT_GAP = 0.025  # metres between an object's bottom and what it stands on
 MAX_STACK = 4
+FAINT_CONFIDENCE = 0.6
 REMEMBER = 256  # objects no longer seen whose descriptions are kept, for "the red cup is gone"  # gripper gap below which the fingers met: closed on nothing
 
 
@@ -49,10 +50,11 @@ class SceneSnapshot:
         object on this table (held objects are attached to their gripper
         separately): it is a piece of the robot's own arm seen by the camera,
         and treating it as an obstacle would block the arm against itself.
+        So is a faint blob perception could neither type nor see clearly.
         """
         boxes = {"table": self.table}
         boxes.update({oid: Box.of(o) for oid, o in self.objects.items()
-                      if oid not in skip and self.supported(oid)})
+                      if oid not in skip and self.supported(oid) and not _faint(o)})
         return boxes
 
     def standing_objects(self) -> list[dict[str, Any]]:
@@ -163,6 +165,12 @@ class Scene:
     def version(self) -> int:
         with self._lock:
             return self._version
+
+
+def _faint(obj: dict[str, Any]) -> bool:
+    """A detection without a type word and with low confidence: a glimpse of the arm, not an object."""
+    confidence = obj.get("confidence")
+    return obj.get("type") == "unknown" and isinstance(confidence, (int, float)) and confidence < FAINT_CONFIDENCE
 
 
 def _valid_object(obj: Any) -> bool:

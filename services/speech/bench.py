@@ -28,10 +28,11 @@ from services.speech import espeak
 from services.speech.audio import RATE, read_wav, silence
 from services.speech.corpus import Item, corpus
 from services.speech.grammar import SceneWords
-from services.speech.recogniser import ACOUSTIC_SCALE, Hypothesis, Recogniser, posteriors
+from services.speech.recogniser import ACOUSTIC_SCALE, OFF_GRAMMAR_PRIOR, PER_MEANING, Hypothesis, Recogniser, posteriors
 from services.speech.vocabulary import nlu_vocabulary
 
 SCALES = (0.0, 0.01, 0.03, 0.1, 0.3, 1.0)
+OFF_GRAMMAR_PRIORS = (1.0, 0.3, 0.1, 0.03, 0.01)
 TARGET_ACCURACY = 0.90
 
 
@@ -52,13 +53,16 @@ def _command(result: Result) -> dict | None:
     return result.command.as_dict() if isinstance(result, CommandResult) else None
 
 
-def rescored(outcome: Outcome, scale: float) -> dict | None:
+def rescored(outcome: Outcome, scale: float = ACOUSTIC_SCALE, off_grammar: float = OFF_GRAMMAR_PRIOR) -> dict | None:
     """The command of the hypothesis with the best log p(hypothesis) + NLU score."""
     logliks = {h.text: h.loglik for h in outcome.hypotheses}
+    members = {h.text for h in outcome.hypotheses if h.in_grammar}
+    results = {h.text: r for h, r in zip(outcome.hypotheses, outcome.results)}
     best, best_score = None, -math.inf
-    for hyp, result in zip(posteriors(logliks, scale), outcome.results):
+    for hyp in posteriors(logliks, scale, members, off_grammar):
         if hyp.score <= 0:
             continue
+        result = results[hyp.text]
         score = math.log(hyp.score) + result.score
         if score > best_score:
             best, best_score = result, score
@@ -67,8 +71,7 @@ def rescored(outcome: Outcome, scale: float) -> dict | None:
 
 def run(vocabulary: str, limit: int | None, out: Path) -> list[Outcome]:
     items = corpus()[:limit]
-    full = nlu_vocabulary()
-    recogniser = Recogniser(full if vocabulary == "full" else full.core(3))
+    recogniser = Recogniser(nlu_vocabulary(), per_meaning=None if vocabulary == "full" else PER_MEANING)
     outcomes: list[Outcome] = []
     for n, item in enumerate(items):
         path = out / f"{n:03d}.wav"
@@ -104,13 +107,17 @@ def report(outcomes: list[Outcome], vocabulary: str) -> bool:
         accuracy = sum(rescored(o, scale) == o.item.expected for o in outcomes) / n
         mark = "  <- ACOUSTIC_SCALE" if scale == ACOUSTIC_SCALE else ""
         print(f"  command accuracy, n-best rescored @{scale:<5g} {accuracy:7.2%}{mark}")
+    for prior in OFF_GRAMMAR_PRIORS:
+        accuracy = sum(rescored(o, off_grammar=prior) == o.item.expected for o in outcomes) / n
+        mark = "  <- OFF_GRAMMAR_PRIOR" if prior == OFF_GRAMMAR_PRIOR else ""
+        print(f"  ... n-gram-only sentences weighted {prior:<5g} {accuracy:7.2%}{mark}")
     print(f"  right command anywhere in the n-best     {in_nbest / n:7.2%}")
     print(f"  n-best length                            mean {statistics.mean(len(o.hypotheses) for o in outcomes):.2f}")
     print(f"  decode time per second of audio          mean {statistics.mean(rtf):.3f} s, "
           f"p95 {float(np.percentile(rtf, 95)):.3f} s, max {max(rtf):.3f} s ({audio:.0f} s of audio)")
-    best = sum(rescored(o, ACOUSTIC_SCALE) == o.item.expected for o in outcomes) / n
+    best = sum(rescored(o) == o.item.expected for o in outcomes) / n
     print(f"  target command accuracy >= {TARGET_ACCURACY:.0%}: {'met' if best >= TARGET_ACCURACY else 'NOT met'}")
-    wrong = [o for o in outcomes if rescored(o, ACOUSTIC_SCALE) != o.item.expected]
+    wrong = [o for o in outcomes if rescored(o) != o.item.expected]
     for o in wrong:
         print(f"  miss [{o.item.voice} {o.item.speed}] said {o.item.text!r}, heard "
               f"{[h.text for h in o.hypotheses] or 'nothing'}")

@@ -45,6 +45,7 @@ SCENE_LABELS = (*LABELS, "middle")
 _DETERMINERS = ("your", "the")
 _RULE_WORD = re.compile(r"<[^>]*>|/[0-9.]+/|[()\[\]|;=*+]")
 _SLOT = re.compile(r"<(\w+)>")
+_TOKEN = re.compile(r"<[^>]+>|/[0-9.]+/|[()\[\]|]|[^\s()\[\]|<>/]+")
 
 
 @dataclass(frozen=True)
@@ -239,6 +240,87 @@ def grammar_words(jsgf: str) -> set[str]:
     """The words a grammar text can produce (for checking it against a vocabulary)."""
     body = "\n".join(line.split("=", 1)[1] for line in jsgf.splitlines() if "=" in line)
     return set(_RULE_WORD.sub(" ", body).split())
+
+
+def parse_rules(jsgf: str) -> tuple[str, dict[str, list[str]]]:
+    """The public rule's name and every rule's body as tokens (words, <rule>, brackets, bars, /weights/)."""
+    rules: dict[str, list[str]] = {}
+    public = None
+    for line in jsgf.splitlines():
+        if "=" not in line or not line.rstrip().endswith(";"):
+            continue
+        head, body = line.split("=", 1)
+        name = head.split()[-1].strip("<>")
+        rules[name] = _TOKEN.findall(body.rstrip().rstrip(";"))
+        if head.startswith("public"):
+            public = name
+    if public is None:
+        raise ValueError("the grammar has no public rule")
+    return public, rules
+
+
+def split_top(tokens: list[str]) -> list[list[str]]:
+    """The alternatives of a rule body (bars outside brackets)."""
+    parts: list[list[str]] = [[]]
+    depth = 0
+    for token in tokens:
+        depth += token in ("(", "[")
+        depth -= token in (")", "]")
+        if token == "|" and depth == 0:
+            parts.append([])
+        else:
+            parts[-1].append(token)
+    return parts
+
+
+def closing(tokens: list[str], start: int) -> int:
+    """Index of the bracket closing the one at ``start``."""
+    depth = 0
+    for i in range(start, len(tokens)):
+        depth += tokens[i] in ("(", "[")
+        depth -= tokens[i] in (")", "]")
+        if depth == 0:
+            return i
+    raise ValueError("unbalanced brackets in the grammar")
+
+
+def sentence_matcher(jsgf: str) -> re.Pattern[str]:
+    """A regular expression matching exactly the sentences of a grammar (plus one trailing space).
+
+    Why: the grammar search returns its best *partial* path when no
+    complete sentence fits the audio ("place it near"); such a result is a
+    sign of a mishearing, and this is how it is recognised.
+    """
+    public, rules = parse_rules(jsgf)
+    cache: dict[str, str] = {}
+
+    def pattern(tokens: list[str]) -> str:
+        alternatives = []
+        for chosen in split_top(tokens):
+            out, i = "", 0
+            while i < len(chosen):
+                token = chosen[i]
+                if token in ("(", "["):
+                    end = closing(chosen, i)
+                    out += f"(?:{pattern(chosen[i + 1:end])})" + ("?" if token == "[" else "")
+                    i = end + 1
+                    continue
+                if token.startswith("<"):
+                    name = token.strip("<>")
+                    if name not in cache:
+                        cache[name] = pattern(rules[name])
+                    out += f"(?:{cache[name]})"
+                elif not token.startswith("/"):
+                    out += re.escape(token) + " "
+                i += 1
+            alternatives.append(out)
+        return "|".join(alternatives)
+
+    return re.compile(pattern(rules[public]))
+
+
+def in_grammar(matcher: re.Pattern[str], sentence: str) -> bool:
+    return matcher.fullmatch(" ".join(sentence.split()) + " ") is not None
 
 
 def _fits(procedure: str, implied: Implied) -> bool:

@@ -12,7 +12,7 @@ from pathlib import Path
 from shared.bus import Bus
 from shared.service import run_service, wait_until_stopped
 from services.speech.audio import AudioError, read_wav
-from services.speech.recogniser import Recogniser
+from services.speech.recogniser import PER_MEANING, Recogniser
 from services.speech.service import Settings, SpeechService
 from services.speech.vad import UtteranceSplitter
 from services.speech.vocabulary import nlu_vocabulary
@@ -40,7 +40,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def body(bus: Bus, args: argparse.Namespace, stop: threading.Event) -> None:
     settings = Settings(trigger=args.trigger, microphone=args.microphone, device=args.device,
-                        per_meaning=None if args.vocabulary == "full" else 3, wav_files=tuple(args.wav))
+                        per_meaning=None if args.vocabulary == "full" else PER_MEANING, wav_files=tuple(args.wav))
     speaker = None
     if not args.no_voice:
         if args.voice_dir is not None:
@@ -62,8 +62,7 @@ def decode_files(argv: Sequence[str]) -> int:
     parser.add_argument("files", nargs="+", type=Path)
     parser.add_argument("--vocabulary", choices=("core", "full"), default="core")
     args = parser.parse_args(argv)
-    vocabulary = nlu_vocabulary()
-    recogniser = Recogniser(vocabulary if args.vocabulary == "full" else vocabulary.core(3))
+    recogniser = Recogniser(nlu_vocabulary(), per_meaning=None if args.vocabulary == "full" else PER_MEANING)
     status = 0
     for path in args.files:
         try:

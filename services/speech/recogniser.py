@@ -1,21 +1,31 @@
-"""Offline decoding with PocketSphinx under a generated grammar, with an n-best list.
+"""Offline decoding with PocketSphinx: a grammar pass and an n-gram pass, pooled into an n-best list.
 
 Why n-best: the top string is often one word off ("left" for "right"); the
 NLU can pick the alternative that makes sense in the scene (P(C|S)) when it
 sees the runners-up and how much less likely the recogniser found them.
+
+Why two passes: a grammar search yields a single path, so its "n-best" is
+nearly always one sentence. The same audio decoded under an n-gram model of
+the command language (full vocabulary, no scene restriction) gives
+genuinely different readings ("raise your arm" where the grammar heard
+"bring the left arm"); both passes score with the same acoustic model, so
+their scores can be pooled.
 """
 
 from __future__ import annotations
 
 import itertools
 import math
+import tempfile
+from pathlib import Path
 from dataclasses import dataclass
 
 import numpy as np
 from pocketsphinx import Decoder
 
 from services.speech.audio import dither
-from services.speech.grammar import SceneWords, build_jsgf
+from services.speech.grammar import SceneWords, build_jsgf, in_grammar, sentence_matcher
+from services.speech.ngram import arpa, sample_sentences
 from services.speech.vocabulary import SpeechVocabulary
 
 NBEST = 5
@@ -26,6 +36,9 @@ NBEST_SEARCH = 50  # lattice paths read to find NBEST distinct sentences
 # (the speech benchmark shows command accuracy for several scales).
 ACOUSTIC_SCALE = 0.03
 MIN_POSTERIOR = 1e-6
+# prior weight of a sentence that is not one of the scene grammar's (heard by the n-gram pass only):
+# it may name an absent object or be a mishearing, so it must sound clearly better to win
+OFF_GRAMMAR_PRIOR = 0.1
 _SCORE_UNIT = 1024.0  # PocketSphinx reports scores shifted down by 10 bits
 
 
@@ -40,6 +53,7 @@ class Hypothesis:
     text: str
     score: float
     loglik: float = 0.0  # the recogniser's scaled-down acoustic log-likelihood, for re-weighting
+    in_grammar: bool = True  # a sentence of the scene grammar (else heard by the n-gram pass only)
 
     def to_json(self) -> dict[str, object]:
         return {"text": self.text, "score": float(f"{self.score:.6g}")}
@@ -53,12 +67,14 @@ class Recogniser:
 
     def __init__(self, vocabulary: SpeechVocabulary, scene: SceneWords = SceneWords(),
                  per_meaning: int | None = PER_MEANING, nbest: int = NBEST,
-                 acoustic_scale: float = ACOUSTIC_SCALE) -> None:
+                 acoustic_scale: float = ACOUSTIC_SCALE, ngram: bool = True) -> None:
         self._decoder = Decoder(lm=None, loglevel="FATAL")
         self._nbest = nbest
         self._scale = acoustic_scale
         self._per_meaning = per_meaning
         self._search: str | None = None
+        self._ngram_search: str | None = None
+        self._use_ngram = ngram
         self._version = 0
         self.vocabulary = vocabulary
         self.scene = scene
@@ -70,14 +86,15 @@ class Recogniser:
         """Regenerate the grammar; words missing from the pronunciation dictionary are left out."""
         words = vocabulary.words()
         self.unpronounceable = {w for w in words if not self._pronounceable(w)}
-        usable = vocabulary.restricted(words - self.unpronounceable).without_homophones(self._sound)
-        if self._per_meaning:
-            usable = usable.core(self._per_meaning)
+        whole = vocabulary.restricted(words - self.unpronounceable).without_homophones(self._sound)
+        usable = whole.core(self._per_meaning) if self._per_meaning else whole
         scene = self.scene if scene is None else scene
         jsgf = build_jsgf(usable, scene)
         if jsgf == self.jsgf:
             return
         self._version += 1
+        if self._use_ngram and (vocabulary is not self.vocabulary or self._ngram_search is None):
+            self._set_ngram(whole)
         name = f"commands{self._version}"
         try:
             self._decoder.add_jsgf_string(name, jsgf)
@@ -87,6 +104,21 @@ class Recogniser:
         if self._search is not None:
             self._decoder.remove_search(self._search)
         self._search, self.jsgf, self.vocabulary, self.scene = name, jsgf, vocabulary, scene
+        self._matcher = sentence_matcher(jsgf)
+
+    def _set_ngram(self, vocabulary: SpeechVocabulary) -> None:
+        """The n-gram pass's model: sentences of the whole vocabulary, any object words."""
+        name = f"ngram{self._version}"
+        with tempfile.TemporaryDirectory(prefix="hfpbd-lm-") as folder:
+            path = Path(folder) / "commands.arpa"
+            path.write_text(arpa(sample_sentences(build_jsgf(vocabulary))))
+            try:
+                self._decoder.add_lm_file(name, str(path))
+            except RuntimeError as exc:
+                raise RecogniserError(f"the generated n-gram model does not load: {exc}") from None
+        if self._ngram_search is not None:
+            self._decoder.remove_search(self._ngram_search)
+        self._ngram_search = name
 
     def _pronounceable(self, word: str) -> bool:
         """Whether the dictionary has ``word``, adding compounds of two known words ("left" + "most")."""
@@ -107,20 +139,39 @@ class Recogniser:
             self.set_vocabulary(self.vocabulary, scene)
 
     def decode(self, pcm: np.ndarray, acoustic_scale: float | None = None) -> list[Hypothesis]:
-        """Decode one utterance (16 kHz int16); best first, empty when nothing in the grammar was heard."""
+        """Decode one utterance (16 kHz int16); best first, empty when nothing in the grammar was heard.
+
+        The grammar pass's best sentence stays first (it is the sentence of
+        the scene's command language); the n-gram pass adds alternatives.
+        """
+        audio = dither(pcm).tobytes()
+        # a grammar result that is no sentence of the grammar is the search's best partial path: a mishearing
+        scored = {text: loglik for text, loglik in self._pass(self._search, audio).items()
+                  if in_grammar(self._matcher, text)}
+        if self._ngram_search is not None:
+            for text, loglik in self._pass(self._ngram_search, audio).items():
+                scored.setdefault(text, loglik)
+        members = {text for text in scored if in_grammar(self._matcher, text)}
+        return posteriors(scored, self._scale if acoustic_scale is None else acoustic_scale, members)
+
+    def _pass(self, search: str | None, audio: bytes) -> dict[str, float]:
+        """One search over the audio: its distinct sentences and their log-likelihoods, best first."""
+        if search is None:
+            return {}
+        self._decoder.activate_search(search)
         self._decoder.start_utt()
-        self._decoder.process_raw(dither(pcm).tobytes(), no_search=False, full_utt=True)
+        self._decoder.process_raw(audio, no_search=False, full_utt=True)
         self._decoder.end_utt()
         best = self._decoder.hyp()
         scored: dict[str, float] = {}
         if best is not None and best.hypstr:
             scored[best.hypstr] = self._loglik(best.score)
         for hyp in itertools.islice(self._decoder.nbest(), NBEST_SEARCH):
-            if hyp is not None and hyp.hypstr and hyp.hypstr not in scored:
-                scored[hyp.hypstr] = self._loglik(hyp.score)
             if len(scored) >= self._nbest:
                 break
-        return posteriors(scored, self._scale if acoustic_scale is None else acoustic_scale)
+            if hyp is not None and hyp.hypstr and hyp.hypstr not in scored:
+                scored[hyp.hypstr] = self._loglik(hyp.score)
+        return scored
 
     def _loglik(self, score: float) -> float:
         if score <= 0.0:
@@ -128,19 +179,26 @@ class Recogniser:
         return math.log(score) * _SCORE_UNIT
 
 
-def posteriors(logliks: dict[str, float], scale: float) -> list[Hypothesis]:
-    """Probabilities within the list (scaled log-likelihoods, softmax), the decoder's first choice first.
+def posteriors(logliks: dict[str, float], scale: float, members: set[str] | None = None,
+               off_grammar_prior: float = OFF_GRAMMAR_PRIOR) -> list[Hypothesis]:
+    """Probabilities within the list, the decoder's first choice first.
 
-    Alternatives too unlikely to ever win a rescoring (below ``MIN_POSTERIOR``) are left out.
+    Softmax of the scaled log-likelihoods, each times its prior: 1 for a
+    sentence of the grammar (``members``; all when None), ``off_grammar_prior``
+    otherwise. Alternatives too unlikely to ever win a rescoring (below
+    ``MIN_POSTERIOR``) are left out.
     """
     if not logliks:
         return []
+    members = set(logliks) if members is None else members
     values = np.array([v * scale for v in logliks.values()])
     finite = np.isfinite(values)
     if not finite.any():
-        return [Hypothesis(next(iter(logliks)), 1.0)]
-    weights = np.where(finite, np.exp(values - values[finite].max()), 0.0)
+        return [Hypothesis(next(iter(logliks)), 1.0, in_grammar=next(iter(logliks)) in members)]
+    priors = np.array([1.0 if text in members else off_grammar_prior for text in logliks])
+    weights = np.where(finite, np.exp(values - values[finite].max()), 0.0) * priors
     probabilities = weights / weights.sum()
-    hyps = [Hypothesis(text, float(p), loglik) for (text, loglik), p in zip(logliks.items(), probabilities)]
+    hyps = [Hypothesis(text, float(p), loglik, text in members)
+            for (text, loglik), p in zip(logliks.items(), probabilities)]
     rest = sorted((h for h in hyps[1:] if h.score >= MIN_POSTERIOR), key=lambda h: -h.score)
     return [hyps[0], *rest]

@@ -51,7 +51,7 @@ class SpeechService:
         self.bus = bus
         self.settings = settings
         self.speaker = speaker
-        self.recogniser = Recogniser(self._vocabulary(None))
+        self.recogniser = Recogniser(nlu_vocabulary(), per_meaning=settings.per_meaning)
         self.microphone: Microphone | None = None
         self.microphone_problem: str | None = None
         self._splitter = UtteranceSplitter()
@@ -190,11 +190,6 @@ class SpeechService:
         self._utterances.put(utterance_message(hypotheses))
 
     # -- vocabulary and scene ---------------------------------------------------
-    def _vocabulary(self, phrases: list[str] | None) -> SpeechVocabulary:
-        vocabulary = nlu_vocabulary(phrases)
-        n = self.settings.per_meaning
-        return vocabulary.core(n) if n else vocabulary
-
     def _on_alive(self, service: str, alive: bool) -> None:
         if service == "nlu" and alive:
             threading.Thread(target=self._fetch_vocabulary, name="vocabulary", daemon=True).start()
@@ -210,7 +205,7 @@ class SpeechService:
         if not isinstance(phrases, list) or not phrases:
             log.warning("the NLU's vocabulary reply has no phrases; keeping the built-in one")
             return
-        vocabulary = self._vocabulary([str(p) for p in phrases])
+        vocabulary = nlu_vocabulary([str(p) for p in phrases])
         self._tasks.put(lambda: self._regenerate(vocabulary))
 
     def _regenerate(self, vocabulary: SpeechVocabulary) -> None:

@@ -128,7 +128,7 @@ def test_command_line_list_show_rename_delete(tmp_path: Path, capsys: pytest.Cap
     assert actions_main(["--data-dir", str(tmp_path), "list"]) == 0
     out = capsys.readouterr().out
     assert "stack" in out and out.count("steps") == 1
-    assert actions_main(["--data-dir", str(tmp_path), "show", "7"]) == 1
+    assert actions_main(["show", "7", "--data-dir", str(tmp_path)]) == 1
     assert "there is no action 7" in capsys.readouterr().err
 
 

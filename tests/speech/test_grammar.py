@@ -7,11 +7,16 @@ import pytest
 from services.nlu.commands import PROCEDURES
 from services.nlu.lexicon import vocabulary as nlu_words
 from services.nlu.tokens import canonical
-from services.speech.grammar import SCENE_WEIGHT, SceneWords, build_jsgf, grammar_words
+from services.speech.grammar import SceneWords, build_jsgf, grammar_words, in_grammar, sentence_matcher
+from services.speech.ngram import arpa, sample_sentences
 from services.speech.recogniser import Recogniser
 from services.speech.vocabulary import nlu_vocabulary
 
-SCENE = SceneWords(frozenset({"red", "blue"}), frozenset({"cup"}))
+SCENE = SceneWords(frozenset({"red", "blue"}), frozenset({"cup"}), frozenset({"leftmost", "rightmost"}))
+TWO_CUPS = [
+    {"id": "a", "color": "red", "type": "cup", "position": [0.55, 0.25, 0.77], "size": [0.07, 0.07, 0.1]},
+    {"id": "b", "color": "red", "type": "cup", "position": [0.55, -0.05, 0.77], "size": [0.07, 0.07, 0.1]},
+]
 
 
 @pytest.fixture(scope="module")
@@ -42,19 +47,49 @@ def test_the_grammar_follows_the_vocabulary_it_is_given(full):
     assert "pick" in grammar_words(build_jsgf(without_grab))
 
 
-def test_scene_words_are_weighted_up_but_others_stay_possible(full):
-    jsgf = build_jsgf(full.core(3), SCENE)
-    color_rule = next(line for line in jsgf.splitlines() if line.startswith("<color>"))
-    assert f"/{SCENE_WEIGHT:g}/ red" in color_rule and f"/{SCENE_WEIGHT:g}/ blue" in color_rule
-    assert "/1/ yellow" in color_rule
-    assert build_jsgf(full.core(3), SceneWords.of([{"color": "yellow", "type": "bowl"}])) != jsgf
+def test_the_scene_keeps_only_the_object_words_that_can_name_an_object_in_view(full):
+    scene = SceneWords.of(TWO_CUPS)
+    assert scene.colors == {"red"} and scene.types == {"cup"}
+    assert {"leftmost", "rightmost"} <= scene.labels and "tallest" not in scene.labels  # same height
+    words = grammar_words(build_jsgf(full.core(3), scene))
+    assert {"red", "cup", "mug", "leftmost"} <= words
+    assert not words & {"blue", "yellow", "box", "plate", "tallest"}
+    assert {"blue", "box"} <= grammar_words(build_jsgf(full.core(3)))  # no scene known: every word
+
+
+@pytest.mark.parametrize(("sentence", "member"), [
+    ("move your right hand above the red cup", True),
+    ("pick the leftmost cup up with your left hand", True),
+    ("please place it on the table", True),
+    ("record objects", True),
+    ("switch to action three", True),
+    ("place it near", False),            # a partial path: the relation lacks its object
+    ("move your right hand above the blue box", False),  # not in this scene
+    ("pick up", False),
+])
+def test_the_matcher_accepts_exactly_the_grammar_sentences(full, sentence, member):
+    jsgf = build_jsgf(full.core(3), SceneWords.of(TWO_CUPS))
+    assert in_grammar(sentence_matcher(jsgf), sentence) is member
+
+
+def test_the_ngram_model_is_built_from_grammar_sentences(full):
+    jsgf = build_jsgf(full.core(3))
+    sentences = sample_sentences(jsgf, 300)
+    matcher = sentence_matcher(jsgf)
+    assert all(in_grammar(matcher, s) for s in sentences)
+    assert sample_sentences(jsgf, 300) == sentences  # deterministic
+    model = arpa(sentences)
+    assert model.startswith("\\data\\") and model.rstrip().endswith("\\end\\")
+    unigrams = model.split("\\1-grams:")[1].split("\\2-grams:")[0]
+    assert {line.split("\t")[1] for line in unigrams.strip().splitlines()} == {w for s in sentences for w in s.split()} | {"<s>", "</s>"}
 
 
 def test_recogniser_loads_the_grammar_and_swaps_it_when_the_scene_changes(full):
-    recogniser = Recogniser(full.core(3), SCENE)
+    recogniser = Recogniser(full, SCENE)
     before = recogniser.jsgf
     # abbreviations have no pronunciation; compounds of two dictionary words do ("leftmost")
     assert recogniser.unpronounceable <= {"cw", "ccw", "pickup"}
     assert "leftmost" in grammar_words(recogniser.jsgf)
     recogniser.set_scene(SceneWords(frozenset({"green"}), frozenset({"box"})))
-    assert recogniser.jsgf != before and "/4/ green" in recogniser.jsgf
+    assert recogniser.jsgf != before
+    assert "green" in grammar_words(recogniser.jsgf) and "red" not in grammar_words(recogniser.jsgf)
