@@ -63,6 +63,7 @@ PLANNING_TIMES = (1.0, 2.0, 4.0)  # seconds for RRTConnect: a quick try, then a 
 CARTESIAN_STEP = 0.01
 JOINT_RESOLUTION = 0.05  # rad between checked waypoints of a planned path  # straight-line moves are interpolated every centimetre
 ROLL_JOINTS = (4, 6)
+HELD_PREFIX = "held:"
 # The ready posture (the PR2 "untucked" arm: bent in front of the body, above the table's near edge).
 READY = {"right": (-0.4, 1.0, 0.0, -2.05, 0.0, -0.1, 0.0), "left": (0.4, 1.0, 0.0, -2.05, 0.0, -0.1, 0.0)}   # forearm and wrist roll: sampled over one turn only
 
@@ -217,7 +218,13 @@ class ArmKinematics:
         self.planner.planning_world.get_allowed_collision_matrix().set_entry(name, self._gripper_links, allowed)
 
     def attach(self, name: str, box: Box, tool_pose: np.ndarray) -> None:
-        """Carry ``box`` in the gripper: it moves with the tool frame and must not hit anything."""
+        """Carry ``box`` in the gripper: it moves with the tool frame and must not hit anything.
+
+        The carried body gets a name of its own (``held:<id>``): the
+        planning world keeps per-name contact permissions after a detach,
+        so reusing the object's obstacle name would leave that object
+        touchable by the fingers once it is put down.
+        """
         if self.held:
             self.detach()
         world = self.planner.planning_world
@@ -225,13 +232,18 @@ class ArmKinematics:
             world.remove_object(name)
         self._obstacles.discard(name)
         relative = _to_pose(tool_pose).inv() * Pose(box.center, [1, 0, 0, 0])
-        world.attach_object(name, fcl.Box(np.maximum(box.size, 1e-3)), self.planner.robot.get_name(),
+        world.attach_object(HELD_PREFIX + name, fcl.Box(np.maximum(box.size, 1e-3)), self.planner.robot.get_name(),
                             self.link, relative, self._gripper_links)
         self.held = name
 
+    @property
+    def held_body(self) -> str | None:
+        """The planning world's name of the carried body (for contact permissions)."""
+        return HELD_PREFIX + self.held if self.held else None
+
     def detach(self) -> None:
         if self.held:
-            self.planner.planning_world.detach_object(self.held, True)
+            self.planner.planning_world.detach_object(HELD_PREFIX + self.held, True)
             self.held = None
 
     # -- checks ---------------------------------------------------------------------
@@ -314,7 +326,7 @@ class ArmKinematics:
             if arm_q is None:
                 continue
             for pair in self.collisions(arm_q):
-                other = [n for n in pair if not n.startswith(f"{PREFIX[self.arm]}_")]
+                other = [n for n in pair if not n.startswith((f"{PREFIX[self.arm]}_", HELD_PREFIX))]
                 hits.update(_part_name(n) for n in other)
         return hits or None
 
@@ -382,7 +394,7 @@ class ArmKinematics:
                 # rolls' two turns), so its raw RRT path (short edges) is taken and shortcut here with
                 # dense checks instead of OMPL's own simplification.
                 status, path = self.planner.planner.plan(start[self.group_idx], [self.full(arm_q)[self.group_idx]],
-                                                         time=planning_time, range=0.1, fixed_joints=fixed,
+                                                         time=planning_time, range=JOINT_RESOLUTION, fixed_joints=fixed,
                                                          simplify=False)
                 if status != "Exact solution":
                     log.info("%s arm: no collision-free path in %.1f s (%s)", self.arm, planning_time, status)

@@ -352,7 +352,7 @@ class Procedures:
         support = self._support_below(held, snap) if destination == "here" else snap.table_z
         _, release = targets.place_table(kin.fk(), held, support)
         where = "here" if destination == "here" else "on the table"
-        with kin.tolerating(held.object_id, self._flat_below(held, release, snap)):
+        with kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):
             self._go(arm, self._line(kin, release, wording.sentence(f"I can't lower my {arm} hand to put it down {where}")))
         return self._release(arm, held)
 
@@ -394,7 +394,7 @@ class Procedures:
             self._go(arm, self._plan(kin, hover_q, wording.sentence(
                 f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}")))
             kin, snap = self._ready(arm)
-            with kin.tolerating(held.object_id, self._flat_below(held, release, snap)):
+            with kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):
                 self._go(arm, self._line(kin, release, wording.cannot_reach(arm, relation, words)))
             done = self._release(arm, held)
             done.landmark = self._landmark(obj)

@@ -89,9 +89,9 @@ def salient_labels(objects: list[dict]) -> frozenset[str]:
     for context in contexts:
         if len(context) < 2:
             continue
-        fitting = [label for label in SCENE_LABELS if len(scene.group(context, label)) == 1]
-        labels.update(fitting)
-        for first, second in combinations(SCENE_LABELS, 2):
+        narrowing = [label for label in SCENE_LABELS if 0 < len(scene.group(context, label)) < len(context)]
+        labels.update(label for label in narrowing if len(scene.group(context, label)) == 1)
+        for first, second in combinations(narrowing, 2):  # "the farthest leftmost cup"
             if len(scene.group(context, first) & scene.group(context, second)) == 1:
                 labels.update((first, second))
     return frozenset(labels)
