@@ -18,6 +18,7 @@ from shared.bus import Bus
 from shared.service import run_service, wait_until_stopped
 from services.nlu.context import Dialogue
 from services.nlu.infer import Clarify, CommandResult, Model, Result
+from services.nlu.nbest import plausibility
 from services.nlu.lexicon import vocabulary
 from services.nlu.templates import sentence_templates
 from services.nlu.world import COLORS, TYPES, WorldError, parse_world
@@ -153,8 +154,8 @@ def _text(request: dict[str, Any]) -> str:
 
 
 def _most_plausible(model: Model, dialogue: Dialogue, nbest: list[Any]) -> str | None:
-    """The speech hypothesis whose best command is most likely: log p(hypothesis) + log P(C|S)P(L|C,S)."""
-    best_text, best_score = None, -math.inf
+    """The speech hypothesis the situated model finds most plausible (see :mod:`services.nlu.nbest`)."""
+    best_text, best_key = None, (False, -math.inf)
     history = dialogue.history
     for hypothesis in nbest:
         if not isinstance(hypothesis, dict) or not isinstance(hypothesis.get("text"), str):
@@ -162,10 +163,9 @@ def _most_plausible(model: Model, dialogue: Dialogue, nbest: list[Any]) -> str |
         weight = hypothesis.get("score", 1.0)
         if not isinstance(weight, (int, float)) or weight <= 0:
             continue
-        result = model.parse(hypothesis["text"], history)
-        score = math.log(weight) + result.score
-        if score > best_score:
-            best_text, best_score = hypothesis["text"], score
+        key = plausibility(model.parse(hypothesis["text"], history), weight)
+        if key > best_key:
+            best_text, best_key = hypothesis["text"], key
     return best_text
 
 

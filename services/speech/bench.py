@@ -23,6 +23,7 @@ import numpy as np
 from rapidfuzz.distance import Levenshtein
 
 from services.nlu.infer import CommandResult, Model, Result
+from services.nlu.nbest import plausibility
 from services.nlu.world import parse_world
 from services.speech import espeak
 from services.speech.audio import RATE, read_wav, silence
@@ -54,18 +55,18 @@ def _command(result: Result) -> dict | None:
 
 
 def rescored(outcome: Outcome, scale: float = ACOUSTIC_SCALE, off_grammar: float = OFF_GRAMMAR_PRIOR) -> dict | None:
-    """The command of the hypothesis with the best log p(hypothesis) + NLU score."""
+    """The command of the hypothesis the NLU finds most plausible, as the NLU service chooses."""
     logliks = {h.text: h.loglik for h in outcome.hypotheses}
     members = {h.text for h in outcome.hypotheses if h.in_grammar}
     results = {h.text: r for h, r in zip(outcome.hypotheses, outcome.results)}
-    best, best_score = None, -math.inf
+    best, best_key = None, (False, -math.inf)
     for hyp in posteriors(logliks, scale, members, off_grammar):
         if hyp.score <= 0:
             continue
         result = results[hyp.text]
-        score = math.log(hyp.score) + result.score
-        if score > best_score:
-            best, best_score = result, score
+        key = plausibility(result, hyp.score)
+        if key > best_key:
+            best, best_key = result, key
     return _command(best) if best is not None else None
 
 
