@@ -220,10 +220,9 @@ class ArmKinematics:
     def attach(self, name: str, box: Box, tool_pose: np.ndarray) -> None:
         """Carry ``box`` in the gripper: it moves with the tool frame and must not hit anything.
 
-        The carried body gets a name of its own (``held:<id>``): the
-        planning world keeps per-name contact permissions after a detach,
-        so reusing the object's obstacle name would leave that object
-        touchable by the fingers once it is put down.
+        The carried body gets a name of its own (``held:<id>``), so the
+        fingers' permission to touch it never carries over to the object's
+        obstacle box once it is put down again.
         """
         if self.held:
             self.detach()
