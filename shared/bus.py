@@ -82,6 +82,13 @@ class _Worker:
             self.thread.join(timeout)
 
 
+def _reason(exc: BaseException) -> str:
+    """The message of an exception; KeyError's repr-quoting is dropped."""
+    if isinstance(exc, KeyError) and exc.args:
+        return str(exc.args[0])
+    return str(exc) or type(exc).__name__
+
+
 def _channel(latest_only: bool, capacity: int) -> Any:
     """Ring channels keep only the newest items (clouds, state); FIFO ones keep all, applying back-pressure."""
     return zenoh.handlers.RingChannel(1) if latest_only else zenoh.handlers.FifoChannel(capacity)
@@ -202,7 +209,9 @@ class Bus:
 
         Runs on a worker thread; every query is finalised, and a handler
         exception becomes an error reply carrying its message, so the asker
-        gets a reason rather than a timeout.
+        gets a reason rather than a timeout. ``ValueError`` and ``LookupError``
+        mean "refused" and are logged in one line; anything else is a bug and
+        is logged with its traceback.
         """
         def run(query: zenoh.Query) -> None:
             try:
@@ -214,9 +223,13 @@ class Bus:
                     log.warning("rejected request on %s: %s", key, exc)
                     query.reply_err(encode({"error": f"malformed request: {exc}"}))
                     return
-                except Exception as exc:
+                except (ValueError, LookupError) as exc:  # a refused request: the asker's mistake
+                    log.warning("refused request on %s: %s", key, exc)
+                    query.reply_err(encode({"error": _reason(exc)}))
+                    return
+                except Exception as exc:  # a bug: keep the traceback for the log
                     log.exception("request handler on %s failed", key)
-                    query.reply_err(encode({"error": str(exc) or type(exc).__name__}))
+                    query.reply_err(encode({"error": _reason(exc)}))
                     return
                 query.reply(query.key_expr, encode(reply))
             finally:

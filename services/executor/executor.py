@@ -63,6 +63,7 @@ class Executor:
         self._progress: dict[str, int] | None = None
         self._pending: tuple[str, dict[str, Any], dict[str, Any]] | None = None
         self._wake = threading.Condition(self._lock)
+        self._publish_lock = threading.Lock()
         self._last_arm: str | None = None
         self._last_object: str | None = None
         self._reach: dict[str, Any] = {}
@@ -144,7 +145,6 @@ class Executor:
             self._pending = (procedure, args, context)
             self.cancel.clear()
             self._wake.notify_all()
-        self.publish_state()
         return True, "accepted"
 
     def _stop(self) -> str:
@@ -165,6 +165,9 @@ class Executor:
                     return
                 procedure, args, context = self._pending  # type: ignore[misc]
                 self._pending = None
+            # Busy and idle are both published from this thread, in order, so
+            # even a command that finishes at once shows as taken up, then done.
+            self.publish_state()
             try:
                 self._run_command(procedure, args, context)
             except Exception:  # a bug must not kill the worker: say so and carry on
@@ -389,10 +392,12 @@ class Executor:
         return {"stamp": time.time(), "robot": robot, "reach": reach}
 
     def publish_state(self) -> None:
-        try:
-            self._state_publisher.put(self.state_message())
-        except StoreError as exc:
-            log.error("cannot publish state: %s", exc)
+        """Publish the situated state; serialised so that states go out in the order they were taken."""
+        with self._publish_lock:
+            try:
+                self._state_publisher.put(self.state_message())
+            except StoreError as exc:
+                log.error("cannot publish state: %s", exc)
 
 
 def _step_words(step: dict[str, Any]) -> str:

@@ -34,9 +34,11 @@ def body(bus: Bus, args: argparse.Namespace, stop: threading.Event) -> None:
     settings = Settings(segment=SegmentSettings(cell=args.cell))
     tracking = TrackSettings(forget_after=args.forget_after, confirm_frames=max(1, args.confirm_frames),
                              max_jump=args.max_jump)
-    PerceptionService(bus, settings, tracking, record_timeout=args.record_timeout).start()
+    service = PerceptionService(bus, settings, tracking, record_timeout=args.record_timeout)
+    service.start()
     bus.declare_alive("perception")
     wait_until_stopped(stop)
+    service.stop()
 
 
 def main(argv: Sequence[str] | None = None) -> int:

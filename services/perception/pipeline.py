@@ -1,7 +1,9 @@
 """One cloud in, the objects on the table out: the stages in order.
 
 valid points → table plane → points above it → minus the robot's arms →
-top-down clusters → descriptors. Each stage is its own module; this one only
+top-down clusters → descriptors → only what is supported (on the table, on
+another object, or in a gripper: anything else floating is a glimpse of the
+robot's own arm). Each stage is its own module; this one only
 wires them and holds their settings, so tests and the benchmark run exactly
 what the service runs.
 """
@@ -17,8 +19,10 @@ import numpy as np
 from services.perception.cloud import cloud_from_message
 from services.perception.descriptors import Descriptor, describe
 from services.perception.plane import Plane, PlaneSettings, find_table
-from services.perception.robot_mask import robot_points, segments_from_state
+from services.perception.robot_mask import robot_points, segments_from_states
 from services.perception.segment import SegmentSettings, cluster, object_candidates, table_outline
+from services.perception.support import supported
+from services.perception.tracking import holding_tools
 
 
 TABLE_STRIDE = 8   # every 8th table point is plenty for its 2 cm outline grid
@@ -40,14 +44,18 @@ class Detection:
 
 
 def detect(message: Mapping[str, Any], state: Mapping[str, Any] | None = None,
-           settings: Settings = Settings()) -> Detection:
+           settings: Settings = Settings(), earlier: Mapping[str, Any] | None = None) -> Detection:
     """Objects in the ``sim/cloud`` ``message``; ``state`` (``sim/state``) masks the arms.
+
+    ``earlier`` is a second state (the one just before the cloud when
+    ``state`` is the one just after it): the arms are masked at both, so an
+    arm that moved between them is covered all along.
 
     Raises :class:`~services.perception.cloud.CloudError` when the cloud is
     unusable (empty, malformed, no table in view).
     """
     cloud = cloud_from_message(dict(message))
-    arms = segments_from_state(state)
+    arms = segments_from_states([state, earlier])
     votes = cloud.valid[np.random.default_rng(0).integers(0, len(cloud.valid), settings.plane.refit_size)]
     plane = find_table(cloud.xyz[votes], settings.plane, ignore=lambda p: robot_points(p, arms))
     with np.errstate(invalid="ignore"):
@@ -60,6 +68,6 @@ def detect(message: Mapping[str, Any], state: Mapping[str, Any] | None = None,
     above, xyz = above[~robot], xyz[~robot]
     groups = cluster(xyz, above, cloud.shape, outline, settings.segment)
     rgb = cloud.rgb[above]
-    objects = [describe(xyz[g], rgb[g], plane) for g in groups]
+    objects = supported([describe(xyz[g], rgb[g], plane) for g in groups], holding_tools(state))
     objects.sort(key=lambda d: (round(float(d.position[0]), 3), round(float(d.position[1]), 3)))
     return Detection(objects, plane, outline)

@@ -1,33 +1,29 @@
 """Remove the robot's own arms from the cloud before looking for objects.
 
-Why capsules between consecutive link origins: the simulator publishes every
-arm link's pose, and a PR2 arm is well covered by a few fat line segments
-(shoulder → elbow → wrist → fingertips). Anything within a segment's radius is
-the robot, not an object; without this an arm over the table would become a
-large phantom object and would merge with the objects it touches.
+Why capsules built from the robot model: the simulator publishes the pose of
+every arm link that has a shape, and the project's PR2 model
+(``services/sim/robot/build_urdf.py``) says exactly which boxes and cylinders
+each link is made of. Each shape becomes the smallest capsule along its
+longest axis that contains it, so the mask covers the real geometry instead
+of a guess. A margin absorbs depth noise, and because a cloud is rendered a
+little before it arrives, the mask is the union of the arm at the two states
+that bracket the cloud's simulated time: a moving arm is covered along the
+whole path it took in between. Without this an arm over the table becomes a
+phantom object and merges with the objects it touches.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from functools import cache
 from typing import Any
 
 import numpy as np
 
-ARMS = ("right", "left")
+from services.sim.robot.build_urdf import ARMS, Shape, arm as arm_model
 
-# Order of the links along a PR2 arm, by the words their names contain.
-CHAIN = ("shoulder_pan", "shoulder_lift", "upper_arm", "elbow_flex", "forearm", "wrist_flex",
-         "wrist_roll", "palm", "finger", "tool_frame")
-
-# Radius of the capsule that ends at a link whose name contains the word (m).
-# Measured from the PR2's link shapes plus a margin for the simulator's own
-# meshes: upper arm 0.15 x 0.17 section, forearm cylinder r 0.06, palm 0.10 wide.
-RADII = (("shoulder", 0.13), ("upper_arm", 0.11), ("elbow", 0.10), ("forearm", 0.08),
-         ("wrist", 0.07), ("palm", 0.065), ("gripper", 0.06), ("finger", 0.04), ("tool", 0.06))
-DEFAULT_RADIUS = 0.06
-FINGER_REACH = 0.03   # fingertips reach this far past the tool frame (m)
+MARGIN = 0.02   # m around every shape: depth noise and the pose's own latency
 
 
 @dataclass(frozen=True)
@@ -39,69 +35,75 @@ class Segment:
     radius: float
 
 
-def arm_of(link: str) -> str | None:
-    """Which arm a link belongs to, from PR2-style names (``r_…``/``l_…``, ``right…``/``left…``)."""
-    name = link.lower()
-    if name.startswith(("r_", "right")):
-        return "right"
-    if name.startswith(("l_", "left")):
-        return "left"
-    return None
+def _shape_capsule(shape: Shape) -> tuple[np.ndarray, np.ndarray, float]:
+    """End points (link frame) and radius of the tightest axis-aligned capsule around ``shape``."""
+    centre = np.asarray(shape.xyz, float)
+    if shape.kind == "box":
+        dims = np.asarray(shape.dims, float)
+        along = int(np.argmax(dims))
+        across = np.delete(dims, along)
+        radius = float(np.hypot(*across) / 2)
+        half = dims[along] / 2
+    else:
+        radius, length = shape.dims
+        along = "xyz".index(shape.axis)
+        half = length / 2
+    offset = np.zeros(3)
+    offset[along] = half
+    return centre - offset, centre + offset, float(radius)
 
 
-def _chain_rank(link: str) -> int:
-    name = link.lower()
-    # distal words first: "r_gripper_l_finger_link" is a finger, not a palm
-    return next((i for i in reversed(range(len(CHAIN))) if CHAIN[i] in name), len(CHAIN))
+@cache
+def link_capsules() -> dict[str, tuple[tuple[np.ndarray, np.ndarray, float], ...]]:
+    """Link name → its shapes as capsules in the link frame, for both arms of the model."""
+    capsules = {}
+    for side in ARMS:
+        links, _ = arm_model(side)
+        for link in links:
+            if link.shapes:
+                capsules[link.name] = tuple(_shape_capsule(shape) for shape in link.shapes)
+    return capsules
 
 
-def _radius(link: str) -> float:
-    name = link.lower()
-    return next((r for word, r in RADII if word in name), DEFAULT_RADIUS)
+def _rotation(quaternion: np.ndarray) -> np.ndarray:
+    w, x, y, z = quaternion / np.linalg.norm(quaternion)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
-def _position(pose: Any) -> np.ndarray | None:
+def _pose(value: Any) -> np.ndarray | None:
     try:
-        values = np.asarray(pose, dtype=float).reshape(-1)
+        pose = np.asarray(value, dtype=float).reshape(-1)
     except (TypeError, ValueError):
         return None
-    return values[:3] if len(values) >= 3 and np.isfinite(values[:3]).all() else None
-
-
-def _approach_axis(pose: Any) -> np.ndarray | None:
-    """The tool frame's x axis (the direction the fingers point) from a pose's quaternion."""
-    values = np.asarray(pose, dtype=float).reshape(-1)
-    if len(values) < 7:
+    if len(pose) != 7 or not np.isfinite(pose).all() or np.linalg.norm(pose[3:]) < 1e-9:
         return None
-    w, x, y, z = values[3:7]
-    axis = np.array([1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)])
-    norm = np.linalg.norm(axis)
-    return axis / norm if norm > 1e-9 else None
+    return pose
 
 
-def segments_from_state(state: Mapping[str, Any] | None) -> list[Segment]:
-    """Capsules covering both arms, from ``sim/state`` ``links`` and ``ee`` poses."""
+def segments_from_state(state: Mapping[str, Any] | None, margin: float = MARGIN) -> list[Segment]:
+    """Capsules covering both arms at one ``sim/state`` (its ``links`` poses), padded by ``margin``."""
     if not state:
         return []
     links = state.get("links") or {}
-    ee = state.get("ee") or {}
-    segments: list[Segment] = []
-    for arm in ARMS:
-        chain = sorted((name for name in links if arm_of(name) == arm), key=_chain_rank)
-        points = [(name, _position(links[name])) for name in chain]
-        points = [(name, p) for name, p in points if p is not None]
-        tool = _position(ee.get(arm)) if arm in ee else None
-        if tool is not None:
-            points.append(("tool_frame", tool))
-            axis = _approach_axis(ee[arm])
-            if axis is not None:
-                points.append(("finger", tool + axis * FINGER_REACH))
-        for (_, a), (name, b) in zip(points, points[1:]):
-            segments.append(Segment(a, b, _radius(name)))
-        if len(points) == 1:
-            name, p = points[0]
-            segments.append(Segment(p, p, _radius(name)))
+    if not isinstance(links, Mapping):
+        return []
+    shapes = link_capsules()
+    segments = []
+    for name, capsules in shapes.items():
+        pose = _pose(links.get(name))
+        if pose is None:
+            continue
+        rotation, origin = _rotation(pose[3:]), pose[:3]
+        for a, b, radius in capsules:
+            segments.append(Segment(origin + rotation @ a, origin + rotation @ b, radius + margin))
     return segments
+
+
+def segments_from_states(states: Iterable[Mapping[str, Any] | None], margin: float = MARGIN) -> list[Segment]:
+    """The union of the arms at several states (the ones that bracket a cloud)."""
+    return [segment for state in states for segment in segments_from_state(state, margin)]
 
 
 def robot_points(xyz: np.ndarray, segments: Sequence[Segment]) -> np.ndarray:
@@ -128,3 +130,11 @@ def robot_points(xyz: np.ndarray, segments: Sequence[Segment]) -> np.ndarray:
         inside[close] = ((q - (s.a + t[:, None] * ab)) ** 2).sum(axis=1) <= s.radius ** 2
     mask[near] = inside
     return mask
+
+
+def hides(camera: np.ndarray, target: np.ndarray, segments: Sequence[Segment], samples: int = 24) -> bool:
+    """Whether an arm capsule lies on the camera's line of sight to ``target`` (it is occluded)."""
+    if not segments:
+        return False
+    line = camera + np.linspace(0.0, 1.0, samples + 2)[1:-1, None] * (target - camera)
+    return bool(robot_points(line, segments).any())

@@ -7,6 +7,11 @@ malformed, no table in view) never erases what we knew — the last good list is
 re-published with a status that says what went wrong. ``perception/record``
 answers from frames that arrive *after* the request and agree with each other,
 so the executor never acts on a view taken while the arms were still moving.
+A cloud is rendered a little before it arrives, so the arms are masked at the
+states that bracket its simulated time, not at the newest one. A scene load
+(the state's ``scene`` name changes) forgets every object at once. Stopping
+waits for the cloud being processed and publishes nothing afterwards, so the
+bus can close under it.
 """
 
 from __future__ import annotations
@@ -26,12 +31,14 @@ from shared.codec import MessageError
 from shared.messages import validate
 from services.perception.cloud import CloudError
 from services.perception.pipeline import Settings, detect
+from services.perception.robot_mask import hides, segments_from_states
 from services.perception.tracking import Tracker, TrackSettings
 
 log = logging.getLogger("hfpbd.perception")
 
 OK = "ok"
 SETTLE_DISTANCE = 0.01   # m two frames' positions may differ and still agree
+STATE_HISTORY = 50       # sim/state messages kept (2 s at 25 Hz) to find the ones around a cloud
 
 
 @dataclass(frozen=True)
@@ -50,7 +57,10 @@ class PerceptionService:
         self.settings = settings
         self.tracker = Tracker(track_settings)
         self.record_timeout = record_timeout
-        self._state: Mapping[str, Any] | None = None
+        self._states: deque[Mapping[str, Any]] = deque(maxlen=STATE_HISTORY)
+        self._scene: str | None = None
+        self._working = threading.Lock()   # held while a cloud is processed and published
+        self._stopped = False
         self._objects: list[dict] = []
         self._table: dict | None = None
         self._frames: deque[Frame] = deque(maxlen=8)
@@ -65,15 +75,37 @@ class PerceptionService:
         self.bus.serve(keys.record, self.on_record)
 
     # -- streams -----------------------------------------------------------
+    def stop(self) -> None:
+        """Finish the cloud in hand and publish nothing more (call before the bus closes)."""
+        with self._working:
+            self._stopped = True
+
     def on_state(self, message: Mapping[str, Any]) -> None:
-        self._state = message
+        self._states.append(message)
+
+    def around(self, sim_time: Any) -> tuple[Mapping[str, Any] | None, Mapping[str, Any] | None]:
+        """The states just after and just before ``sim_time`` (the newest one when it is unknown)."""
+        states = list(self._states)
+        if not states:
+            return None, None
+        if not isinstance(sim_time, (int, float)):
+            return states[-1], None
+        after = next((s for s in states if _sim_time(s) >= sim_time), states[-1])
+        before = next((s for s in reversed(states) if _sim_time(s) <= sim_time), None)
+        return after, before if before is not after else None
 
     def on_cloud(self, message: dict[str, Any]) -> None:
         """Process one cloud; on any problem keep the last good objects and say why."""
+        with self._working:
+            if not self._stopped:
+                self._process(message)
+
+    def _process(self, message: dict[str, Any]) -> None:
         stamp = message.get("stamp") if isinstance(message.get("stamp"), (int, float)) else time.time()
+        state, earlier = self.around(message.get("sim_time"))
         try:
             validate("cloud", message)
-            detection = detect(message, self._state, self.settings)
+            detection = detect(message, state, self.settings, earlier)
         except (MessageError, CloudError) as exc:
             status = f"rejected cloud: {exc}" if isinstance(exc, MessageError) else str(exc)
             if isinstance(exc, MessageError):
@@ -81,7 +113,15 @@ class PerceptionService:
             log.warning("%s", status)
             self._publish(stamp, status)
             return
-        self._objects = self.tracker.update(detection.objects, time.monotonic(), self._state)
+        scene = state.get("scene") if state else None
+        if scene != self._scene and self._scene is not None:
+            log.info("scene %s loaded: forgetting every object", scene)
+            self.tracker.reset()
+        self._scene = scene if scene is not None else self._scene
+        arms = segments_from_states([state, earlier])
+        camera = np.asarray(message["camera_pose"], float)[:3]
+        self._objects = self.tracker.update(detection.objects, time.monotonic(), state,
+                                            hidden=lambda position: hides(camera, position, arms))
         plane = detection.plane
         centre = detection.table_outline.mean(axis=0)
         self._table = {"height": round(plane.z_at(float(centre[0]), float(centre[1])), 4),
@@ -115,6 +155,11 @@ class PerceptionService:
                 if left <= 0:
                     raise RuntimeError(_record_failure(fresh, self.record_timeout))
                 self._changed.wait(left)
+
+
+def _sim_time(state: Mapping[str, Any]) -> float:
+    value = state.get("sim_time")
+    return float(value) if isinstance(value, (int, float)) else float("inf")
 
 
 def _settled(frames: list[Frame]) -> Frame | None:

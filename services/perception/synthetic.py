@@ -15,6 +15,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial.transform import Rotation
+
+from services.perception.robot_mask import segments_from_state
 
 RGB = tuple[int, int, int]
 
@@ -288,31 +291,59 @@ def _hit_capsule(origin: np.ndarray, rays: np.ndarray, cap: Capsule) -> tuple[np
 
 SHOULDER = {"right": (-0.05, -0.188, 1.121), "left": (-0.05, 0.188, 1.121)}
 POINTING_DOWN = (0.7071068, 0.0, 0.7071068, 0.0)   # tool x axis along -z
+UPPER_ARM, FOREARM = 0.4, 0.321                     # shoulder lift -> elbow -> wrist flex (m)
+SHOULDER_LIFT_OFFSET, TOOL_OFFSET = 0.1, 0.18
+
+
+def _frame(x_axis: np.ndarray, origin: np.ndarray) -> list[float]:
+    """A pose whose x axis points along ``x_axis`` and whose y axis stays level."""
+    x = x_axis / np.linalg.norm(x_axis)
+    y = np.cross([0.0, 0.0, 1.0], x)
+    y = y / np.linalg.norm(y) if np.linalg.norm(y) > 1e-6 else np.array([0.0, 1.0, 0.0])
+    qx, qy, qz, qw = Rotation.from_matrix(np.column_stack([x, y, np.cross(x, y)])).as_quat()
+    return [*map(float, origin), float(qw), float(qx), float(qy), float(qz)]
 
 
 def reaching_arm(tool: tuple[float, float, float], arm: str = "right",
                  holding: bool = False) -> tuple[list[Capsule], dict]:
-    """A PR2-like arm with its gripper pointing down at ``tool``.
+    """A PR2 arm, with the project model's link lengths, its gripper pointing down at ``tool``.
 
-    Returns the capsules to render and the matching ``sim/state`` fields
-    (``links``, ``ee``, ``grippers``) with PR2 link names, so masking is
-    exercised exactly as with the simulator's state.
+    Returns the capsules to render (the model's link shapes, from the same
+    poses) and the matching ``sim/state`` fields (``links``, ``ee``,
+    ``grippers``), so masking is exercised exactly as with the simulator's state.
     """
     side = "r" if arm == "right" else "l"
-    shoulder = np.asarray(SHOULDER[arm])
+    lift = np.asarray(SHOULDER[arm]) + np.array([SHOULDER_LIFT_OFFSET, 0.0, 0.0])
     tool_p = np.asarray(tool, float)
-    wrist = tool_p + np.array([0.0, 0.0, 0.18])
-    upper = shoulder + np.array([0.1, 0.0, 0.0])
-    elbow = (upper + wrist) / 2 + np.array([0.0, 0.0, 0.12])
-    tip = tool_p - np.array([0.0, 0.0, 0.02])
-    capsules = [Capsule(tuple(shoulder), tuple(upper), 0.09), Capsule(tuple(upper), tuple(elbow), 0.07),
-                Capsule(tuple(elbow), tuple(wrist), 0.05), Capsule(tuple(wrist), tuple(tip), 0.035)]
-    links = {f"{side}_shoulder_pan_link": shoulder, f"{side}_upper_arm_roll_link": upper,
-             f"{side}_elbow_flex_link": elbow, f"{side}_wrist_roll_link": wrist,
-             f"{side}_gripper_palm_link": wrist, f"{side}_gripper_tool_frame": tool_p}
-    state = {
-        "links": {name: [*map(float, p), 1.0, 0.0, 0.0, 0.0] for name, p in links.items()},
-        "ee": {arm: [*map(float, tool_p), *POINTING_DOWN]},
-        "grippers": {arm: {"width": 0.07 if holding else 0.08, "holding": holding, "contact": holding}},
+    wrist = tool_p + np.array([0.0, 0.0, TOOL_OFFSET])
+    reach = wrist - lift
+    distance = float(np.linalg.norm(reach))
+    along = (distance ** 2 + UPPER_ARM ** 2 - FOREARM ** 2) / (2 * distance)
+    up = np.cross(np.cross(reach, [0.0, 0.0, 1.0]), reach)
+    up = up / np.linalg.norm(up) if np.linalg.norm(up) > 1e-9 else np.array([0.0, 0.0, 1.0])
+    if up[2] < 0:
+        up = -up
+    elbow = lift + reach / distance * along + up * np.sqrt(max(UPPER_ARM ** 2 - along ** 2, 0.0))
+    down = np.array([0.0, 0.0, -1.0])
+    width = 0.07 if holding else 0.08
+    palm = _frame(down, wrist)
+    palm_y = Rotation.from_quat([*palm[4:], palm[3]]).as_matrix()[:, 1]
+    links = {
+        f"{side}_shoulder_pan_link": _frame(np.array([1.0, 0.0, 0.0]), np.asarray(SHOULDER[arm])),
+        f"{side}_shoulder_lift_link": _frame(elbow - lift, lift),
+        f"{side}_upper_arm_link": _frame(elbow - lift, lift),
+        f"{side}_elbow_flex_link": _frame(wrist - elbow, elbow),
+        f"{side}_forearm_link": _frame(wrist - elbow, elbow),
+        f"{side}_wrist_flex_link": palm,
+        f"{side}_gripper_palm_link": palm,
+        f"{side}_gripper_l_finger_link": [*(wrist + palm_y * width / 2), *palm[3:]],
+        f"{side}_gripper_r_finger_link": [*(wrist - palm_y * width / 2), *palm[3:]],
+        f"{side}_gripper_tool_frame": [*tool_p, *palm[3:]],
     }
+    state = {
+        "links": {name: [float(v) for v in pose] for name, pose in links.items()},
+        "ee": {arm: [*map(float, tool_p), *POINTING_DOWN]},
+        "grippers": {arm: {"width": width, "holding": holding, "contact": holding}},
+    }
+    capsules = [Capsule(tuple(s.a), tuple(s.b), s.radius) for s in segments_from_state(state, margin=0.0)]
     return capsules, state

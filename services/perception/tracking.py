@@ -4,14 +4,23 @@ Why: the user says "pick it up" about the object they named a moment ago, and
 recorded steps refer to ids, so an id must stay with its physical object while
 it moves a little, while an arm passes over it, and while it is in a gripper.
 Detections are matched to tracks by an optimal assignment (Hungarian, from
-SciPy) on distance, size and colour; a new object must be seen in consecutive
-frames before it gets an id (a one-frame flicker never becomes an object); an
-object unseen for ``forget_after`` seconds is removed; ids are never reused.
+SciPy) on distance, size and colour, or on footprint overlap (a cluster that an
+arm cuts in half has its centroid far from the object's but still lies on its
+footprint); one cluster never feeds two tracks, and a cluster on the footprint
+of a known object is a piece of it, not a new object. A new object must be
+seen in consecutive frames before it gets an id (a one-frame flicker never
+becomes an object). An object hidden behind an arm is kept as long as the arm
+hides it; an object unseen in clear view is removed after ``forget_after``
+seconds, or after ``gone_frames`` frames when new objects appear elsewhere
+meanwhile (the scene was rearranged or reloaded). A held object, or one only
+partly seen, keeps its last confident colour, type and size. Ids are never
+reused.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from dataclasses import replace
 from dataclasses import dataclass
 from typing import Any
 
@@ -19,6 +28,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from services.perception.descriptors import Descriptor
+from services.perception.support import HOLD_RADIUS, footprint_share
 
 ARMS = ("right", "left")
 NO_MATCH = 1e6
@@ -29,20 +39,26 @@ class TrackSettings:
     max_jump: float = 0.08        # m an object may move between two frames and keep its id
     forget_after: float = 3.0     # s an unseen (not held) object is still reported
     confirm_frames: int = 2       # consecutive sightings before a new object gets an id
-    hold_radius: float = 0.15     # m from a holding gripper's tool frame to its object
+    hold_radius: float = HOLD_RADIUS  # m from a holding gripper's tool frame to its object
     colour_penalty: float = 0.03  # m-equivalent cost of a colour-word change
     partial_share: float = 0.5    # a sighting with fewer points than this share is partial
+    gone_frames: int = 3          # unseen frames in clear view, while new objects appear, before removal
+    overlap_share: float = 0.5    # share of a cluster's footprint on a track's that makes it that object
+    confident: float = 0.6        # a sighting at least this confident sets an object's words and size
 
 
 @dataclass
 class Track:
     descriptor: Descriptor
     last_seen: float
+    first_seen: float
     hits: int = 1
     id: str = ""                       # empty until confirmed
     held_by: str | None = None
     hold_offset: np.ndarray | None = None
     visible: bool = True
+    missed: int = 0                    # consecutive frames unseen in clear view
+    identity: Descriptor | None = None  # last confident full sighting
 
     @property
     def confirmed(self) -> bool:
@@ -57,10 +73,19 @@ class Tracker:
         self.tracks: list[Track] = []
         self._next_id = 0
 
+    def reset(self) -> None:
+        """Forget every object (a new scene was loaded); ids still never come back."""
+        self.tracks = []
+
     def update(self, detections: list[Descriptor], now: float,
-               state: Mapping[str, Any] | None = None) -> list[dict]:
-        """Fold one frame's detections in; return the published object list."""
-        tools = _holding_tools(state)
+               state: Mapping[str, Any] | None = None,
+               hidden: Callable[[np.ndarray], bool] | None = None) -> list[dict]:
+        """Fold one frame's detections in; return the published object list.
+
+        ``hidden(position)`` says whether something (an arm) blocks the
+        camera's view of a position, so an unseen object there is kept.
+        """
+        tools = holding_tools(state)
         self._grasp_and_release(tools)
         for track in self.tracks:
             if track.held_by is not None and track.hold_offset is not None:
@@ -72,9 +97,17 @@ class Tracker:
         seen = {id(track) for track, _ in matches}
         for track in self.tracks:
             track.visible = id(track) in seen
-        fresh = [d for d in unmatched if not self._inside_held(d, tools)]
-        self.tracks = [t for t in self.tracks if self._keep(t, now)]
-        self.tracks += [Track(d, now) for d in fresh]
+            if track.visible or track.held_by is not None:
+                track.missed = 0
+            elif hidden is not None and hidden(track.descriptor.position):
+                track.last_seen, track.missed = now, 0   # behind an arm: not gone, just out of sight
+            else:
+                track.missed += 1
+        fresh = [d for d in unmatched if not self._inside_held(d, tools) and not self._piece_of_known(d)]
+        newest = max([now] * bool(fresh) + [t.first_seen for t in self.tracks], default=-np.inf)
+        self.tracks = [t for t in self.tracks if self._keep(t, now, newest)]
+        confident = self.settings.confident
+        self.tracks += [Track(d, now, now, identity=d if d.confidence >= confident else None) for d in fresh]
         for track in self.tracks:
             if not track.confirmed and track.hits >= self.settings.confirm_frames:
                 track.id = f"obj{self._next_id}"
@@ -85,7 +118,7 @@ class Tracker:
         """The confirmed objects as ``perception/objects`` items, by id number."""
         items = []
         for track in sorted((t for t in self.tracks if t.confirmed), key=lambda t: int(t.id[3:])):
-            items.append({"id": track.id, **track.descriptor.as_message(),
+            items.append({"id": track.id, **self._shown(track).as_message(),
                           "held_by": track.held_by, "visible": track.visible})
         return items
 
@@ -107,6 +140,18 @@ class Tracker:
                 free[nearest].held_by = arm
                 free[nearest].hold_offset = free[nearest].descriptor.position - tool
 
+    def _shown(self, track: Track) -> Descriptor:
+        """What is published: held or partly seen objects keep their confident words and size."""
+        current, known = track.descriptor, track.identity
+        if known is None or known is current:
+            return current
+        if track.held_by is None and current.confidence >= self.settings.confident \
+                and current.points >= self.settings.partial_share * known.points:
+            return current
+        return replace(current, color=known.color, type=known.type, size=known.size.copy(),
+                       box_size=known.box_size.copy(), volume=known.volume, rgb=known.rgb,
+                       confidence=max(current.confidence, known.confidence))
+
     def _match(self, detections: list[Descriptor]) -> tuple[list[tuple[Track, Descriptor]], list[Descriptor]]:
         if not self.tracks or not detections:
             return [], list(detections)
@@ -116,7 +161,8 @@ class Tracker:
             gate = s.hold_radius if track.held_by else s.max_jump
             for j, det in enumerate(detections):
                 distance = float(np.linalg.norm(track.descriptor.position - det.position))
-                if distance > gate:
+                on_footprint = track.held_by is None and footprint_share(det, track.descriptor) >= s.overlap_share
+                if distance > gate and not on_footprint:
                     continue
                 cost[i, j] = (distance + 0.5 * float(np.linalg.norm(track.descriptor.size - det.size))
                               + (s.colour_penalty if track.descriptor.color != det.color else 0.0))
@@ -136,21 +182,35 @@ class Tracker:
         if partial and moved < 0.02:
             return
         track.descriptor = detection
+        known = track.identity
+        if detection.confidence >= self.settings.confident and (
+                known is None or detection.points >= self.settings.partial_share * known.points
+                or moved >= self.settings.max_jump):
+            track.identity = detection
+
+    def _piece_of_known(self, detection: Descriptor) -> bool:
+        """A cluster lying on a known object's footprint is part of it (cut by an arm), not a new object."""
+        return any(t.confirmed and t.held_by is None
+                   and footprint_share(detection, t.descriptor) >= self.settings.overlap_share
+                   for t in self.tracks)
 
     def _inside_held(self, detection: Descriptor, tools: dict[str, np.ndarray]) -> bool:
         """A blob at a holding gripper is the held object's visible part, not a new object."""
         return any(float(np.linalg.norm(detection.position - tool)) <= self.settings.hold_radius
                    for tool in tools.values())
 
-    def _keep(self, track: Track, now: float) -> bool:
+    def _keep(self, track: Track, now: float, newest: float) -> bool:
+        """Whether a track stays; ``newest`` is when the most recent object first appeared."""
         if track.visible or track.held_by is not None:
             return True
         if not track.confirmed:
             return False  # a candidate must be seen in consecutive frames
+        if track.missed >= self.settings.gone_frames and newest > track.last_seen:
+            return False  # plainly absent while new objects appeared: it moved, or the scene changed
         return now - track.last_seen <= self.settings.forget_after
 
 
-def _holding_tools(state: Mapping[str, Any] | None) -> dict[str, np.ndarray]:
+def holding_tools(state: Mapping[str, Any] | None) -> dict[str, np.ndarray]:
     """Tool-frame positions of the grippers that report holding something."""
     if not state:
         return {}

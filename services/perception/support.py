@@ -1,0 +1,46 @@
+"""Keep only clusters that something holds up.
+
+Why: a real object on a tabletop rests on the table, on another object, or in
+a gripper. A cluster hanging in the air with nothing under it is a piece of
+the robot's arm that the mask missed (a link seen at a grazing angle, a pose
+that lags the image), so it must never be reported as an object.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from services.perception.descriptors import Descriptor
+
+STACK_GAP = 0.03     # m between a cluster's bottom and the top of the object it stands on
+HOLD_RADIUS = 0.15   # m from a holding gripper's tool frame to the object it holds
+FOOTPRINT_SHARE = 0.3  # share of a cluster's footprint that must lie over its support
+
+
+def supported(objects: Sequence[Descriptor], holding: Mapping[str, np.ndarray]) -> list[Descriptor]:
+    """The ``objects`` that stand on the table or another object, or hang in a holding gripper."""
+    return [o for o in objects if o.bottom_on_table or _near_a_gripper(o, holding) or _stands_on_another(o, objects)]
+
+
+def _near_a_gripper(obj: Descriptor, holding: Mapping[str, np.ndarray]) -> bool:
+    return any(float(np.linalg.norm(obj.position - tool)) <= HOLD_RADIUS for tool in holding.values())
+
+
+def _stands_on_another(obj: Descriptor, objects: Sequence[Descriptor]) -> bool:
+    bottom = obj.position[2] - obj.size[2] / 2
+    for other in objects:
+        if other is obj or not other.bottom_on_table:
+            continue
+        top = other.position[2] + other.size[2] / 2
+        if abs(bottom - top) <= STACK_GAP and footprint_share(obj, other) >= FOOTPRINT_SHARE:
+            return True
+    return False
+
+
+def footprint_share(piece: Descriptor, whole: Descriptor) -> float:
+    """Share of ``piece``'s top-down bounding box that lies on ``whole``'s."""
+    lo = np.maximum(piece.position[:2] - piece.size[:2] / 2, whole.position[:2] - whole.size[:2] / 2)
+    hi = np.minimum(piece.position[:2] + piece.size[:2] / 2, whole.position[:2] + whole.size[:2] / 2)
+    return float(np.prod(np.clip(hi - lo, 0.0, None))) / float(np.prod(np.maximum(piece.size[:2], 1e-3)))
