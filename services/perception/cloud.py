@@ -50,3 +50,14 @@ def cloud_from_message(message: dict[str, Any]) -> Cloud:
     if len(valid) < MIN_POINTS:
         raise CloudError(f"point cloud is empty ({len(valid)} valid points of {len(flat)})")
     return Cloud(flat, rgb.reshape(-1, 3).astype(np.uint8, copy=False), valid, (xyz.shape[0], xyz.shape[1]))
+
+
+def camera_position(message: dict[str, Any]) -> np.ndarray:
+    """Where the camera was (``camera_pose``'s x, y, z); raise :class:`CloudError` when it is unusable."""
+    try:
+        pose = np.asarray(message.get("camera_pose"), dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        pose = np.empty(0)
+    if len(pose) != 7 or not np.isfinite(pose).all():
+        raise CloudError("camera_pose must be 7 finite numbers [x, y, z, qw, qx, qy, qz]")
+    return pose[:3]

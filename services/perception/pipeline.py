@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from services.perception.cloud import cloud_from_message
+from services.perception.cloud import camera_position, cloud_from_message
 from services.perception.descriptors import Descriptor, describe
 from services.perception.plane import Plane, PlaneSettings, find_table
 from services.perception.robot_mask import robot_points, segments_from_states
@@ -68,6 +68,7 @@ def detect(message: Mapping[str, Any], state: Mapping[str, Any] | None = None,
     above, xyz = above[~robot], xyz[~robot]
     groups = cluster(xyz, above, cloud.shape, outline, settings.segment)
     rgb = cloud.rgb[above]
-    objects = supported([describe(xyz[g], rgb[g], plane) for g in groups], holding_tools(state))
+    camera = camera_position(dict(message))
+    objects = supported([describe(xyz[g], rgb[g], plane) for g in groups], holding_tools(state), camera)
     objects.sort(key=lambda d: (round(float(d.position[0]), 3), round(float(d.position[1]), 3)))
     return Detection(objects, plane, outline)

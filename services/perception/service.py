@@ -29,7 +29,7 @@ import numpy as np
 from shared.bus import Bus
 from shared.codec import MessageError
 from shared.messages import validate
-from services.perception.cloud import CloudError
+from services.perception.cloud import CloudError, camera_position
 from services.perception.pipeline import Settings, detect
 from services.perception.robot_mask import hides, segments_from_states
 from services.perception.tracking import Tracker, TrackSettings
@@ -119,7 +119,7 @@ class PerceptionService:
             self.tracker.reset()
         self._scene = scene if scene is not None else self._scene
         arms = segments_from_states([state, earlier])
-        camera = np.asarray(message["camera_pose"], float)[:3]
+        camera = camera_position(message)
         self._objects = self.tracker.update(detection.objects, time.monotonic(), state,
                                             hidden=lambda position: hides(camera, position, arms))
         plane = detection.plane

@@ -3,7 +3,10 @@
 Why: a real object on a tabletop rests on the table, on another object, or in
 a gripper. A cluster hanging in the air with nothing under it is a piece of
 the robot's arm that the mask missed (a link seen at a grazing angle, a pose
-that lags the image), so it must never be reported as an object.
+that lags the image), so it must never be reported as an object. An object
+whose lower part is hidden behind a nearer object only *looks* as if it
+floated, so a cluster whose bottom the camera cannot see is given the benefit
+of the doubt.
 """
 
 from __future__ import annotations
@@ -19,9 +22,14 @@ HOLD_RADIUS = 0.15   # m from a holding gripper's tool frame to the object it ho
 FOOTPRINT_SHARE = 0.3  # share of a cluster's footprint that must lie over its support
 
 
-def supported(objects: Sequence[Descriptor], holding: Mapping[str, np.ndarray]) -> list[Descriptor]:
-    """The ``objects`` that stand on the table or another object, or hang in a holding gripper."""
-    return [o for o in objects if o.bottom_on_table or _near_a_gripper(o, holding) or _stands_on_another(o, objects)]
+def supported(objects: Sequence[Descriptor], holding: Mapping[str, np.ndarray],
+              camera: np.ndarray) -> list[Descriptor]:
+    """The ``objects`` that stand on the table or another object, or hang in a holding gripper.
+
+    ``camera`` is the camera's position, to tell a hidden bottom from a missing one.
+    """
+    return [o for o in objects if o.bottom_on_table or _near_a_gripper(o, holding)
+            or _stands_on_another(o, objects) or _bottom_hidden(o, objects, camera)]
 
 
 def _near_a_gripper(obj: Descriptor, holding: Mapping[str, np.ndarray]) -> bool:
@@ -44,3 +52,21 @@ def footprint_share(piece: Descriptor, whole: Descriptor) -> float:
     lo = np.maximum(piece.position[:2] - piece.size[:2] / 2, whole.position[:2] - whole.size[:2] / 2)
     hi = np.minimum(piece.position[:2] + piece.size[:2] / 2, whole.position[:2] + whole.size[:2] / 2)
     return float(np.prod(np.clip(hi - lo, 0.0, None))) / float(np.prod(np.maximum(piece.size[:2], 1e-3)))
+
+
+def _bottom_hidden(obj: Descriptor, objects: Sequence[Descriptor], camera: np.ndarray) -> bool:
+    """Whether another object lies on the line of sight to the foot of ``obj``'s visible part."""
+    foot = obj.position - np.array([0.0, 0.0, obj.size[2] / 2 + STACK_GAP])
+    direction = foot - camera
+    for other in objects:
+        if other is obj:
+            continue
+        lo = other.position - other.size / 2 - 0.01
+        hi = other.position + other.size / 2 + 0.01
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t1, t2 = (lo - camera) / direction, (hi - camera) / direction
+        near = np.nanmax(np.minimum(t1, t2))
+        far = np.nanmin(np.maximum(t1, t2))
+        if near <= far and far > 0.0 and near < 1.0:
+            return True
+    return False

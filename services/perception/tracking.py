@@ -59,6 +59,7 @@ class Track:
     visible: bool = True
     missed: int = 0                    # consecutive frames unseen in clear view
     identity: Descriptor | None = None  # last confident full sighting
+    near_hand: bool = False            # a gripper is at it: partly hidden by the fingers
 
     @property
     def confirmed(self) -> bool:
@@ -86,6 +87,7 @@ class Tracker:
         camera's view of a position, so an unseen object there is kept.
         """
         tools = holding_tools(state)
+        hands = tool_positions(state)
         self._grasp_and_release(tools)
         for track in self.tracks:
             if track.held_by is not None and track.hold_offset is not None:
@@ -93,6 +95,8 @@ class Tracker:
                 track.descriptor.box_center = track.descriptor.position.copy()
         matches, unmatched = self._match(detections)
         for track, detection in matches:
+            track.near_hand = any(float(np.linalg.norm(detection.position - hand)) <= self.settings.hold_radius
+                                  for hand in hands)
             self._refresh(track, detection, now)
         seen = {id(track) for track, _ in matches}
         for track in self.tracks:
@@ -145,7 +149,7 @@ class Tracker:
         current, known = track.descriptor, track.identity
         if known is None or known is current:
             return current
-        if track.held_by is None and current.confidence >= self.settings.confident \
+        if track.held_by is None and not track.near_hand and current.confidence >= self.settings.confident \
                 and current.points >= self.settings.partial_share * known.points:
             return current
         return replace(current, color=known.color, type=known.type, size=known.size.copy(),
@@ -183,7 +187,7 @@ class Tracker:
             return
         track.descriptor = detection
         known = track.identity
-        if detection.confidence >= self.settings.confident and (
+        if not track.near_hand and detection.confidence >= self.settings.confident and (
                 known is None or detection.points >= self.settings.partial_share * known.points
                 or moved >= self.settings.max_jump):
             track.identity = detection
@@ -227,3 +231,16 @@ def holding_tools(state: Mapping[str, Any] | None) -> dict[str, np.ndarray]:
             if len(pose) >= 3 and np.isfinite(pose[:3]).all():
                 tools[arm] = pose[:3]
     return tools
+
+
+def tool_positions(state: Mapping[str, Any] | None) -> list[np.ndarray]:
+    """Tool-frame positions of both grippers, holding or not."""
+    positions = []
+    for pose in ((state or {}).get("ee") or {}).values():
+        try:
+            values = np.asarray(pose, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            continue
+        if len(values) >= 3 and np.isfinite(values[:3]).all():
+            positions.append(values[:3])
+    return positions

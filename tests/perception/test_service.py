@@ -116,3 +116,42 @@ def test_record_against_the_running_simulator(network, launcher):
     words = sorted((o["color"], o["type"]) for o in reply["objects"])
     assert words == [("blue", "cup"), ("green", "box"), ("red", "cup"), ("white", "plate")]
     assert all(o["held_by"] is None and o["visible"] for o in reply["objects"])
+
+
+def sim_state(scene: str, sim_time: float) -> dict:
+    return {"stamp": time.time(), "sim_time": sim_time, "joints": {}, "ee": {}, "grippers": {}, "links": {},
+            "scene": scene}
+
+
+def test_a_scene_load_announced_in_the_state_forgets_every_object(feed, good_cloud):
+    state = feed.bus.publisher(feed.keys.sim_state)
+    state.put(sim_state("first", 0.0))
+    first = feed.until(good_cloud, lambda m: len(m["objects"]) == 2)
+    state.put(sim_state("second", 1.0))
+    reloaded = feed.until(good_cloud, lambda m: len(m["objects"]) == 2
+                          and not {o["id"] for o in m["objects"]} & {o["id"] for o in first["objects"]})
+    assert sorted(o["color"] for o in reloaded["objects"]) == ["blue", "red"]
+
+
+def test_sigterm_while_clouds_stream_in_stops_cleanly(network, launcher, good_cloud):
+    process = launcher.start("perception")
+    feed = Feed(network)
+    feed.until(good_cloud, lambda m: len(m["objects"]) == 2)
+    stop = threading.Event()
+
+    def flood() -> None:
+        while not stop.is_set():
+            feed.cloud.put({**good_cloud, "stamp": time.time()})
+            time.sleep(0.02)
+
+    flooding = threading.Thread(target=flood, daemon=True)
+    flooding.start()
+    try:
+        time.sleep(0.5)
+        code = process.stop()
+    finally:
+        stop.set()
+        flooding.join()
+    log = process.log()
+    assert code == 0, log
+    assert "Traceback" not in log and "Undeclared" not in log, log
