@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -14,16 +13,6 @@ from tests.executor.stack import Stack, texts
 
 DEFAULT_SCENE = Path(__file__).resolve().parents[2] / "services" / "sim" / "scenes" / "default.json"
 MOVED = {"obj0": [0.50, -0.16], "obj1": [0.46, 0.08], "obj2": [0.60, 0.0], "obj3": [0.66, -0.17]}
-
-
-@pytest.fixture(scope="module")
-def stack(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Stack]:
-    running = Stack(tmp_path_factory.mktemp("logs"), tmp_path_factory.mktemp("data"))
-    try:
-        running.start()
-        yield running
-    finally:
-        running.close()
 
 
 def red_left_of_blue(stack: Stack) -> float:
