@@ -9,9 +9,9 @@ answers from frames that arrive *after* the request and agree with each other,
 so the executor never acts on a view taken while the arms were still moving.
 A cloud is rendered a little before it arrives, so the arms are masked at the
 states that bracket its simulated time, not at the newest one. A scene load
-(the state's ``scene`` name changes) forgets every object at once. Stopping
-waits for the cloud being processed and publishes nothing afterwards, so the
-bus can close under it.
+(the state's ``scene`` name or ``scene_generation`` changes) forgets every
+object at once. Stopping waits for the cloud being processed and publishes
+nothing afterwards, so the bus can close under it.
 """
 
 from __future__ import annotations
@@ -58,7 +58,7 @@ class PerceptionService:
         self.tracker = Tracker(track_settings)
         self.record_timeout = record_timeout
         self._states: deque[Mapping[str, Any]] = deque(maxlen=STATE_HISTORY)
-        self._scene: str | None = None
+        self._scene: tuple[object, object] | None = None
         self._working = threading.Lock()   # held while a cloud is processed and published
         self._stopped = False
         self._objects: list[dict] = []
@@ -113,9 +113,9 @@ class PerceptionService:
             log.warning("%s", status)
             self._publish(stamp, status)
             return
-        scene = state.get("scene") if state else None
-        if scene != self._scene and self._scene is not None:
-            log.info("scene %s loaded: forgetting every object", scene)
+        scene = (state.get("scene"), state.get("scene_generation")) if state else None
+        if scene is not None and scene != self._scene and self._scene is not None:
+            log.info("scene %s loaded (load %s): forgetting every object", *scene)
             self.tracker.reset()
         self._scene = scene if scene is not None else self._scene
         arms = segments_from_states([state, earlier])

@@ -104,6 +104,7 @@ class SimWorld:
         self.objects: dict[str, sapien.Entity] = {}
         self.specs: dict[str, ObjectSpec] = {}
         self.scene_name = ""
+        self.scene_generation = 0  # counts loads, so a reload of the same scene is visible too
         self.motions: dict[str, Motion] = {}
         self.grip_force = {arm: DEFAULT_GRIP_FORCE for arm in ARMS}
         self.sim_time = 0.0
@@ -303,6 +304,7 @@ class SimWorld:
             self.objects[spec.id] = object_builder.build_object(self.scene, spec)
             self.specs[spec.id] = spec
         self.scene_name = scene.name
+        self.scene_generation += 1
 
     def settle(self, seconds: float = 0.5) -> None:
         for _ in range(int(seconds / self.timestep)):
@@ -347,6 +349,7 @@ class SimWorld:
             "torso": joints["torso_lift_joint"],
             "links": links,
             "scene": self.scene_name,
+            "scene_generation": self.scene_generation,
         }
 
     def truth(self) -> list[dict]:

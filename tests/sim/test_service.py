@@ -55,7 +55,8 @@ def test_state_carries_every_documented_field(client: Bus) -> None:
     inbox = Inbox()
     client.subscribe(client.keys.sim_state, inbox, schema="sim_state", latest_only=True)
     state = inbox.wait()
-    for field in ("stamp", "sim_time", "joints", "ee", "grippers", "moving", "head", "torso", "links", "rtf"):
+    for field in ("stamp", "sim_time", "joints", "ee", "grippers", "moving", "head", "torso", "links", "rtf",
+                  "scene", "scene_generation"):
         assert field in state, field
     assert len(state["joints"]) == 21
     assert set(state["ee"]) == {"right", "left"} and len(state["ee"]["right"]) == 7
@@ -139,4 +140,9 @@ def test_scene_load_with_seed_and_snapshot(client: Bus) -> None:
     assert np.allclose([o["position"] for o in loaded["objects"]], [o["position"] for o in again["objects"]], atol=1e-3)
     picture = client.request(client.keys.sim_control("snapshot"), {}, timeout=30)
     assert picture["png"][:8] == b"\x89PNG\r\n\x1a\n"
+    inbox = Inbox()
+    client.subscribe(client.keys.sim_state, inbox, schema="sim_state", latest_only=True)
+    before = inbox.wait()["scene_generation"]
     client.request(client.keys.sim_control("scene"), {"name": "default"}, timeout=20)
+    state = inbox.wait(lambda m: m["scene_generation"] != before)
+    assert state["scene"] == "default" and state["scene_generation"] == before + 1
