@@ -12,7 +12,7 @@ import pytest
 from tests.executor.stack import Stack, texts
 
 DEFAULT_SCENE = Path(__file__).resolve().parents[2] / "services" / "sim" / "scenes" / "default.json"
-MOVED = {"obj0": [0.50, -0.16], "obj1": [0.46, 0.08], "obj2": [0.60, 0.0], "obj3": [0.66, -0.17]}
+MOVED = {"obj0": [0.50, -0.16], "obj1": [0.56, 0.06], "obj2": [0.47, -0.02], "obj3": [0.66, -0.17]}
 
 
 def red_left_of_blue(stack: Stack) -> float:
