@@ -18,8 +18,7 @@ import signal
 import subprocess
 import sys
 import threading
-import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 from shared.bus import Bus
@@ -41,14 +40,12 @@ class Supervised:
     log_path: Path
     popen: subprocess.Popen | None = None
     restarts: int = 0
-    started_at: float = field(default=0.0)
 
     def start(self) -> None:
         self.log_path.parent.mkdir(parents=True, exist_ok=True)
         with open(self.log_path, "a") as out:
             self.popen = subprocess.Popen(self.argv, stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                                           start_new_session=True)
-        self.started_at = time.monotonic()
 
     def exited(self) -> int | None:
         return None if self.popen is None else self.popen.poll()
@@ -124,7 +121,10 @@ class Supervisor:
         return argv
 
     def _say(self, bus: Bus, text: str, kind: str) -> None:
-        log.warning(text) if kind == "error" else log.info(text)
+        if kind == "error":
+            log.warning(text)
+        else:
+            log.info(text)
         bus.publish(bus.keys.say, {"text": text, "kind": kind})
 
     def watch(self, bus: Bus) -> None:

@@ -11,6 +11,8 @@ import statistics
 from pathlib import Path
 from typing import Any
 
+from shared import stats
+
 COLUMNS = ("task", "style", "utterances", "words", "success", "programming_s", "replay", "median_latency_ms")
 
 
@@ -33,9 +35,7 @@ def text_table(rows: list[dict[str, Any]]) -> str:
 
 
 def markdown_table(rows: list[dict[str, Any]]) -> str:
-    lines = ["| " + " | ".join(COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
-    lines += ["| " + " | ".join(str(r[c]) for c in COLUMNS) + " |" for r in rows]
-    return "\n".join(lines)
+    return stats.markdown_table(COLUMNS, [[r[c] for c in COLUMNS] for r in rows])
 
 
 def write_csv(rows: list[dict[str, Any]], path: Path) -> None:
