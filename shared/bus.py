@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import logging
 import threading
-import time
 from collections import Counter
 from collections.abc import Callable
 from typing import Any
@@ -252,20 +251,8 @@ class Bus:
 
     # -- presence ----------------------------------------------------------
     def declare_alive(self, service: str) -> None:
-        """Announce that ``service`` is up; the token vanishes when the process dies.
-
-        The service also answers ``ping/<service>``: liveliness is resolved
-        by the local router, so only a real round trip tells how far away a
-        service is (the UI's status bar shows it).
-        """
-        self.serve(self.keys.ping(service), lambda _request: {"ok": True, "service": service})
+        """Announce that ``service`` is up; the token vanishes when the process dies."""
         self._keep(self.session.liveliness().declare_token(self.keys.alive(service)))
-
-    def ping(self, service: str, timeout: float = 2.0) -> float:
-        """Round-trip seconds to ``service``; raises :class:`BusTimeout` when it does not answer."""
-        started = time.perf_counter()
-        self.request(self.keys.ping(service), {}, timeout=timeout)
-        return time.perf_counter() - started
 
     def watch_alive(self, handler: Callable[[str, bool], None]) -> None:
         """Call ``handler(service, alive)`` for every service appearing or vanishing."""

@@ -72,9 +72,6 @@ class Keys:
     def alive(self, service: str) -> str:
         return self._key(f"alive/{service}")
 
-    def ping(self, service: str) -> str:
-        return self._key(f"ping/{service}")
-
     @property
     def alive_all(self) -> str:
         return self._key("alive/*")

@@ -25,7 +25,7 @@ from shared.bus import BusTimeout, RemoteError
 from shared.config import SessionOptions
 from tui import events
 from tui.action_panel import ActionPanel
-from tui.bridge import Bridge
+from tui.bridge import PROBES, Bridge
 from tui.clarify import ClarifyPrompt
 from tui.command_input import CommandInput
 from tui.conversation import Conversation
@@ -301,7 +301,7 @@ class PbdApp(App[None]):
     def _probe_alive(self) -> None:
         bars = self.query(StatusBar)  # empty while the screen is being torn down
         if self.bridge.connected and bars:
-            self.probe(sorted(bars.first().alive))
+            self.probe(sorted(bars.first().alive & set(PROBES)))
 
     @work(thread=True, exclusive=True, group="probe")
     def probe(self, services: list[str]) -> None:

@@ -9,6 +9,7 @@ on a Zenoh thread. Requests block, so the app calls them from
 
 from __future__ import annotations
 
+import time
 from typing import Any, Protocol
 
 from textual.message import Message
@@ -16,6 +17,14 @@ from textual.message import Message
 from shared.bus import Bus, BusTimeout, RemoteError
 from shared.config import SessionOptions
 from tui import events
+
+# A cheap, side-effect-free request per service, timed for the status bar.
+# Services without one in the contract show presence only.
+PROBES: dict[str, tuple[str, dict[str, Any]]] = {
+    "nlu": ("nlu/vocabulary", {}),
+    "executor": ("executor/control/actions", {"op": "list"}),
+}
+
 
 class Poster(Protocol):
     def post_message(self, message: Message) -> bool: ...
@@ -114,8 +123,16 @@ class Bridge:
         return [str(w) for w in reply.get("words", [])], [str(p) for p in reply.get("phrases", [])]
 
     def ping(self, service: str) -> float | None:
-        """Round-trip seconds to the service's ping, None if it did not answer."""
-        try:
-            return self._bus().ping(service)
-        except (BusTimeout, RemoteError):
+        """Round-trip seconds of the service's probe request, None if it did not answer."""
+        if service not in PROBES:
             return None
+        bus = self._bus()
+        suffix, request = PROBES[service]
+        start = time.perf_counter()
+        try:
+            bus.request(f"pbd/{bus.keys.namespace}/{suffix}", request, timeout=2.0)
+        except BusTimeout:
+            return None
+        except RemoteError:
+            pass  # an error reply still measures the round trip
+        return time.perf_counter() - start

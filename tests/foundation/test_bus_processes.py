@@ -102,11 +102,3 @@ def test_point_cloud_sized_message_crosses_intact(network: Network, echo) -> Non
     assert xyz.nbytes + rgb.nbytes == 4_608_000
     assert reply["digest"] == digest and reply["shape"] == [480, 640, 3]
 
-
-def test_live_service_answers_ping(network: Network, echo) -> None:
-    assert 0 < network.hub.ping("echo") < 2
-
-
-def test_ping_to_absent_service_times_out(network: Network, echo) -> None:
-    with pytest.raises(BusTimeout, match="ping/ghost"):
-        network.hub.ping("ghost", timeout=0.3)
