@@ -5,8 +5,12 @@ only the newest is processed (``latest_only``); the object list is published
 on a cached key so a UI started later sees it at once; a bad cloud (empty,
 malformed, no table in view) never erases what we knew — the last good list is
 re-published with a status that says what went wrong. ``perception/record``
-answers from frames that arrive *after* the request and agree with each other,
-so the executor never acts on a view taken while the arms were still moving.
+answers from frames *rendered* after the request (their simulated time is not
+older than the newest robot state at the request; a cloud spends a while in
+rendering, encoding and transport, so one that merely *arrives* later can
+still show the scene before a reload or the arms mid-motion) and agree with
+each other, and never from the first frames after a scene load, while the new
+objects are still waiting for their ids.
 A cloud is rendered a little before it arrives, so the arms are masked at the
 states that bracket its simulated time, not at the newest one. A scene load
 (the state's ``scene`` name or ``scene_generation`` changes) forgets every
@@ -48,6 +52,8 @@ class Frame:
     number: int
     status: str
     objects: list[dict]
+    sim_time: float | None = None   # when the cloud was rendered (None: unknown)
+    steady: bool = True             # enough frames since the last scene load for new objects to be confirmed
 
 
 class PerceptionService:
@@ -64,6 +70,7 @@ class PerceptionService:
         self._objects: list[dict] = []
         self._table: dict | None = None
         self._frames: deque[Frame] = deque(maxlen=8)
+        self._since_load = 0              # frames processed since the tracker last forgot everything
         self._changed = threading.Condition()
         self._publisher = bus.publisher(bus.keys.objects, cached=True)
 
@@ -111,12 +118,14 @@ class PerceptionService:
             if isinstance(exc, MessageError):
                 self.bus.rejected[self.bus.keys.cloud] += 1
             log.warning("%s", status)
-            self._publish(stamp, status)
+            self._publish(stamp, status, message.get("sim_time"))
             return
         scene = (state.get("scene"), state.get("scene_generation")) if state else None
         if scene is not None and scene != self._scene and self._scene is not None:
             log.info("scene %s loaded (load %s): forgetting every object", *scene)
             self.tracker.reset()
+            self._since_load = 0
+        self._since_load += 1
         self._scene = scene if scene is not None else self._scene
         arms = segments_from_states([state, earlier])
         camera = camera_position(message)
@@ -127,26 +136,29 @@ class PerceptionService:
         self._table = {"height": round(plane.z_at(float(centre[0]), float(centre[1])), 4),
                        "normal": [round(float(v), 4) for v in plane.normal],
                        "outline": np.round(detection.table_outline, 3).tolist()}
-        self._publish(stamp, OK)
+        self._publish(stamp, OK, message.get("sim_time"))
 
-    def _publish(self, stamp: float, status: str) -> None:
+    def _publish(self, stamp: float, status: str, sim_time: Any = None) -> None:
         message = {"stamp": float(stamp), "objects": self._objects, "status": status}
         if self._table is not None:
             message["table"] = self._table
         self._publisher.put(message)
         with self._changed:
             number = self._frames[-1].number + 1 if self._frames else 1
-            self._frames.append(Frame(number, status, self._objects))
+            rendered = float(sim_time) if isinstance(sim_time, (int, float)) else None
+            steady = self._since_load >= self.tracker.settings.confirm_frames
+            self._frames.append(Frame(number, status, self._objects, rendered, steady))
             self._changed.notify_all()
 
     # -- record ------------------------------------------------------------
     def on_record(self, _request: Mapping[str, Any]) -> dict:
-        """Objects from two consecutive good frames that arrived after the request and agree."""
+        """Objects from two consecutive good frames rendered after the request that agree."""
         deadline = time.monotonic() + self.record_timeout
+        now = _sim_time(self._states[-1]) if self._states else None
         with self._changed:
             after = self._frames[-1].number if self._frames else 0
             while True:
-                fresh = [f for f in self._frames if f.number > after]
+                fresh = [f for f in self._frames if f.number > after and _rendered_since(f, now)]
                 settled = _settled(fresh)
                 if settled is not None:
                     return {"ok": True, "objects": settled.objects, "settled": True,
@@ -162,10 +174,16 @@ def _sim_time(state: Mapping[str, Any]) -> float:
     return float(value) if isinstance(value, (int, float)) else float("inf")
 
 
+def _rendered_since(frame: Frame, sim_time: float | None) -> bool:
+    """Whether the frame's cloud was rendered at or after ``sim_time`` (true when either is unknown)."""
+    return sim_time is None or frame.sim_time is None or not np.isfinite(sim_time) or frame.sim_time >= sim_time
+
+
 def _settled(frames: list[Frame]) -> Frame | None:
-    """The newest frame that is good and agrees with the good frame just before it."""
+    """The newest frame that is good, steady and agrees with the good, steady frame just before it."""
     for earlier, later in zip(reversed(frames[:-1]), reversed(frames)):
-        if earlier.status == OK and later.status == OK and _agree(earlier.objects, later.objects):
+        if earlier.status == OK and later.status == OK and earlier.steady and later.steady \
+                and _agree(earlier.objects, later.objects):
             return later
     return None
 

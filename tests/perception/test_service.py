@@ -15,6 +15,9 @@ from services.perception.synthetic import Box, Camera, Cylinder, Scene, render
 SMALL = Camera(width=320, height=240)
 SCENE = Scene([Cylinder((0.70, -0.15, 0.80), 0.035, 0.10, "red"),
                Box((0.85, 0.10, 0.79), (0.08, 0.08, 0.08), "blue")])
+WITH_GREEN = Scene([*SCENE.objects, Box((0.75, 0.30, 0.79), (0.08, 0.08, 0.08), "green")])
+MOVED = Scene([Cylinder((0.90, -0.30, 0.80), 0.035, 0.10, "red"),
+               Box((0.65, 0.25, 0.79), (0.08, 0.08, 0.08), "blue")])
 
 
 @pytest.fixture(scope="module")
@@ -31,6 +34,13 @@ class Feed:
         self.cloud = self.bus.publisher(self.keys.cloud, large=True)
         self.received: queue.Queue[dict] = queue.Queue()
         self.bus.subscribe(self.keys.objects, self.received.put, schema="objects")
+
+    def once(self, cloud: dict, timeout: float = 5.0) -> dict:
+        """Publish ``cloud`` once and return the object list perception published for it."""
+        while not self.received.empty():
+            self.received.get_nowait()
+        self.cloud.put({**cloud, "stamp": time.time()})
+        return self.received.get(timeout=timeout)
 
     def until(self, cloud: dict, accept, timeout: float = 20.0) -> dict:
         """Publish ``cloud`` every 0.2 s until a published object list satisfies ``accept``."""
@@ -131,6 +141,63 @@ def test_a_scene_load_announced_in_the_state_forgets_every_object(feed, good_clo
     reloaded = feed.until(good_cloud, lambda m: len(m["objects"]) == 2
                           and not {o["id"] for o in m["objects"]} & {o["id"] for o in first["objects"]})
     assert sorted(o["color"] for o in reloaded["objects"]) == ["blue", "red"]
+
+
+class Recording:
+    """A ``record`` request running in the background while the test feeds clouds."""
+
+    def __init__(self, feed: Feed) -> None:
+        self.reply: dict | None = None
+        self.error: Exception | None = None
+        self._thread = threading.Thread(target=self._ask, args=(feed,), daemon=True)
+        self._thread.start()
+        time.sleep(0.5)  # the request has reached perception
+
+    def _ask(self, feed: Feed) -> None:
+        try:
+            self.reply = feed.bus.request(feed.keys.record, {}, timeout=10)
+        except Exception as exc:  # noqa: BLE001 - handed to the test thread
+            self.error = exc
+
+    def result(self) -> dict:
+        self._thread.join(timeout=15)
+        assert self.error is None, self.error
+        assert self.reply is not None
+        return self.reply
+
+
+def test_record_ignores_clouds_rendered_before_the_request(feed):
+    """A cloud that arrives after the request may have been rendered before it (a reload, a moving arm)."""
+    state = feed.bus.publisher(feed.keys.sim_state)
+    before, after = {**render(SCENE, SMALL), "sim_time": 9.0}, {**render(WITH_GREEN, SMALL), "sim_time": 10.5}
+    state.put(sim_state("first", 9.0))
+    feed.until(before, lambda m: len(m["objects"]) == 2)
+    state.put(sim_state("first", 10.0))
+    time.sleep(0.3)
+    recording = Recording(feed)
+    for _ in range(3):
+        feed.once(before)
+    for _ in range(4):
+        feed.once(after)
+    reply = recording.result()
+    assert sorted(o["color"] for o in reply["objects"]) == ["blue", "green", "red"]
+
+
+def test_record_right_after_a_scene_load_waits_for_the_new_objects(feed):
+    """The first frames after a load have no confirmed objects yet; an empty list is not the new scene."""
+    state = feed.bus.publisher(feed.keys.sim_state)
+    old, new = render(SCENE, SMALL), render(MOVED, SMALL)
+    state.put(sim_state("first", 1.0))
+    feed.until({**old, "sim_time": 1.0}, lambda m: len(m["objects"]) == 2)
+    state.put(sim_state("second", 2.0))
+    time.sleep(0.3)
+    recording = Recording(feed)
+    feed.once({**old, "sim_time": 2.0})  # forgets every object; the old view starts candidates that never return
+    for k in range(4):
+        feed.once({**new, "sim_time": 2.2 + 0.2 * k})
+    reply = recording.result()
+    assert sorted((o["color"], tuple(np.round(o["position"][:2], 1))) for o in reply["objects"]) == \
+        [("blue", (0.6, 0.2)), ("red", (0.9, -0.3))]
 
 
 def test_sigterm_while_clouds_stream_in_stops_cleanly(network, launcher, good_cloud):
