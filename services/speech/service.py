@@ -35,6 +35,9 @@ log = logging.getLogger("hfpbd.speech")
 NOT_HEARD = "I heard something but could not make out a command. Please say it again or type it."
 WAV_CHUNK_S = 0.1
 RELEASE_TAIL_S = 0.4
+# a speech/audio stream that sends nothing for this long has stopped (its sender quit or paused
+# without saying "end"): what it left half-said is decoded instead of waiting for more audio
+STREAM_IDLE_S = 1.0
 
 
 @dataclass
@@ -57,6 +60,7 @@ class SpeechService:
         self._splitter = UtteranceSplitter()
         self._audio_lock = threading.Lock()
         self._talk: list[np.ndarray] | None = None  # audio captured while push-to-talk is held
+        self._streamed_at: float | None = None  # when the last speech/audio chunk came, while the stream is open
         self._tasks: queue.Queue[Callable[[], None] | None] = queue.Queue()
         self._worker = threading.Thread(target=self._work, name="decoder", daemon=True)
         self._utterances = bus.publisher(bus.keys.utterance)
@@ -133,7 +137,18 @@ class SpeechService:
         except AudioError as exc:
             log.warning("speech/audio chunk ignored: %s", exc)
             return
+        with self._audio_lock:
+            self._streamed_at = None if message.get("end") else time.monotonic()
         if message.get("end"):
+            self.end_of_stream()
+
+    def _end_idle_stream(self) -> None:
+        """Decode what a stream that went quiet mid-utterance left behind."""
+        with self._audio_lock:
+            idle = self._streamed_at is not None and time.monotonic() - self._streamed_at >= STREAM_IDLE_S
+            if idle:
+                self._streamed_at = None
+        if idle:
             self.end_of_stream()
 
     # -- push to talk ----------------------------------------------------------
@@ -172,7 +187,20 @@ class SpeechService:
 
     # -- decoding --------------------------------------------------------------
     def _work(self) -> None:
-        while (task := self._tasks.get()) is not None:
+        """Run decoder tasks in order; when none is waiting, notice streams that stopped.
+
+        Why only when idle: right after a long task the bus handler may not yet
+        have taken the chunks that queued meanwhile, so the stream would look
+        stopped when it is not.
+        """
+        while True:
+            try:
+                task = self._tasks.get(timeout=STREAM_IDLE_S / 4)
+            except queue.Empty:
+                self._end_idle_stream()
+                continue
+            if task is None:
+                return
             try:
                 task()
             except Exception:

@@ -24,11 +24,16 @@ OBJECTS = [
 
 
 def stream(bus, pcm: np.ndarray, chunk_s: float = 0.1) -> None:
-    """Send audio on speech/audio the way a remote microphone would."""
-    key = Keys(bus.keys.namespace).speech("audio")
+    """Send audio on speech/audio the way a remote microphone would.
+
+    The publisher blocks rather than drops under congestion: a burst of chunks
+    sent while the service is busy would otherwise lose some, and a lost
+    trailing silence leaves the utterance unfinished.
+    """
+    publisher = bus.publisher(Keys(bus.keys.namespace).speech("audio"), large=True)
     step = int(RATE * chunk_s)
     for start in range(0, len(pcm), step):
-        bus.publish(key, {"pcm": pcm[start:start + step], "rate": RATE})
+        publisher.put({"pcm": pcm[start:start + step], "rate": RATE})
 
 
 def collect(bus, key: str, **options) -> queue.Queue:
@@ -37,9 +42,8 @@ def collect(bus, key: str, **options) -> queue.Queue:
     return inbox
 
 
-@pytest.mark.xfail(strict=False, reason="intermittent: in about half the runs the streamed utterance never comes "
-                   "out of the speech service as dialog/utterance within 60 s; the cause is not yet found")
-def test_spoken_command_reaches_the_nlu_as_a_command(network, launcher):
+@pytest.mark.parametrize("tail_s", [1.0, 0.0], ids=["silence-after", "stream-stops-mid-utterance"])
+def test_spoken_command_reaches_the_nlu_as_a_command(network, launcher, tail_s: float):
     hub = network.hub
     hub.publisher(hub.keys.objects, cached=True).put({"stamp": time.time(), "objects": OBJECTS})
     utterances = collect(hub, hub.keys.utterance)
@@ -49,7 +53,7 @@ def test_spoken_command_reaches_the_nlu_as_a_command(network, launcher):
     launcher.start("speech", "--microphone", "off", "--no-voice")
     status.get(timeout=30)  # published after its audio subscription: audio sent now is not lost in routing
     said = espeak.synthesise("pick up the green box with your right hand", "en-us", 140)
-    stream(hub, np.concatenate([silence(0.5), said, silence(1.0)]))
+    stream(hub, np.concatenate([silence(0.5), said, silence(tail_s)]))  # no "end": the stream just stops
 
     utterance = utterances.get(timeout=60)
     assert utterance["source"] == "speech"
