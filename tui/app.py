@@ -35,6 +35,7 @@ from tui.world import WorldView
 from tui.world_panel import TableCanvas, WorldPanel
 
 RECONNECT_SECONDS = 3.0
+NO_SPEECH = "push-to-talk needs the speech service, which is not running (start it: hfpbd speech); typing works as always"
 T = TypeVar("T")
 
 
@@ -63,6 +64,7 @@ class PbdApp(App[None]):
         Binding("f6", "new_action", "New action", priority=True),
         Binding("f7", "switch_action('previous')", "Prev action", priority=True),
         Binding("f8", "switch_action('next')", "Next action", priority=True),
+        Binding("f9", "talk", "Talk", priority=True),
         Binding("ctrl+q", "quit", "Quit", priority=True),
     ]
 
@@ -136,6 +138,8 @@ class PbdApp(App[None]):
     def on_presence(self, event: events.Presence) -> None:
         self.query_one(StatusBar).set_alive(event.service, event.alive)
         conversation = self.query_one(Conversation)
+        if not event.alive and event.service == "speech":
+            self.query_one(StatusBar).set_talking(False)
         if not event.alive and event.service in CONSEQUENCES:
             self._lost.add(event.service)
             conversation.add("warning", f"{event.service} stopped: {CONSEQUENCES[event.service]} until it is back")
@@ -205,6 +209,10 @@ class PbdApp(App[None]):
         self.query_one(StatusBar).set_latency(event.service, event.seconds)
 
     @while_running
+    def on_talking(self, event: events.Talking) -> None:
+        self.query_one(StatusBar).set_talking(event.listening)
+
+    @while_running
     def on_request_failed(self, event: events.RequestFailed) -> None:
         self.query_one(Conversation).add("error", f"{event.what} failed: {event.reason}")
 
@@ -259,6 +267,14 @@ class PbdApp(App[None]):
     def action_switch_action(self, target: str) -> None:
         self._direct("switch_action", {"target": target}, f"[{'F7' if target == 'previous' else 'F8'}] {target} action")
 
+    def action_talk(self) -> None:
+        """Push-to-talk as a toggle: terminals report key presses, never releases."""
+        bar = self.query_one(StatusBar)
+        if "speech" not in bar.alive:
+            self.query_one(Conversation).add("warning", NO_SPEECH)
+            return
+        self.push_to_talk(not bar.talking)
+
     def _direct(self, procedure: str, args: dict[str, Any], shown: str) -> None:
         self.query_one(Conversation).add("user", shown)
         self.run_command(procedure, args)
@@ -278,6 +294,14 @@ class PbdApp(App[None]):
             self.bridge.command(procedure, args)
         except (BusTimeout, RemoteError, ConnectionError) as exc:
             self.post_message(events.RequestFailed(procedure.replace("_", " "), _reason(exc, "executor")))
+
+    @work(thread=True, exclusive=True, group="talk")
+    def push_to_talk(self, on: bool) -> None:
+        try:
+            self.post_message(events.Talking(self.bridge.talk(on)))
+        except (BusTimeout, RemoteError, ConnectionError) as exc:
+            self.post_message(events.Talking(False))  # a speech service that does not answer is not listening
+            self.post_message(events.RequestFailed("push-to-talk", _reason(exc, "speech service")))
 
     @work(thread=True, exclusive=True, group="vocabulary")
     def load_vocabulary(self) -> None:

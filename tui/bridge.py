@@ -112,6 +112,12 @@ class Bridge:
             bus.request(bus.keys.sim_control("stop"), {}, timeout=2.0)
             return "stopped the arms directly (the executor did not answer)"
 
+    def talk(self, on: bool) -> bool:
+        """Press (``on``) or release push-to-talk on the speech service; returns whether it now listens."""
+        bus = self._bus()
+        reply = bus.request(bus.keys.speech("ptt"), {"on": on}, timeout=2.0)
+        return bool(reply.get("listening"))
+
     def describe(self) -> dict[str, str]:
         bus = self._bus()
         reply = bus.request(bus.keys.nlu_query("describe"), {}, timeout=3.0)

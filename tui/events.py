@@ -112,3 +112,11 @@ class RequestFailed(Message):
         super().__init__()
         self.what = what
         self.reason = reason
+
+
+class Talking(Message):
+    """The speech service answered a push-to-talk press or release: whether it now listens."""
+
+    def __init__(self, listening: bool) -> None:
+        super().__init__()
+        self.listening = listening

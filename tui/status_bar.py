@@ -26,6 +26,7 @@ class StatusBar(Static):
         self.latency: dict[str, float | None] = {}
         self.connection = "connecting…"
         self.connected = False
+        self.talking = False  # push-to-talk is on: the speech service collects what is said
 
     def set_connection(self, connected: bool, text: str) -> None:
         self.connected = connected
@@ -36,6 +37,10 @@ class StatusBar(Static):
         (self.alive.add if alive else self.alive.discard)(service)
         if not alive:
             self.latency.pop(service, None)
+        self._redraw()
+
+    def set_talking(self, talking: bool) -> None:
+        self.talking = talking
         self._redraw()
 
     def set_latency(self, service: str, seconds: float | None) -> None:
@@ -51,6 +56,9 @@ class StatusBar(Static):
 
     def render_text(self) -> Text:
         line = Text()
+        if self.talking:
+            line.append(" listening… (F9 when done) ", style="bold reverse")
+            line.append("  ")
         line.append(self.connection, style="green" if self.connected else "bold red")
         for service in (*REQUIRED, *OPTIONAL, *sorted(self.alive - set(REQUIRED) - set(OPTIONAL))):
             up = service in self.alive

@@ -11,8 +11,9 @@ import pytest
 
 from services.speech import espeak
 from services.speech.audio import RATE, read_wav, silence
-from shared.keys import Keys
 from shared.bus import RemoteError
+from shared.keys import Keys
+from tests.speech.helpers import stream
 
 pytestmark = pytest.mark.skipif(not espeak.available(), reason="espeak-ng is not installed")
 
@@ -21,19 +22,6 @@ OBJECTS = [
     {"id": "obj1", "color": "blue", "type": "cup", "position": [0.6, 0.15, 0.77], "size": [0.07, 0.07, 0.1]},
     {"id": "obj2", "color": "green", "type": "box", "position": [0.5, 0.0, 0.76], "size": [0.08, 0.08, 0.08]},
 ]
-
-
-def stream(bus, pcm: np.ndarray, chunk_s: float = 0.1) -> None:
-    """Send audio on speech/audio the way a remote microphone would.
-
-    The publisher blocks rather than drops under congestion: a burst of chunks
-    sent while the service is busy would otherwise lose some, and a lost
-    trailing silence leaves the utterance unfinished.
-    """
-    publisher = bus.publisher(Keys(bus.keys.namespace).speech("audio"), large=True)
-    step = int(RATE * chunk_s)
-    for start in range(0, len(pcm), step):
-        publisher.put({"pcm": pcm[start:start + step], "rate": RATE})
 
 
 def collect(bus, key: str, **options) -> queue.Queue:
