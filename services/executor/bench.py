@@ -131,9 +131,10 @@ class WorldRobot:
                     return Outcome(status, message)
         return Outcome("failed", "the motion did not finish")
 
-    def move_arm(self, arm: str, points: np.ndarray, times: np.ndarray) -> Outcome:
+    def move_arm(self, arm: str, points: np.ndarray, times: np.ndarray, contact: bool = False) -> Outcome:
         motion_id = self.world.new_motion_id()
-        self.world.follow_waypoints(arm, joint_names(arm), np.asarray(times, float), np.asarray(points, float), motion_id)
+        self.world.follow_waypoints(arm, joint_names(arm), np.asarray(times, float), np.asarray(points, float),
+                                    motion_id, contact)
         return self._finish(motion_id)
 
     def gripper(self, arm: str, width: float, force: float) -> Outcome:

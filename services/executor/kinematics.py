@@ -64,6 +64,11 @@ CARTESIAN_STEP = 0.01
 JOINT_RESOLUTION = 0.05  # rad between checked waypoints of a planned path  # straight-line moves are interpolated every centimetre
 ROLL_JOINTS = (4, 6)
 HELD_PREFIX = "held:"
+CONTACT_STEP = 0.0025  # metres between checked poses of a contact move (how exactly its end is found)
+PRESS_DEPTH = 0.02     # a press is planned this far past the touched object's perceived surface
+MIN_PRESS = 0.003      # ... and must get at least this far past it to count as pressing
+STEER_NUDGE = 0.1      # rad the elbow is swung to look for solutions with more room to the joint limits
+STEER_JUMP = 0.15      # rad: the most any joint may move between two poses of a contact move
 # The ready posture (the PR2 "untucked" arm: bent in front of the body, above the table's near edge).
 READY = {"right": (-0.4, 1.0, 0.0, -2.05, 0.0, -0.1, 0.0), "left": (0.4, 1.0, 0.0, -2.05, 0.0, -0.1, 0.0)}   # forearm and wrist roll: sampled over one turn only
 
@@ -88,6 +93,14 @@ class Trajectory:
         return float(self.times[-1]) if len(self.times) else 0.0
 
 
+@dataclass(frozen=True)
+class ContactMove:
+    """A straight move that ends pressed against ``touched`` (an obstacle name)."""
+
+    trajectory: Trajectory
+    touched: str
+
+
 def _densified(path: np.ndarray, resolution: float) -> np.ndarray:
     """Waypoints at most ``resolution`` rad apart, so the timing spline stays on the checked segments."""
     out = [path[0]]
@@ -95,6 +108,16 @@ def _densified(path: np.ndarray, resolution: float) -> np.ndarray:
         steps = max(1, int(np.ceil(np.max(np.abs(b - a)) / resolution)))
         out.extend(np.linspace(a, b, steps + 1)[1:])
     return np.asarray(out)
+
+
+def _nudged(arm_q: np.ndarray) -> list[np.ndarray]:
+    """Starts beside ``arm_q`` with the elbow swung a little (upper-arm roll, shoulder pan)."""
+    out = []
+    for joint, delta in ((2, STEER_NUDGE), (2, -STEER_NUDGE), (0, STEER_NUDGE), (0, -STEER_NUDGE)):
+        q = arm_q.copy()
+        q[joint] += delta
+        out.append(q)
+    return out
 
 
 def _part_name(link_or_object: str) -> str:
@@ -305,6 +328,34 @@ class ArmKinematics:
             out[j] = best
         return out
 
+    def _turned_towards(self, arm_q: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        """Roll joints turned by whole turns to lie nearest ``reference`` (the previous waypoint of a line)."""
+        out = arm_q.copy()
+        for j in ROLL_JOINTS:
+            lo, hi = self.limits[self.arm_idx[j]]
+            for turn in (-2 * np.pi, 2 * np.pi):
+                candidate = out[j] + turn
+                if lo <= candidate <= hi and abs(candidate - reference[j]) < abs(out[j] - reference[j]):
+                    out[j] = candidate
+        return out
+
+    def turn_variants(self, arm_q: np.ndarray) -> list[np.ndarray]:
+        """``arm_q`` and the same posture with the roll joints turned by whole turns (within the limits).
+
+        They put the tool in the same place, but a straight line from one may
+        run a roll joint into its limit where from another it does not.
+        """
+        out = [arm_q]
+        for j in ROLL_JOINTS:
+            lo, hi = self.limits[self.arm_idx[j]]
+            for q in list(out):
+                for turn in (-2 * np.pi, 2 * np.pi):
+                    if lo <= q[j] + turn <= hi:
+                        variant = q.copy()
+                        variant[j] += turn
+                        out.append(variant)
+        return out
+
     def first_reachable(self, poses: list[np.ndarray], **kw: object) -> tuple[int, np.ndarray] | None:
         """Index and joints of the first pose in ``poses`` with an IK solution."""
         for i, pose in enumerate(poses):
@@ -357,10 +408,13 @@ class ArmKinematics:
         """Let the arm leave objects it already touches (a grasped object, a misperceived blob).
 
         Without this, a start state in contact makes every path "invalid";
-        the table is never tolerated, so paths still cannot cut through it.
+        the table is never tolerated, so paths still cannot cut through it,
+        and neither is an object only the *other* arm touches (it presses a
+        box this hand is about to press too).
         """
-        touched = sorted({name for pair in self.collisions(self.arm_q) for name in pair if name in self._obstacles}
-                         - {"table"})
+        mine = (f"{PREFIX[self.arm]}_", HELD_PREFIX)
+        touched = sorted({name for pair in self.collisions(self.arm_q) if any(n.startswith(mine) for n in pair)
+                          for name in pair if name in self._obstacles} - {"table"})
         acm = self.planner.planning_world.get_allowed_collision_matrix()
         for name in touched:
             acm.set_entry(name, self._robot_links, True)
@@ -454,16 +508,16 @@ class ArmKinematics:
                 return None
         return path
 
-    def straight_line(self, pose: np.ndarray, *, check_collisions: bool = True,
-                      ignore: tuple[str, ...] = ()) -> Trajectory | None:
-        """Move the tool in a straight line to ``pose`` (approach, descend, lift), orientation interpolated.
+    def _cartesian_path(self, pose: np.ndarray, resolution: float = CARTESIAN_STEP,
+                        steer: bool = False) -> list[np.ndarray] | None:
+        """Joint waypoints moving the tool in a straight line to ``pose``, ``resolution`` metres apart (no checks).
 
-        Collisions with obstacles in ``ignore`` (the object being grasped)
-        are allowed along the way.
+        ``steer``: at each waypoint prefer, among nearby solutions, the one
+        farthest from the joint limits (see :meth:`_steered_ik`).
         """
         start_pose = self.fk()
         distance = float(np.linalg.norm(np.asarray(pose[:3]) - start_pose[:3]))
-        steps = max(2, int(np.ceil(distance / CARTESIAN_STEP)) + 1)
+        steps = max(2, int(np.ceil(distance / resolution)) + 1)
         r0, r1 = rotation_of(start_pose), rotation_of(pose)
         slerp = Slerp([0.0, 1.0], Rotation.concatenate([r0, r1]))
         path = [self.arm_q]
@@ -471,12 +525,29 @@ class ArmKinematics:
             rot = slerp([s])[0]
             x, y, z, w = rot.as_quat()
             waypoint = np.concatenate([start_pose[:3] + s * (np.asarray(pose[:3]) - start_pose[:3]), [w, x, y, z]])
-            q = self.ik(waypoint, seeds=[path[-1]], check_collisions=False, neighbours=0)
+            if steer:
+                q = self._steered_ik(waypoint, path[-1])
+            else:
+                q = self.ik(waypoint, seeds=[path[-1]], check_collisions=False, neighbours=0)
+            if q is not None:
+                q = self._turned_towards(q, path[-1])
             if q is None or np.max(np.abs(q - path[-1])) > 0.5:
                 log.info("%s arm: no smooth IK along the line at %s (%s)", self.arm, waypoint.round(3),
                          "no solution" if q is None else f"jump {np.max(np.abs(q - path[-1])):.2f} rad")
                 return None
             path.append(q)
+        return path
+
+    def straight_line(self, pose: np.ndarray, *, check_collisions: bool = True,
+                      ignore: tuple[str, ...] = (), steer: bool = False) -> Trajectory | None:
+        """Move the tool in a straight line to ``pose`` (approach, descend, lift), orientation interpolated.
+
+        Collisions with obstacles in ``ignore`` (the object being grasped)
+        are allowed along the way; ``steer`` as in :meth:`_cartesian_path`.
+        """
+        path = self._cartesian_path(pose, steer=steer)
+        if path is None:
+            return None
         if check_collisions:
             for name in ignore:
                 self.allow_touching(name, True)
@@ -490,3 +561,101 @@ class ArmKinematics:
                 for name in ignore:
                     self.allow_touching(name, False)
         return self._parameterise(np.asarray(path))
+
+    def contact_line(self, pose: np.ndarray, *, pressing: str | None = None) -> ContactMove | None:
+        """A straight move towards ``pose`` that may end pressed against one object.
+
+        Walks the line in small steps. The first object the *gripper* meets
+        (never the table, the other arm or the body, and never with any other
+        link) becomes the one it may touch; the move then ends ``PRESS_DEPTH``
+        past that object's surface as perceived, or earlier where anything
+        else would be hit, or at ``pose`` if it comes first. ``pressing``
+        names an object the hand already presses (it may slide along it, e.g.
+        dragging a plate). None when the line is blocked before any contact,
+        cannot be followed at all, or touches nothing (a plain
+        :meth:`straight_line` is the move then).
+        """
+        path = self._cartesian_path(pose, CONTACT_STEP, steer=True)
+        if path is None:
+            return None
+        touched, travelled, end = pressing, 0.0, 0
+        at_start = self.gripper_touching()
+        if pressing is None and len(at_start) == 1:
+            # already within the padding of one object: the press starts here, about half way to its surface
+            touched, travelled = at_start.pop(), OBJECT_PADDING / 2
+        acm = self.planner.planning_world.get_allowed_collision_matrix()
+        allowed = {pressing} if pressing else set()
+        for name in allowed:
+            acm.set_entry(name, self._gripper_links, True)
+        try:
+            with self._tolerating_start_contacts():
+                for i, q in enumerate(path[1:], start=1):
+                    hits = self._own_collisions(q)
+                    if hits and touched is None:
+                        objects = {self._pressable(pair) for pair in hits}
+                        if len(objects) == 1 and None not in objects:
+                            touched = objects.pop()
+                            acm.set_entry(touched, self._gripper_links, True)
+                            allowed.add(touched)
+                            hits = self._own_collisions(q)
+                    if hits:
+                        log.info("%s arm: the contact move stops short of %s", self.arm, hits)
+                        break
+                    end = i
+                    if touched is not None and touched != pressing:
+                        travelled += CONTACT_STEP
+                        if travelled >= OBJECT_PADDING + PRESS_DEPTH:
+                            break
+        finally:
+            for name in allowed:
+                acm.set_entry(name, self._gripper_links, False)
+        if touched is None or end == 0:
+            return None
+        if touched != pressing and travelled < OBJECT_PADDING + MIN_PRESS:
+            return None   # blocked before the fingers would even reach the object's surface
+        return ContactMove(self._parameterise(np.asarray(path[:end + 1])), touched)
+
+    def _steered_ik(self, pose: np.ndarray, previous: np.ndarray) -> np.ndarray | None:
+        """The solution near ``previous`` that keeps the joints farthest from their limits.
+
+        The solver follows the least-squares direction, which on a long line
+        close to the body runs the wrist flex into its limit while the
+        7-joint arm could still reach on by swinging its elbow. Starting
+        also from ``previous`` with the elbow swung a little (shoulder pan,
+        upper-arm roll) and keeping the solution with the most room lets a
+        hand that must not leave the line (it presses on an object) go on.
+        """
+        best, room = None, -np.inf
+        for seed in (previous, *_nudged(previous)):
+            q = self.ik(pose, seeds=[seed], check_collisions=False, neighbours=0)
+            if q is not None:
+                q = self._turned_towards(q, previous)
+            if q is None or np.max(np.abs(q - previous)) > STEER_JUMP:
+                continue
+            margin = self._limit_room(q)
+            if margin > room + 1e-3:
+                best, room = q, margin
+        return best
+
+    def _limit_room(self, arm_q: np.ndarray) -> float:
+        """Smallest distance to a joint limit, as a share of the joint's range (roll joints excluded)."""
+        lim = self.limits[self.arm_idx]
+        share = np.minimum(arm_q - lim[:, 0], lim[:, 1] - arm_q) / (lim[:, 1] - lim[:, 0])
+        return float(np.delete(share, list(ROLL_JOINTS)).min())
+
+    def gripper_touching(self) -> set[str]:
+        """Objects (not the table) the gripper touches or nearly touches (within the padding) now."""
+        return {name for pair in self.collisions(self.arm_q) if (name := self._pressable(pair)) is not None}
+
+    def _own_collisions(self, arm_q: np.ndarray) -> list[tuple[str, str]]:
+        """Colliding pairs at ``arm_q`` that involve this arm or what it holds (not the other arm's own contacts)."""
+        mine = (f"{PREFIX[self.arm]}_", HELD_PREFIX)
+        return [pair for pair in self.collisions(arm_q) if any(n.startswith(mine) for n in pair)]
+
+    def _pressable(self, pair: tuple[str, str]) -> str | None:
+        """The object of a gripper-versus-object collision pair, else None (the table, the body, an arm link)."""
+        a, b = pair
+        for link, other in ((a, b), (b, a)):
+            if link in self._gripper_links and other in self._obstacles and other != "table":
+                return other
+        return None

@@ -10,6 +10,13 @@ raises :class:`StepFailed` with the sentence to say.
 Pick-up is physical: approach, straight descent, close with force, lift,
 and the grasp counts only if the simulator's finger contacts still hold the
 object after the lift.
+
+A directional move may end pressed against the object in its way (a hand
+pushed onto a plate, or against a box to squeeze it between both hands):
+the simulator runs it as a contact motion, and the hand stays pressed —
+its drives still aimed past the surface — until it moves away. Further
+moves of a pressing hand start from where its drives aim, so the press
+(and with it the friction that drags a plate or lifts a box) is kept.
 """
 
 from __future__ import annotations
@@ -26,12 +33,12 @@ from services.executor import geometry as geo
 from services.executor import targets, wording
 from services.executor.geometry import Box
 from services.executor.grounding import descriptor
-from services.executor.kinematics import ArmKinematics, Trajectory
+from services.executor.kinematics import ArmKinematics, ContactMove, Trajectory
 from services.executor.reach import sync
 from services.executor.referring import refer
 from services.executor.robot import MotionError, SimRobot
 from services.executor.scene import Scene, SceneSnapshot
-from services.executor.targets import Held
+from services.executor.targets import EdgeGrasp, Held, overhang, thin_and_wide
 from services.sim.layout import HEAD_LOOK_AT, arm_pose
 
 log = logging.getLogger("hfpbd.executor.procedures")
@@ -43,6 +50,17 @@ RETREAT = 0.08          # after releasing, the hand backs off this far
 STATE_WAIT = 1.0        # seconds to wait for a robot state newer than a finished motion
 PICK_ATTEMPTS = 2
 FLAT_MARGIN = 0.01      # metres: how far a "flat" object's top may reach above a released object's bottom
+PRESS_KEPT = 0.03       # metres between the measured and the commanded tool position of a hand still pressing
+AWAY = -0.5             # cosine between a move and the press direction below which the move leaves the object
+
+
+@dataclass(frozen=True)
+class Press:
+    """A hand left pressed against an object: which, in which direction, and where its drives aim."""
+
+    object_id: str
+    direction: np.ndarray
+    arm_q: np.ndarray
 
 
 class StepFailed(RuntimeError):
@@ -69,6 +87,7 @@ class Procedures:
         self.arms = arms
         self._record_objects = record_objects
         self._held: dict[str, Held | None] = {"right": None, "left": None}
+        self._press: dict[str, Press | None] = {"right": None, "left": None}
         self._held_lock = threading.Lock()
 
     # -- what the hands hold --------------------------------------------------------
@@ -150,13 +169,15 @@ class Procedures:
             raise StepFailed(wording.unknown_object(object_id))
         return snap.objects[object_id]
 
-    def _go(self, arm: str, trajectory: Trajectory) -> None:
-        """Run a trajectory and wait until the simulator reports the arm there."""
+    def _go(self, arm: str, trajectory: Trajectory, contact: bool = False) -> None:
+        """Run a trajectory and wait until the simulator reports the arm there (or, ``contact``, pressing)."""
         if len(trajectory.points) == 0:
             return
+        if not contact:
+            self._press[arm] = None
         version = self.scene.snapshot().robot_version
         try:
-            outcome = self.robot.move_arm(arm, trajectory.points, trajectory.times)
+            outcome = self.robot.move_arm(arm, trajectory.points, trajectory.times, contact)
         except MotionError as exc:
             raise StepFailed(wording.sentence(f"My {arm} arm could not move: {exc}")) from exc
         if outcome.status != "done":
@@ -232,11 +253,58 @@ class Procedures:
 
     # -- p3 -------------------------------------------------------------------------------------
     def move_abs_dir(self, arm: str, direction: str) -> Done:
-        kin, _ = self._ready(arm)
+        kin, snap = self._ready(arm)
+        unit = np.asarray(geo.DIRECTIONS[direction], float)
+        press = self._still_pressing(arm, kin, snap, unit)
         goal = geo.direction_target(kin.fk(), direction)
         words = wording.DIRECTION_WORDS[direction]
-        self._go(arm, self._line(kin, goal, wording.sentence(f"I can't move my {arm} hand {words} any further")))
+        self._move_line(arm, kin, goal, unit, press, wording.sentence(f"I can't move my {arm} hand {words} any further"))
         return Done()
+
+    def _still_pressing(self, arm: str, kin: ArmKinematics, snap: SceneSnapshot, unit: np.ndarray) -> Press | None:
+        """The hand's press, if it is kept by a move along ``unit`` (the model is then put where the drives aim).
+
+        A move away from the pressed object ends the press; one further into
+        it is refused (it would shove the object); one along its surface
+        keeps pressing and plans from the commanded joints, so the pressing
+        force stays the same throughout.
+        """
+        press = self._press[arm]
+        if press is None:
+            return None
+        measured = kin.fk()[:3]
+        commanded = kin.fk(press.arm_q)[:3]
+        if np.linalg.norm(measured - commanded) > PRESS_KEPT or float(np.dot(unit, press.direction)) < AWAY:
+            self._press[arm] = None
+            return None
+        if float(np.dot(unit, press.direction)) > -AWAY:
+            what = refer(snap.objects, press.object_id) if press.object_id in snap.objects else "it"
+            raise StepFailed(wording.sentence(f"My {arm} hand is already pressing against {what}"))
+        kin.set_joints(dict(zip([kin.names[i] for i in kin.arm_idx], press.arm_q)))
+        return press
+
+    def _move_line(self, arm: str, kin: ArmKinematics, goal: np.ndarray, unit: np.ndarray, press: Press | None,
+                   why: str) -> None:
+        """A straight move to ``goal``; where an object is in the way, a press against it."""
+        if press is None and not kin.gripper_touching():
+            trajectory = kin.straight_line(goal)
+            if trajectory is not None:
+                self._go(arm, trajectory)
+                return
+        move: ContactMove | None = kin.contact_line(goal, pressing=press.object_id if press else None)
+        if move is None:
+            raise StepFailed(why)
+        if press is None and self._snapshot().gripper_state(arm) == "open":
+            # press with the closed fingers: one contact patch on the tool's axis, not whichever
+            # fingertip of the open hand happens to meet the object first (it would twist the object)
+            self._grip(arm, CLOSE_WIDTH)
+            kin, _ = self._ready(arm)
+            move = kin.contact_line(goal)
+            if move is None:
+                raise StepFailed(why)
+        log.info("%s hand presses against %s", arm, move.touched)
+        self._go(arm, move.trajectory, contact=True)
+        self._press[arm] = Press(move.touched, press.direction if press else unit, move.trajectory.points[-1].copy())
 
     # -- p4 -------------------------------------------------------------------------------------
     def move_rel_dir(self, arm: str, direction: str, object: str) -> Done:
@@ -259,6 +327,9 @@ class Procedures:
         words = refer(snap.objects, object)
         plans = self._grasp_plans(kin, obj)
         if not plans:
+            box = Box.of(obj)
+            if thin_and_wide(box) and overhang(box) < targets.MIN_OVERHANG:
+                raise StepFailed(wording.sentence(f"{words} is too wide to grasp; push it over the table edge first"))
             raise StepFailed(wording.cannot_pick(arm, words, "I can't reach around it"))
         reason = "it slipped out of my fingers"
         for attempt, (grasp, pre_q) in enumerate(plans[:PICK_ATTEMPTS]):
@@ -266,6 +337,9 @@ class Procedures:
                 self._grip(arm, OPEN_WIDTH)
             self._go(arm, self._plan(kin, pre_q, wording.cannot_pick(arm, words, "I can't find a clear path to it")))
             kin, snap = self._ready(arm)
+            if isinstance(grasp, EdgeGrasp):
+                self._go(arm, self._line(kin, grasp.pregrasp, wording.cannot_pick(arm, words, "I can't reach down to its edge")))
+                kin, snap = self._ready(arm)
             self._go(arm, self._line(kin, grasp.grasp, wording.cannot_pick(arm, words, "I can't reach down to it"),
                                      ignore=(object,)))
             self._grip(arm, CLOSE_WIDTH)
@@ -297,17 +371,23 @@ class Procedures:
     def _lift(kin: ArmKinematics, height: float) -> Trajectory | None:
         """Straight up by ``height``, or by less where the wrist cannot go that high in this orientation."""
         for share in (1.0, 0.66, 0.4):
-            trajectory = kin.straight_line(geo.shifted(kin.fk(), [0.0, 0.0, share * height]), check_collisions=False)
+            trajectory = kin.straight_line(geo.shifted(kin.fk(), [0.0, 0.0, share * height]), check_collisions=False,
+                                           steer=True)
             if trajectory is not None:
                 return trajectory
         return None
 
     def _grasp_plans(self, kin: ArmKinematics, obj: dict[str, Any]) -> list[tuple[geo.Grasp, np.ndarray]]:
-        """Grasps whose pre-grasp and grasp both have IK solutions, in preference order."""
+        """Grasps whose pre-grasp and grasp both have IK solutions, in preference order (with the joints to plan to)."""
         plans = []
         for grasp in targets.grasps(obj):
-            pre_q = kin.ik(grasp.pregrasp)
+            pre_q = kin.ik(grasp.hover if isinstance(grasp, EdgeGrasp) else grasp.pregrasp)
             if pre_q is None:
+                continue
+            if isinstance(grasp, EdgeGrasp):
+                hover_q = self._edge_approach(kin, grasp, pre_q, obj["id"])
+                if hover_q is not None:
+                    plans.append((grasp, hover_q))
                 continue
             kin.allow_touching(obj["id"], True)
             try:
@@ -317,6 +397,17 @@ class Procedures:
             if grasp_q is not None and self._descent_clear(kin, pre_q, grasp.grasp, obj["id"]):
                 plans.append((grasp, pre_q))
         return plans
+
+    def _edge_approach(self, kin: ArmKinematics, grasp: EdgeGrasp, hover_q: np.ndarray, object_id: str) -> np.ndarray | None:
+        """Joints at the hover pose from which both straight legs (down to the pre-grasp, in to the grasp) are clear."""
+        for start in kin.turn_variants(hover_q):
+            low_q = kin.ik(grasp.pregrasp, seeds=[start])
+            if low_q is None or not self._descent_clear(kin, start, grasp.pregrasp, object_id):
+                continue
+            for low in kin.turn_variants(low_q):
+                if self._descent_clear(kin, low, grasp.grasp, object_id):
+                    return start
+        return None
 
     @staticmethod
     def _descent_clear(kin: ArmKinematics, pre_q: np.ndarray, grasp_pose: np.ndarray, object_id: str) -> bool:

@@ -82,9 +82,13 @@ def object_reach(kin: ArmKinematics, snap: SceneSnapshot, oid: str, held: Held |
 
 
 def can_move(kin: ArmKinematics) -> dict[str, bool]:
-    """Per direction: is the tool pose one step that way reachable without collision?"""
+    """Per direction: is the tool pose one step that way reachable without collision, or a press against an object?"""
     tool = kin.fk()
-    return {d: kin.ik(geo.direction_target(tool, d), seeds=[kin.arm_q]) is not None for d in geo.DIRECTIONS}
+    moves = {}
+    for d in geo.DIRECTIONS:
+        goal = geo.direction_target(tool, d)
+        moves[d] = kin.ik(goal, seeds=[kin.arm_q]) is not None or kin.contact_line(goal) is not None
+    return moves
 
 
 def reach_map(arms: dict[str, ArmKinematics], snap: SceneSnapshot,

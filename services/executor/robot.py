@@ -111,9 +111,15 @@ class SimRobot:
         return outcome
 
     # -- motions ----------------------------------------------------------------
-    def move_arm(self, arm: str, points: np.ndarray, times: np.ndarray) -> Outcome:
-        """Follow a timed joint trajectory; returns when the arm got there (or could not)."""
+    def move_arm(self, arm: str, points: np.ndarray, times: np.ndarray, contact: bool = False) -> Outcome:
+        """Follow a timed joint trajectory; returns when the arm got there (or could not).
+
+        ``contact``: a press, which the simulator reports done when it ends
+        blocked against an object.
+        """
         payload = {"arm": arm, "points": np.asarray(points, np.float64), "times": np.asarray(times, np.float64)}
+        if contact:
+            payload["contact"] = True
         return self._run("arm", payload, float(times[-1]) if len(times) else 0.0)
 
     def gripper(self, arm: str, width: float, force: float) -> Outcome:

@@ -19,9 +19,18 @@ import numpy as np
 
 from services.executor import geometry as geo
 from services.executor.geometry import Box
+from services.sim.layout import TABLE_X
 
 HOVER = 0.06          # a carried object is brought this far above its release point first
 ROUND_TYPES = ("cup", "bowl", "plate")
+# Gripping a flat object by the part that sticks out over the table's near edge:
+MAX_EDGE_THICKNESS = 0.03   # metres: thicker than this, the fingers cannot pass over and under it
+MIN_OVERHANG = 0.04         # the fingers need this much of it past the edge (clearance + a firm hold)
+EDGE_CLEARANCE = 0.012      # fingertips stop this far short of the table edge
+FINGERTIP = 0.02            # tool frame -> fingertips, along the approach axis
+EDGE_APPROACH = 0.06        # the pre-grasp is at least this far back from the grasp (the body is close behind)
+EDGE_LIFT = 0.12
+EDGE_HOVER = 0.06           # the hand is brought this far above the pre-grasp first
 
 
 @dataclass(frozen=True)
@@ -66,4 +75,47 @@ def place_table(tool_pose: np.ndarray, held: Held, table_z: float) -> tuple[np.n
 
 
 def grasps(obj: dict) -> list[geo.Grasp]:
-    return geo.grasp_candidates(Box.of(obj), round_shape=obj.get("type") in ROUND_TYPES)
+    """Grasps around the object where it fits the gripper, else on its overhang beyond the table's near edge."""
+    box = Box.of(obj)
+    found = geo.grasp_candidates(box, round_shape=obj.get("type") in ROUND_TYPES)
+    if not found and thin_and_wide(box) and overhang(box) >= MIN_OVERHANG:
+        found.append(edge_grasp(box))
+    return found
+
+
+def thin_and_wide(box: Box) -> bool:
+    """Flat and wider than the open gripper every way (a plate, a tray): only an edge can be gripped."""
+    return box.size[2] <= MAX_EDGE_THICKNESS and float(np.min(box.size[:2])) > geo.MAX_GRIP_WIDTH
+
+
+def overhang(box: Box) -> float:
+    """How far the object reaches past the table's near edge, towards the robot (metres; negative: not at all)."""
+    return TABLE_X[0] - float(box.center[0] - box.half[0])
+
+
+@dataclass(frozen=True)
+class EdgeGrasp(geo.Grasp):
+    """A grasp on an overhang: reached from ``hover`` (over the pre-grasp) straight down, then straight in.
+
+    The pre-grasp sits low between the body and the table edge, a narrow
+    place for a planner; above it there is room, and the last two legs are
+    straight so the lower finger passes under the object level with it.
+    """
+
+    hover: np.ndarray
+
+
+def edge_grasp(box: Box) -> EdgeGrasp:
+    """Gripper level, pointing +x at the overhang, fingers closing across the object's thickness.
+
+    The fingertips stop ``EDGE_CLEARANCE`` short of the table edge, so the
+    lower finger passes under the object without touching the table.
+    """
+    rot = geo.facing(np.array([1.0, 0.0, 0.0]), np.pi / 2)   # closing axis vertical
+    point = np.array([TABLE_X[0] - EDGE_CLEARANCE - FINGERTIP, box.center[1], box.center[2]])
+    grasp = geo.make_pose(point, rot)
+    near_edge = float(box.center[0] - box.half[0])
+    back = max(EDGE_APPROACH, point[0] + FINGERTIP + EDGE_CLEARANCE - near_edge)   # fingertips clear of the edge
+    pregrasp = geo.shifted(grasp, [-back, 0.0, 0.0])
+    return EdgeGrasp(pregrasp, grasp, geo.shifted(grasp, [0.0, 0.0, EDGE_LIFT]),
+                     geo.shifted(pregrasp, [0.0, 0.0, EDGE_HOVER]))

@@ -59,6 +59,14 @@ def _limits(joints: Mapping[str, JointInfo], names: list[str]) -> tuple[np.ndarr
             np.array([joints[n].velocity for n in names]))
 
 
+def contact_flag(request: Mapping[str, Any]) -> bool:
+    """``contact``: the arm motion may end pressed against an object (default false)."""
+    value = request.get("contact", False)
+    if not isinstance(value, bool):
+        raise ValueError(f"contact must be true or false, got {value!r}")
+    return value
+
+
 def arm_request(request: Mapping[str, Any], joints: Mapping[str, JointInfo]) -> tuple[str, list[str], Any]:
     """``(arm, joint names, goal)`` where goal is an array of 7 positions or ``(times, points)``."""
     arm = arm_of(request)

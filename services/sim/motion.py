@@ -20,6 +20,7 @@ SPEED_FRACTION = 0.4       # default moves use this share of each joint's veloci
 MIN_DURATION = 0.4         # s; even tiny moves take a moment
 SETTLE_TOLERANCE = 0.02    # rad or m: "arrived"
 SETTLE_TIMEOUT = 1.5       # s after the reference ends before a motion is declared blocked
+CONTACT_SETTLE = 0.3       # s a contact motion must rest against an object before it counts as done
 
 
 class Trajectory(Protocol):
@@ -77,6 +78,7 @@ class Motion:
     joints: list[str]
     trajectory: Trajectory
     start_time: float
+    contact: bool = False          # may end blocked against an object (a press): see contact_outcome
     goal: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
@@ -98,6 +100,25 @@ class Motion:
         worst = int(np.argmax(error))
         return "failed", (f"{self.part} was blocked: {self.joints[worst]} stopped "
                           f"{error[worst]:.3f} from its goal")
+
+
+    def contact_outcome(self, now: float, actual: np.ndarray, touching: list[str]) -> tuple[str, str] | None:
+        """Like :meth:`outcome`, but a joint blocked while the arm rests against an object is success.
+
+        A press (a hand pushed onto a plate, or against a box to squeeze it)
+        is planned a little past the object's surface, so the drives never
+        reach their goal: they stay compressed against it, which is what
+        keeps the pressing force. Blocked by anything that is not an object
+        (the table, another limit) is still a failure.
+        """
+        finished = self.outcome(now, actual)
+        if finished is not None and finished[0] == "done":
+            return finished
+        elapsed = now - self.start_time - self.trajectory.duration
+        if touching and elapsed >= CONTACT_SETTLE:
+            error = float(np.abs(np.asarray(actual) - self.goal).max(initial=0.0))
+            return "done", f"{self.part} stopped against {', '.join(touching)} ({error:.3f} short of its goal)"
+        return finished
 
 
 def check_waypoints(times: np.ndarray, points: np.ndarray, joints: list[str],

@@ -207,11 +207,14 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
 
     def arm(request: dict) -> dict:
         side, names, goal = control.arm_request(request, joints)
+        contact = control.contact_flag(request)
+        if contact and not isinstance(goal, tuple):
+            raise ValueError("contact applies to timed waypoints ('points' and 'times'), not to 'positions'")
 
         def start() -> str:
             motion_id = world.new_motion_id()
             if isinstance(goal, tuple):
-                runner.replaced(world.follow_waypoints(side, names, *goal, motion_id), motion_id)
+                runner.replaced(world.follow_waypoints(side, names, *goal, motion_id, contact), motion_id)
             else:
                 runner.replaced(world.move_joints(side, names, goal, motion_id), motion_id)
             return motion_id

@@ -35,6 +35,7 @@ PAD_FRICTION = 1.5
 GRIPPER_SETTLE_TRAVEL = 0.0005          # m: the pads have stopped when the opening changes less than this
 GRIPPER_SETTLE_TIME = 0.15               # s ... over this long
 ROBOT_IGNORE_BIT = 1 << 30               # collision group 2 bit shared by all robot shapes
+SQUEEZE_ALIGNMENT = 0.7                  # |cos| between a pad contact's normal and the closing axis for a squeeze
 
 # joint drives: (stiffness, damping, force limit); gravity is off for the robot's
 # links (a real PR2 is counterbalanced), so the drives only fight contacts and loads
@@ -230,14 +231,15 @@ class SimWorld:
         return self.start_motion(Motion(motion_id, part, names, MinimumJerk(start, goal, velocity), self.sim_time))
 
     def follow_waypoints(self, part: str, names: list[str], times: np.ndarray, points: np.ndarray,
-                         motion_id: str) -> Motion | None:
+                         motion_id: str, contact: bool = False) -> Motion | None:
+        """Follow timed waypoints; ``contact``: the motion may end pressed against an object (a press)."""
         if times[0] > 0:   # start from where the joints are now
             times = np.concatenate([[0.0], times])
             points = np.vstack([self.joint_targets(names), points])
         else:
             points = points.copy()
             points[0] = self.joint_targets(names)
-        return self.start_motion(Motion(motion_id, part, names, Waypoints(times, points), self.sim_time))
+        return self.start_motion(Motion(motion_id, part, names, Waypoints(times, points), self.sim_time, contact))
 
     def move_gripper(self, arm: str, width: float, force: float, motion_id: str) -> Motion | None:
         names = finger_joint_names(arm)
@@ -284,6 +286,8 @@ class SimWorld:
         for part, motion in list(self.motions.items()):
             if isinstance(motion, GripperMotion):
                 result = motion.gripper_outcome(self.sim_time, self)
+            elif motion.contact and self.sim_time - motion.start_time >= motion.trajectory.duration:
+                result = motion.contact_outcome(self.sim_time, self.qpos(motion.joints), self.arm_touching(part))
             else:
                 result = motion.outcome(self.sim_time, self.qpos(motion.joints))
             if result is not None:
@@ -322,6 +326,32 @@ class SimWorld:
                         touching[mine].add(other)
         return touching
 
+    def arm_touching(self, arm: str) -> list[str]:
+        """Objects touching any link of ``arm`` (what a pressing hand rests against)."""
+        prefix = f"{arm[0]}_"
+        links = {name for name, link in self.links.items() if name.startswith(prefix) and link.collision_shapes}
+        return sorted(set().union(*self.contacts_by_link(links).values()))
+
+    def squeezed(self, arm: str) -> set[str]:
+        """Objects squeezed between the inner faces of both of ``arm``'s pads.
+
+        A pad touching an object with its tip (a hand pressed against a box's
+        side, fingertips on a plate) does not hold it: only contacts whose
+        normal runs along the closing axis count, so a box squeezed between
+        two hands is held by neither gripper alone.
+        """
+        closing = Rotation.from_quat(np.roll(self.links[tool_frame(arm)].entity_pose.q, -1)).apply([0.0, 1.0, 0.0])
+        pads = set(self.pad_links(arm))
+        faces: dict[str, set[str]] = {name: set() for name in pads}
+        for contact in self.scene.get_contacts():
+            names = [body.entity.name for body in contact.bodies]
+            for mine, other in (names, names[::-1]):
+                if mine in pads and other in self.objects and any(
+                        point.separation < 0.002 and abs(float(np.dot(point.normal, closing))) > SQUEEZE_ALIGNMENT
+                        for point in contact.points):
+                    faces[mine].add(other)
+        return set.intersection(*faces.values())
+
     def gripper_width(self, arm: str) -> float:
         return float(self.qpos(finger_joint_names(arm)).sum())
 
@@ -334,7 +364,7 @@ class SimWorld:
         grippers = {}
         for arm in ARMS:
             left, right = (touching[name] for name in self.pad_links(arm))
-            both = sorted(left & right)
+            both = sorted(self.squeezed(arm))
             grippers[arm] = {"width": self.gripper_width(arm), "holding": both[0] if both else None,
                              "contact": sorted(left | right), "force": self.grip_force[arm]}
         links = {name: pose_list(link.entity_pose) for name, link in self.links.items()
@@ -416,8 +446,7 @@ class GripperMotion(Motion):
         goal = float(self.goal.sum())
         if abs(width - goal) <= 0.003:
             return "done", f"{self.arm} gripper at {width:.3f} m"
-        touching = world.contacts_by_link(set(world.pad_links(self.arm)))
-        held = set.intersection(*touching.values())
+        held = world.squeezed(self.arm)
         if held:
             return "done", f"{self.arm} gripper holding {sorted(held)[0]} at {width:.3f} m"
         return "failed", f"{self.arm} gripper was blocked at {width:.3f} m (goal {goal:.3f} m)"
