@@ -29,6 +29,8 @@ ABOVE = 0.10
 ON_TOP = 0.05
 POINT_DISTANCE = 0.14
 RELEASE_CLEARANCE = 0.015  # a placed object's bottom is released this far above its support
+PLACE_SHIFT = 0.02  # metres a release point may move off the exact one when that is out of reach
+TOP_MARGIN = 0.01   # a held object released on a top stays this far inside its edges
 ROTATE_STEP = 1.6  # rad, the paper's wrist-roll increment
 MAX_GRIP_WIDTH = 0.085  # widest object the open gripper can close around, with margin
 SIDE_GRASP_HEIGHT = 0.7  # share of an object's height at which a side grasp squeezes it
@@ -180,10 +182,14 @@ def relation_candidates(relation: str, box: Box) -> list[np.ndarray]:
 # -- placing a held object -------------------------------------------------------
 
 def placement_centers(relation: str, landmark: Box, held_size: np.ndarray, table_z: float) -> list[np.ndarray]:
-    """Where the held object's centre should be released for ``relation`` of ``landmark``.
+    """Where the held object's centre may be released for ``relation`` of ``landmark``, best first.
 
     The held object's own size decides the release point: a tall object is
-    released higher, a wide one further to the side.
+    released higher, a wide one further to the side. The exact point comes
+    first; then the same relation a little off it — ``PLACE_SHIFT`` along the
+    landmark's side or further out from it, or across a top wide enough that
+    the held object still stands wholly on it (an open box's floor) — since
+    an arm that cannot reach one point often reaches the next.
     """
     if relation in COMPOSITE:
         return [p for part in COMPOSITE[relation] for p in placement_centers(part, landmark, held_size, table_z)]
@@ -191,25 +197,39 @@ def placement_centers(relation: str, landmark: Box, held_size: np.ndarray, table
     c, lh = landmark.center, landmark.half
     if relation in ("above", "on_top_of"):
         extra = ABOVE if relation == "above" else RELEASE_CLEARANCE
-        return [np.array([c[0], c[1], landmark.top + extra + half[2]])]
+        z = landmark.top + extra + half[2]
+        room = lh[:2] - half[:2] - TOP_MARGIN   # how far the centre may move with the object still on the top
+        points = [c[:2]]
+        for axis, sign in ((0, -1.0), (1, 1.0), (1, -1.0), (0, 1.0)):   # towards the robot first
+            if room[axis] >= PLACE_SHIFT:
+                offset = np.zeros(2)
+                offset[axis] = sign * min(room[axis], 2 * PLACE_SHIFT)
+                points.append(c[:2] + offset)
+        return [np.array([p[0], p[1], z]) for p in points]
     z = table_z + RELEASE_CLEARANCE + half[2]
-    offsets = {
-        "left_of": [0.0, lh[1] + GAP + half[1], 0.0],
-        "right_of": [0.0, -lh[1] - GAP - half[1], 0.0],
-        "in_front_of": [-lh[0] - GAP - half[0], 0.0, 0.0],
-        "behind": [lh[0] + GAP + half[0], 0.0, 0.0],
+    sides = {   # (offset from the landmark's centre, outward unit, unit along the side)
+        "left_of": ([0.0, lh[1] + GAP + half[1], 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]),
+        "right_of": ([0.0, -lh[1] - GAP - half[1], 0.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]),
+        "in_front_of": ([-lh[0] - GAP - half[0], 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        "behind": ([lh[0] + GAP + half[0], 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
     }
-    if relation not in offsets:
+    if relation not in sides:
         raise ValueError(f"unknown relation {relation!r}")
-    point = c + offsets[relation]
-    return [np.array([point[0], point[1], z])]
+    offset, outward, along = (np.asarray(v, float) for v in sides[relation])
+    base = c + offset
+    points = [base, base + PLACE_SHIFT * outward, base - PLACE_SHIFT * along, base + PLACE_SHIFT * along]
+    return [np.array([p[0], p[1], z]) for p in points]
 
 
-def carry_pose(tool_pose: np.ndarray, held_center: np.ndarray, new_center: np.ndarray) -> np.ndarray:
-    """Tool pose that puts the held object's centre at ``new_center``, orientation kept (no tipping)."""
-    pose = np.array(tool_pose, float)
-    pose[:3] = pose[:3] + (np.asarray(new_center, float) - np.asarray(held_center, float))
-    return pose
+def carry_pose(tool_pose: np.ndarray, held_center: np.ndarray, new_center: np.ndarray, yaw: float = 0.0) -> np.ndarray:
+    """Tool pose that puts the held object's centre at ``new_center``, turned ``yaw`` rad about the vertical.
+
+    Turning about the vertical through the held object keeps it upright (no
+    tipping); only its heading changes.
+    """
+    turn = Rotation.from_euler("z", yaw)
+    lever = turn.apply(np.asarray(tool_pose[:3], float) - np.asarray(held_center, float))
+    return make_pose(np.asarray(new_center, float) + lever, turn * rotation_of(tool_pose))
 
 
 def table_release_center(held_center: np.ndarray, held_size: np.ndarray, table_z: float) -> np.ndarray:

@@ -159,7 +159,7 @@ class Procedures:
         """The held object's box from the offset measured at grasp time and the tool pose now."""
         kin.set_joints(snap.joints())
         tool = kin.fk()
-        return Held(held.object_id, Box(np.asarray(tool[:3]) + held.offset, held.box.size), tool)
+        return Held(held.object_id, Box(held.center_at(tool), held.box.size), tool)
 
     def _object(self, snap: SceneSnapshot, object_id: str) -> dict[str, Any]:
         if object_id not in snap.objects:
@@ -479,18 +479,45 @@ class Procedures:
             raise StepFailed(wording.sentence(f"I can't place {words} relative to itself"))
         box = Box.of(obj)
         for hover, release in targets.place_relation(relation, box, kin.fk(), held, snap.table_z):
-            hover_q = kin.ik(hover)
+            hover_q = self._lowerable(kin, snap, held, hover, release)
             if hover_q is None:
                 continue
             self._go(arm, self._plan(kin, hover_q, wording.sentence(
                 f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}")))
             kin, snap = self._ready(arm)
             with kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):
-                self._go(arm, self._line(kin, release, wording.cannot_reach(arm, relation, words)))
+                descent = kin.straight_line(release)
+            if descent is None:  # the view changed on the way there: on to the next release point
+                log.info("the way down to %s is blocked now; objects seen: %s", np.round(release[:3], 3),
+                         {k: (np.round(o["position"], 3).tolist(), np.round(o["size"], 3).tolist(), o.get("type"))
+                          for k, o in snap.objects.items()})
+                continue
+            self._go(arm, descent)
             done = self._release(arm, held)
             done.landmark = self._landmark(obj)
             return done
         raise StepFailed(wording.cannot_reach(arm, relation, words))
+
+    def _lowerable(self, kin: ArmKinematics, snap: SceneSnapshot, held: Held, hover: np.ndarray,
+                   release: np.ndarray) -> np.ndarray | None:
+        """Joints at ``hover`` when the held object can also be lowered straight from there to ``release``.
+
+        Checked for every candidate before the arm moves at all, so a hover
+        pose whose descent would be blocked is passed over for the next
+        candidate instead of ending the step once the arm is there.
+        """
+        hover_q = kin.ik(hover)
+        if hover_q is None:
+            return None
+        names = [kin.names[i] for i in kin.arm_idx]
+        now = kin.arm_q
+        kin.set_joints(dict(zip(names, hover_q)))
+        try:
+            with kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):
+                descent = kin.straight_line(release)
+        finally:
+            kin.set_joints(dict(zip(names, now)))
+        return hover_q if descent is not None else None
 
     def _release(self, arm: str, held: Held) -> Done:
         self._grip(arm, OPEN_WIDTH)

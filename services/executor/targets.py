@@ -7,8 +7,9 @@ would then refuse, or the other way round.
 
 With an object in the hand, the held object is what gets positioned: the
 tool goes wherever puts the *held object* at the relation's place, keeping
-the gripper's current orientation (so a cup is not tipped) — a big object is
-therefore released higher than a small one.
+the gripper's current tilt (so a cup is not tipped) but turning it about the
+vertical where that helps the arm — a big object is therefore released
+higher than a small one.
 """
 
 from __future__ import annotations
@@ -22,6 +23,9 @@ from services.executor.geometry import Box
 from services.sim.layout import TABLE_X
 
 HOVER = 0.06          # a carried object is brought this far above its release point first
+# Headings (rad about the vertical) a carried object may be turned to: the hand keeps the grasp's
+# orientation, which suits the place it was picked from but rarely one across the table.
+CARRY_YAWS = (0.0, 0.35, -0.35, 0.7, -0.7)
 ROUND_TYPES = ("cup", "bowl", "plate")
 # Gripping a flat object by the part that sticks out over the table's near edge:
 MAX_EDGE_THICKNESS = 0.03   # metres: thicker than this, the fingers cannot pass over and under it
@@ -46,10 +50,16 @@ class Held:
         """Tool position -> held object centre, in the base frame (orientation is kept while carrying)."""
         return self.box.center - np.asarray(self.tool_pose[:3], float)
 
+    def center_at(self, tool_pose: np.ndarray) -> np.ndarray:
+        """Where the held object's centre is with the tool at ``tool_pose`` (it turns with the hand)."""
+        turn = geo.rotation_of(tool_pose) * geo.rotation_of(self.tool_pose).inv()
+        return np.asarray(tool_pose[:3], float) + turn.apply(self.offset)
+
 
 def _carry(tool_pose: np.ndarray, held: Held, centers: list[np.ndarray], lift: float = 0.0) -> list[np.ndarray]:
-    current_center = np.asarray(tool_pose[:3], float) + held.offset
-    return [geo.carry_pose(tool_pose, current_center, c + [0.0, 0.0, lift]) for c in centers]
+    """Tool poses putting the held object at each centre, at each heading of ``CARRY_YAWS`` in turn."""
+    current_center = held.center_at(tool_pose)
+    return [geo.carry_pose(tool_pose, current_center, c + [0.0, 0.0, lift], yaw) for c in centers for yaw in CARRY_YAWS]
 
 
 def move_relation(relation: str, landmark: Box, tool_pose: np.ndarray, held: Held | None, table_z: float) -> list[np.ndarray]:
@@ -69,7 +79,7 @@ def place_relation(relation: str, landmark: Box, tool_pose: np.ndarray, held: He
 
 def place_table(tool_pose: np.ndarray, held: Held, table_z: float) -> tuple[np.ndarray, np.ndarray]:
     """(current pose, release pose): straight down until the held object's bottom is just above the table."""
-    current_center = np.asarray(tool_pose[:3], float) + held.offset
+    current_center = held.center_at(tool_pose)
     center = geo.table_release_center(current_center, held.box.size, table_z)
     return np.asarray(tool_pose, float), geo.carry_pose(tool_pose, current_center, center)
 

@@ -1,0 +1,83 @@
+"""Placement candidates for a held object: where it may be released and how the hand may turn it (no processes)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from services.executor import geometry as geo
+from services.executor import targets
+from services.executor.geometry import Box
+from services.executor.kinematics import ArmKinematics
+from services.executor.reach import sync
+from services.executor.scene import Scene
+from services.executor.targets import Held
+from services.sim.layout import TABLE_TOP_Z, TORSO_HEIGHT, arm_pose_map
+
+CUP = np.array([0.07, 0.07, 0.10])
+SIDE_GRASP = geo.make_pose([0.55, -0.10, 0.84], geo.facing([1.0, -0.2, 0.0]))  # level, pointing ahead and a little right
+
+
+def standing(x: float, y: float, size: np.ndarray = CUP) -> Box:
+    return Box(np.array([x, y, TABLE_TOP_Z + size[2] / 2]), np.asarray(size, float))
+
+
+def held_cup(tool: np.ndarray = SIDE_GRASP) -> Held:
+    """A cup squeezed 1 cm in front of the tool frame, 2 cm below it."""
+    return Held("cup", Box(tool[:3] + geo.approach_axis(tool) * 0.01 + [0.0, 0.0, -0.02], CUP), tool)
+
+
+@pytest.mark.parametrize("relation", ["left_of", "right_of", "in_front_of", "behind"])
+def test_side_placements_stand_the_object_beside_the_landmark_upright(relation: str) -> None:
+    landmark, held = standing(0.60, 0.05), held_cup()
+    pairs = targets.place_relation(relation, landmark, held.tool_pose, held, TABLE_TOP_Z)
+    assert len(pairs) > 1
+    outward = {"left_of": [0, 1], "right_of": [0, -1], "in_front_of": [-1, 0], "behind": [1, 0]}[relation]
+    for hover, release in pairs:
+        center = held.center_at(release)
+        gap = float(np.dot(center[:2] - landmark.center[:2], outward)) - landmark.half[0] - CUP[0] / 2
+        assert geo.GAP - 1e-6 <= gap <= geo.GAP + geo.PLACE_SHIFT + 1e-6
+        assert center[2] - CUP[2] / 2 == pytest.approx(TABLE_TOP_Z + geo.RELEASE_CLEARANCE)
+        # only turned about the vertical: the approach axis keeps its tilt, so the cup is never tipped
+        assert geo.approach_axis(release)[2] == pytest.approx(geo.approach_axis(held.tool_pose)[2], abs=1e-9)
+        assert np.allclose(hover[:3] - release[:3], [0.0, 0.0, targets.HOVER])
+
+
+@pytest.mark.parametrize(("size", "centres"), [((0.08, 0.08, 0.10), 1), ((0.20, 0.20, 0.10), 5)],
+                         ids=["cup-on-a-cup", "into-a-wide-box"])
+def test_on_top_placements_keep_the_whole_object_over_the_top(size: tuple[float, float, float], centres: int) -> None:
+    landmark, held = standing(0.58, 0.10, np.array(size)), held_cup()
+    pairs = targets.place_relation("on_top_of", landmark, held.tool_pose, held, TABLE_TOP_Z)
+    assert len(pairs) == centres * len(targets.CARRY_YAWS)
+    for _, release in pairs:
+        center = held.center_at(release)
+        assert np.all(np.abs(center[:2] - landmark.center[:2]) + CUP[:2] / 2 <= landmark.half[:2] + 1e-9)
+        assert center[2] - CUP[2] / 2 == pytest.approx(landmark.top + geo.RELEASE_CLEARANCE)
+
+
+def test_the_held_object_turns_with_the_hand() -> None:
+    held = held_cup()
+    centre = held.center_at(held.tool_pose)
+    turned = geo.carry_pose(held.tool_pose, centre, centre + [0.0, 0.1, 0.0], yaw=0.7)
+    assert held.center_at(turned) == pytest.approx(centre + [0.0, 0.1, 0.0])
+
+
+def test_a_turned_heading_reaches_where_the_grasp_heading_does_not() -> None:
+    """Right hand, cup side-grasped at (0.54, -0.11), to be put behind a cup at (0.47, 0.0)."""
+    kin = ArmKinematics("right")
+    scene = Scene()
+    red, blue = standing(0.54, -0.11), standing(0.47, 0.0)
+    scene.update_objects([{"id": "blue", "color": "blue", "type": "cup", "position": blue.center.tolist(),
+                           "size": blue.size.tolist()}])
+    scene.update_robot({"joints": {"torso_lift_joint": TORSO_HEIGHT, **arm_pose_map("side")}})
+    sync(kin, scene.snapshot(), None)
+    grasp = targets.grasps({"id": "red", "type": "cup", "position": red.center.tolist(), "size": red.size.tolist()})[0]
+    lifted = kin.ik(geo.shifted(grasp.grasp, [0.0, 0.0, 0.10]))
+    assert lifted is not None
+    kin.set_joints(dict(zip([kin.names[i] for i in kin.arm_idx], lifted)))
+    held = Held("red", Box(red.center + [0.0, 0.0, 0.10], red.size), kin.fk())
+    kin.attach("red", held.box, held.tool_pose)
+    pairs = targets.place_relation("behind", blue, held.tool_pose, held, TABLE_TOP_Z)
+    reachable = [i for i, (hover, _) in enumerate(pairs) if kin.ik(hover) is not None]
+    assert reachable, "no heading or release point behind the blue cup is reachable"
+    assert 0 not in reachable, "the grasp's own heading became reachable: this case no longer shows why turning helps"
