@@ -54,9 +54,11 @@ class Executor:
         self.scene = Scene()
         self.cancel = threading.Event()
         self.robot = SimRobot(bus, self.cancel, self.scene.sim_time)
-        self.procedures = Procedures(self.scene, self.robot, {arm: ArmKinematics(arm) for arm in ARMS},
+        self.procedures = Procedures(self.scene, self.robot,
+                                     {arm: ArmKinematics(arm, cancel=self.cancel) for arm in ARMS},
                                      self._record_objects)
-        self._reach_arms = {arm: ArmKinematics(arm, rng_seed=1) for arm in ARMS}
+        # the same IK seed table as the procedures' models: the map must say "reachable" exactly when they would
+        self._reach_arms = {arm: ArmKinematics(arm) for arm in ARMS}
         self._lock = threading.Lock()
         self._busy: str | None = None           # procedure being run by the worker
         self._executing = False

@@ -23,6 +23,7 @@ on top:
 from __future__ import annotations
 
 import logging
+import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -59,7 +60,10 @@ JOINT_SPEED = 1.0
 JOINT_ACCEL = 1.5
 OBJECT_PADDING = 0.01  # metres added around each object: a margin for perception's error and path sampling
 TABLE_PADDING = 0.005
-PLANNING_TIMES = (1.0, 2.0, 4.0)  # seconds for RRTConnect: a quick try, then a patient one
+# RRTConnect runs in one-second tries (a fresh tree each) up to this many: a "stop" is noticed between
+# two tries, as the C++ planner cannot be interrupted inside one.
+PLANNING_SLICE = 1.0
+PLANNING_TRIES = 7
 CARTESIAN_STEP = 0.01
 JOINT_RESOLUTION = 0.05  # rad between checked waypoints of a planned path  # straight-line moves are interpolated every centimetre
 ROLL_JOINTS = (4, 6)
@@ -142,8 +146,9 @@ class ArmKinematics:
     """IK, collision checks and planning for one arm. Not thread-safe: one instance per thread."""
 
     def __init__(self, arm: str, *, urdf: Path = URDF, srdf: Path = SRDF, seeds: int = SEED_COUNT,
-                 rng_seed: int = 0) -> None:
+                 rng_seed: int = 0, cancel: threading.Event | None = None) -> None:
         self.arm = arm
+        self._cancel = cancel
         self.planner = mplib.Planner(urdf=str(urdf), srdf=str(srdf), move_group=tool_frame(arm),
                                      joint_vel_limits=np.full(8, JOINT_SPEED),
                                      joint_acc_limits=np.full(8, JOINT_ACCEL))
@@ -424,13 +429,19 @@ class ArmKinematics:
             for name in touched:
                 acm.set_entry(name, self._robot_links, False)
 
+    @property
+    def cancelled(self) -> bool:
+        """Whether the user said stop (planning gives up at its next check)."""
+        return self._cancel is not None and self._cancel.is_set()
+
     def plan_to(self, arm_q: np.ndarray) -> Trajectory | None:
         """A collision-free joint trajectory from the current joints to ``arm_q``.
 
         The straight joint path when it is clear (most moves); otherwise
-        OMPL's RRTConnect, given more time on a second try because a narrow
+        OMPL's RRTConnect in repeated one-second tries, because a narrow
         passage (over a tall box with a cup in hand) is sometimes missed in
-        the first second.
+        one. None when no path was found or the user said stop meanwhile
+        (see :attr:`cancelled`).
         """
         with self._tolerating_start_contacts():
             if not self.collisions(self.arm_q):
@@ -442,21 +453,24 @@ class ArmKinematics:
             via = self._via_ready(arm_q)
             if via is not None:
                 return self._parameterise(via)
-            for planning_time in PLANNING_TIMES:
+            for _ in range(PLANNING_TRIES):
+                if self.cancelled:
+                    return None
                 # OMPL checks edges at a resolution relative to the whole joint space (coarse, with the
                 # rolls' two turns), so its raw RRT path (short edges) is taken and shortcut here with
                 # dense checks instead of OMPL's own simplification.
                 status, path = self.planner.planner.plan(start[self.group_idx], [self.full(arm_q)[self.group_idx]],
-                                                         time=planning_time, range=JOINT_RESOLUTION, fixed_joints=fixed,
+                                                         time=PLANNING_SLICE, range=JOINT_RESOLUTION, fixed_joints=fixed,
                                                          simplify=False)
                 if status != "Exact solution":
-                    log.info("%s arm: no collision-free path in %.1f s (%s)", self.arm, planning_time, status)
+                    log.info("%s arm: no collision-free path in %.1f s (%s)", self.arm, PLANNING_SLICE, status)
                     continue
                 raw = _densified(np.asarray(path)[:, 1:], JOINT_RESOLUTION)
                 if not self._clear(raw):
                     log.info("%s arm: the planned path grazes an obstacle; planning again", self.arm)
                     continue
-                return self._parameterise(self._shortcut(raw))
+                shortened = self._shortcut(raw)
+                return None if shortened is None else self._parameterise(shortened)
         return None
 
     def _via_ready(self, arm_q: np.ndarray) -> np.ndarray | None:
@@ -475,10 +489,15 @@ class ArmKinematics:
             return None
         return np.vstack([first, second[1:]])
 
-    def _shortcut(self, path: np.ndarray) -> np.ndarray:
-        """Greedy shortcutting: from each waypoint jump to the farthest one reachable by a clear straight line."""
+    def _shortcut(self, path: np.ndarray) -> np.ndarray | None:
+        """Greedy shortcutting: from each waypoint jump to the farthest one reachable by a clear straight line.
+
+        None when the user said stop meanwhile (a long path takes many checks).
+        """
         out, i = [path[0]], 0
         while i < len(path) - 1:
+            if self.cancelled:
+                return None
             j = len(path) - 1
             while j > i + 1 and not self._clear(_densified(path[[i, j]], JOINT_RESOLUTION)):
                 j = i + 1 + (j - i - 1) // 2

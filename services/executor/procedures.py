@@ -36,7 +36,7 @@ from services.executor.grounding import descriptor
 from services.executor.kinematics import ArmKinematics, ContactMove, Trajectory
 from services.executor.reach import sync
 from services.executor.referring import refer
-from services.executor.robot import MotionError, SimRobot
+from services.executor.robot import MotionError, SimRobot, Stopped
 from services.executor.scene import Scene, SceneSnapshot
 from services.executor.targets import EdgeGrasp, Held, overhang, thin_and_wide
 from services.sim.layout import HEAD_LOOK_AT, arm_pose
@@ -197,6 +197,8 @@ class Procedures:
     def _plan(self, kin: ArmKinematics, arm_q: np.ndarray, why: str) -> Trajectory:
         trajectory = kin.plan_to(arm_q)
         if trajectory is None:
+            if kin.cancelled:
+                raise Stopped()
             raise StepFailed(why)
         return trajectory
 

@@ -70,11 +70,11 @@ def object_reach(kin: ArmKinematics, snap: SceneSnapshot, oid: str, held: Held |
     out["next_to"] = side["left_of"] or side["right_of"]
     out["near"] = out["next_to"] or side["in_front_of"] or side["behind"]
     out["pick_up"] = held is None and obj.get("held_by") is None and can_pick(kin, obj)
-    if held is None:
-        out["place"] = out["near"] or out["on_top_of"]
-    else:
-        out["place"] = any(_any(kin, [release for _, release in targets.place_relation(r, box, tool, held, snap.table_z)])
-                           for r in ("on_top_of", *SIDES))
+    # With something in the hand the relation keys above were computed for the *held object*: their
+    # poses are the hover poses of placing it there, the first thing place_rel needs, so "place" is
+    # their union. With an empty hand it says whether the hand itself gets beside or on top of the
+    # object; what it could release there is answered anew the moment it takes something.
+    out["place"] = out["near"] or out["on_top_of"]
     for direction in ("towards", "away_from"):
         goal = geo.relative_direction_target(tool, box, direction)
         out[direction] = goal is not None and kin.ik(goal, seeds=[kin.arm_q]) is not None

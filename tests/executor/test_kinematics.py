@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import threading
+import time
+
 import numpy as np
 import pytest
 
@@ -99,3 +102,24 @@ def test_moves_take_longer_the_further_they_go(arms: dict[str, ArmKinematics]) -
     long = kin.straight_line(geo.direction_target(kin.fk(), "down", 0.20))
     assert short is not None and long is not None
     assert long.duration > 2 * short.duration
+
+
+def test_planning_gives_up_when_the_user_says_stop() -> None:
+    """A path that needs the random planner (a tall box between the hand and its goal) is abandoned on stop."""
+    cancel = threading.Event()
+    kin = ArmKinematics("right", cancel=cancel)
+    wall = {"id": "wall", "color": "green", "type": "box", "position": [0.55, -0.10, TABLE_TOP_Z + 0.09],
+            "size": [0.20, 0.04, 0.18]}
+    snap = scene_with(wall).snapshot()
+    sync(kin, snap, None)
+    here = kin.ik(geo.make_pose([0.55, -0.25, TABLE_TOP_Z + 0.10], geo.facing([1.0, 0.0, 0.0])))
+    there = kin.ik(geo.make_pose([0.55, 0.05, TABLE_TOP_Z + 0.10], geo.facing([1.0, 0.0, 0.0])))
+    assert here is not None and there is not None
+    kin.set_joints(dict(zip([kin.names[i] for i in kin.arm_idx], here)))
+    assert kin._joint_line(kin.arm_q, there) is None and kin._via_ready(there) is None, "not a random planner's case"
+    cancel.set()
+    started = time.perf_counter()
+    assert kin.plan_to(there) is None and kin.cancelled
+    assert time.perf_counter() - started < 0.5
+    cancel.clear()
+    assert kin.plan_to(there) is not None
