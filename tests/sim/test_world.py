@@ -120,3 +120,33 @@ def test_look_at_points_the_camera_at_the_target(world: SimWorld) -> None:
     xyz, _ = cloud_arrays(capture)
     centre = xyz[120, 160]
     assert np.linalg.norm(centre - target) < 0.03
+
+
+@pytest.mark.parametrize("contact", [True, False])
+def test_a_press_onto_a_plate_ends_done_only_as_a_contact_motion_and_holds_nothing(world: SimWorld, contact: bool) -> None:
+    world.load(load_scene("task5_plate_edge"))
+    world.settle(0.3)
+    planner = mplib.Planner(urdf=str(URDF_PATH), srdf=str(SRDF_PATH), move_group=tool_frame("right"))
+    plate = truth_of(world, "obj0")
+    x, y, _ = plate["position"]
+    top = plate["aabb"][1][2]
+    high = _ik(planner, world, "right", [x, y, top + 0.20], None)
+    assert _move(world, planner, "right", high)[0] == "done"
+    above = _ik(planner, world, "right", [x, y, top + 0.10], high)
+    assert _move(world, planner, "right", above)[0] == "done"
+    # the fingertips (2 cm past the tool frame) aimed 3 cm past the plate's top: blocked on it
+    pressed = _ik(planner, world, "right", [x, y, top + 0.02 - 0.03], above)
+    names = arm_joint_names("right")
+    index = [planner.user_joint_names.index(n) for n in names]
+    motion_id = world.new_motion_id()
+    world.follow_waypoints("right", names, np.array([0.0, 2.0]), np.array([above[index], pressed[index]]),
+                           motion_id, contact)
+    status, message = _run(world, motion_id)
+    if contact:
+        assert status == "done" and "stopped against obj0" in message, message
+    else:
+        assert status == "failed", message
+    fingertips = world.state()["ee"]["right"][2] - 0.02
+    assert fingertips > top - 0.004, "the fingers went into the plate"
+    assert truth_of(world, "obj0")["aabb"][0][2] == pytest.approx(TABLE_TOP_Z, abs=0.003), "the plate left the table"
+    assert world.state()["grippers"]["right"]["holding"] is None, "fingertips pressing on a plate do not hold it"
