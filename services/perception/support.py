@@ -20,6 +20,7 @@ from services.perception.descriptors import Descriptor
 STACK_GAP = 0.03     # m between a cluster's bottom and the top of the object it stands on
 HOLD_RADIUS = 0.15   # m from a holding gripper's tool frame to the object it holds
 FOOTPRINT_SHARE = 0.3  # share of a cluster's footprint that must lie over its support
+MIN_FOOTPRINT = 0.005  # m: the narrowest a cluster's top-down box counts as
 
 
 def supported(objects: Sequence[Descriptor], holding: Mapping[str, np.ndarray],
@@ -48,10 +49,18 @@ def _stands_on_another(obj: Descriptor, objects: Sequence[Descriptor]) -> bool:
 
 
 def footprint_share(piece: Descriptor, whole: Descriptor) -> float:
-    """Share of ``piece``'s top-down bounding box that lies on ``whole``'s."""
-    lo = np.maximum(piece.position[:2] - piece.size[:2] / 2, whole.position[:2] - whole.size[:2] / 2)
-    hi = np.minimum(piece.position[:2] + piece.size[:2] / 2, whole.position[:2] + whole.size[:2] / 2)
-    return float(np.prod(np.clip(hi - lo, 0.0, None))) / float(np.prod(np.maximum(piece.size[:2], 1e-3)))
+    """Share of ``piece``'s top-down bounding box that lies on ``whole``'s.
+
+    A sliver seen edge-on (a wall beside an arm) can be flat to the
+    millimetre in one direction and lie right on the object's edge; it
+    counts as ``MIN_FOOTPRINT`` wide, and ``whole`` reaches as far beyond its
+    edges, so that the sliver still lies on the object it belongs to.
+    """
+    half = np.maximum(piece.size[:2], MIN_FOOTPRINT) / 2
+    reach = whole.size[:2] / 2 + MIN_FOOTPRINT
+    lo = np.maximum(piece.position[:2] - half, whole.position[:2] - reach)
+    hi = np.minimum(piece.position[:2] + half, whole.position[:2] + reach)
+    return float(np.prod(np.clip(hi - lo, 0.0, None))) / float(np.prod(2 * half))
 
 
 def _bottom_hidden(obj: Descriptor, objects: Sequence[Descriptor], camera: np.ndarray) -> bool:

@@ -145,16 +145,34 @@ class Tracker:
                 free[nearest].hold_offset = free[nearest].descriptor.position - tool
 
     def _shown(self, track: Track) -> Descriptor:
-        """What is published: held or partly seen objects keep their confident words and size."""
+        """What is published: held or partly seen objects keep their confident words and size.
+
+        An object only partly seen on the footprint where it was last seen
+        whole, with no gripper at it, has an arm in front of it, not a new
+        place: it is published where it stands (the visible sliver's centre
+        can be a box's width away from the box's). Near a gripper it may
+        really be moving (pushed), so there the sighting's position is kept.
+        """
         current, known = track.descriptor, track.identity
         if known is None or known is current:
             return current
         if track.held_by is None and not track.near_hand and current.confidence >= self.settings.confident \
                 and current.points >= self.settings.partial_share * known.points:
             return current
-        return replace(current, color=known.color, type=known.type, size=known.size.copy(),
-                       box_size=known.box_size.copy(), volume=known.volume, rgb=known.rgb,
-                       confidence=max(current.confidence, known.confidence))
+        shown = replace(current, color=known.color, type=known.type, size=known.size.copy(),
+                        box_size=known.box_size.copy(), volume=known.volume, rgb=known.rgb,
+                        confidence=max(current.confidence, known.confidence))
+        if self._occluded_in_place(track):
+            shown = replace(shown, position=known.position.copy(), box_center=known.box_center.copy(),
+                            box_yaw=known.box_yaw)
+        return shown
+
+    def _occluded_in_place(self, track: Track) -> bool:
+        """A partial sighting, away from the grippers, lying on the footprint of the last whole sighting."""
+        current, known = track.descriptor, track.identity
+        return (known is not None and track.held_by is None and not track.near_hand
+                and current.points < self.settings.partial_share * known.points
+                and footprint_share(current, known) >= self.settings.overlap_share)
 
     def _match(self, detections: list[Descriptor]) -> tuple[list[tuple[Track, Descriptor]], list[Descriptor]]:
         if not self.tracks or not detections:
@@ -193,9 +211,15 @@ class Tracker:
             track.identity = detection
 
     def _piece_of_known(self, detection: Descriptor) -> bool:
-        """A cluster lying on a known object's footprint is part of it (cut by an arm), not a new object."""
+        """A cluster lying on a known object's footprint is part of it (cut by an arm), not a new object.
+
+        The footprint of its last whole sighting counts too: once an arm has
+        cut a big box in two, the track follows one piece, and the other
+        piece lies on the box but not on that piece.
+        """
+        share = self.settings.overlap_share
         return any(t.confirmed and t.held_by is None
-                   and footprint_share(detection, t.descriptor) >= self.settings.overlap_share
+                   and any(footprint_share(detection, d) >= share for d in (t.descriptor, t.identity) if d is not None)
                    for t in self.tracks)
 
     def _inside_held(self, detection: Descriptor, tools: dict[str, np.ndarray]) -> bool:

@@ -5,7 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from services.perception.cloud import camera_position
 from services.perception.pipeline import detect
+from services.perception.robot_mask import hides, segments_from_states
 from services.perception.synthetic import Box, Camera, Cylinder, Scene, reaching_arm, render
 from services.perception.tracking import Tracker, TrackSettings
 
@@ -112,3 +114,26 @@ def test_an_object_in_a_gripper_is_held_not_lost_and_keeps_its_id_when_put_down(
     red = {o["id"]: o for o in after}[ids["red"]]
     assert red["held_by"] is None and red["visible"] is True
     assert np.linalg.norm(np.subtract(red["position"], placed.center)) < 0.01
+
+
+WIDE_BOX = Box((0.62, -0.02, TABLE + 0.05), (0.20, 0.20, 0.10), "blue")
+SMALL_BOX = Box((0.78, 0.14, TABLE + 0.03), (0.06, 0.06, 0.06), "yellow")
+
+
+@pytest.mark.parametrize("tool", [(0.78, 0.14, TABLE + 0.20), (0.78, 0.14, TABLE + 0.12), (0.80, 0.10, TABLE + 0.10),
+                                  (0.75, 0.05, TABLE + 0.18)], ids=["above", "low", "beside", "over-the-edge"])
+def test_a_wide_box_an_arm_reaches_across_stays_where_it_stands(tool):
+    """The forearm hides most of the box on its way to the small one: the box neither moves nor splits."""
+    tracker = Tracker()
+    frame(tracker, scene_with(WIDE_BOX, SMALL_BOX), 0.0)
+    before = frame(tracker, scene_with(WIDE_BOX, SMALL_BOX), 0.2)
+    capsules, state = reaching_arm(tool)
+    cloud = render(scene_with(WIDE_BOX, SMALL_BOX, links=capsules), SMALL)
+    arms, camera = segments_from_states([state]), camera_position(cloud)
+    for k in range(3):
+        items = tracker.update(detect(cloud, state).objects, 0.4 + 0.2 * k, state,
+                               hidden=lambda position: hides(camera, position, arms))
+    assert {o["color"]: o["id"] for o in items} == before
+    box = next(o for o in items if o["color"] == "blue")
+    assert np.linalg.norm(np.asarray(box["position"][:2]) - WIDE_BOX.center[:2]) < 0.01
+    assert box["size"] == pytest.approx([0.20, 0.20, 0.10], abs=0.01)
