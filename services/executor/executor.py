@@ -10,7 +10,11 @@ Threads and why:
   action.
 * A **reachability worker** with its own kinematic models recomputes the
   reach map and can-move flags whenever the scene or the arms changed and
-  the arms are still, so the NLU always sees what is possible now.
+  the arms are still, so the NLU always sees what is possible now. It pauses
+  while a command runs: a map computed between two motions of a pick-up
+  takes the CPU from the pick-up's own IK and planning (for seconds on a busy
+  machine), and no command can be given then anyway; the map is recomputed
+  the moment the command ends.
 
 Every change (a command started or ended, a gripper changed, a new reach
 map) republishes the situated state on ``executor/state``.
@@ -347,6 +351,11 @@ class Executor:
             self._reach_stale.wait(REACH_POLL)
             if self._closing.is_set():
                 return
+            with self._lock:
+                busy = self._busy is not None
+            if busy:  # see the module notes: the map waits until the command is done
+                self._closing.wait(REACH_POLL)
+                continue
             snap = self.scene.snapshot()
             if snap.robot is None:
                 continue

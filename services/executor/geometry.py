@@ -232,6 +232,20 @@ def carry_pose(tool_pose: np.ndarray, held_center: np.ndarray, new_center: np.nd
     return make_pose(np.asarray(new_center, float) + lever, turn * rotation_of(tool_pose))
 
 
+def carry_poses(tool_pose: np.ndarray, held_center: np.ndarray, centers: list[np.ndarray],
+                yaws: tuple[float, ...]) -> list[np.ndarray]:
+    """:func:`carry_pose` for every centre at every heading (centre-major), computed in one go.
+
+    The reach map asks for these for every object and relation, so the
+    rotations are done as one batch rather than pose by pose.
+    """
+    turns = Rotation.from_euler("z", list(yaws))
+    levers = turns.apply(np.asarray(tool_pose[:3], float) - np.asarray(held_center, float)).reshape(-1, 3)
+    x, y, z, w = (turns * rotation_of(tool_pose)).as_quat().reshape(-1, 4).T
+    quats = np.column_stack([w, x, y, z])
+    return [np.concatenate([np.asarray(c, float) + lever, quat]) for c in centers for lever, quat in zip(levers, quats)]
+
+
 def table_release_center(held_center: np.ndarray, held_size: np.ndarray, table_z: float) -> np.ndarray:
     """Keep x, y; lower the held object until its bottom is just above the table."""
     return np.array([held_center[0], held_center[1], table_z + RELEASE_CLEARANCE + held_size[2] / 2])

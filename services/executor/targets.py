@@ -58,8 +58,7 @@ class Held:
 
 def _carry(tool_pose: np.ndarray, held: Held, centers: list[np.ndarray], lift: float = 0.0) -> list[np.ndarray]:
     """Tool poses putting the held object at each centre, at each heading of ``CARRY_YAWS`` in turn."""
-    current_center = held.center_at(tool_pose)
-    return [geo.carry_pose(tool_pose, current_center, c + [0.0, 0.0, lift], yaw) for c in centers for yaw in CARRY_YAWS]
+    return geo.carry_poses(tool_pose, held.center_at(tool_pose), [c + [0.0, 0.0, lift] for c in centers], CARRY_YAWS)
 
 
 def move_relation(relation: str, landmark: Box, tool_pose: np.ndarray, held: Held | None, table_z: float) -> list[np.ndarray]:

@@ -11,7 +11,7 @@ import pytest
 from services.executor import geometry as geo
 from services.executor import targets
 from services.executor.geometry import Box
-from services.executor.kinematics import ArmKinematics
+from services.executor.kinematics import PLANNING_SLICE, PLANNING_TRIES, ArmKinematics
 from services.executor.reach import REACH_KEYS, reach_map, sync
 from services.executor.scene import Scene
 from services.executor.targets import Held
@@ -122,4 +122,6 @@ def test_planning_gives_up_when_the_user_says_stop() -> None:
     assert kin.plan_to(there) is None and kin.cancelled
     assert time.perf_counter() - started < 0.5
     cancel.clear()
-    assert kin.plan_to(there) is not None
+    started = time.perf_counter()
+    # without the stop the random planner runs: it finds a path, or gives up only after its tries
+    assert kin.plan_to(there) is not None or time.perf_counter() - started >= PLANNING_TRIES * PLANNING_SLICE
