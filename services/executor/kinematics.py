@@ -99,10 +99,10 @@ class Trajectory:
 
 @dataclass(frozen=True)
 class ContactMove:
-    """A straight move that ends pressed against ``touched`` (an obstacle name)."""
+    """A straight move that ends pressed against ``touched`` (obstacle names: an object, or its pieces)."""
 
     trajectory: Trajectory
-    touched: str
+    touched: tuple[str, ...]
 
 
 def _densified(path: np.ndarray, resolution: float) -> np.ndarray:
@@ -581,56 +581,56 @@ class ArmKinematics:
                     self.allow_touching(name, False)
         return self._parameterise(np.asarray(path))
 
-    def contact_line(self, pose: np.ndarray, *, pressing: str | None = None) -> ContactMove | None:
-        """A straight move towards ``pose`` that may end pressed against one object.
+    def contact_line(self, pose: np.ndarray, *, pressing: tuple[str, ...] = ()) -> ContactMove | None:
+        """A straight move towards ``pose`` that may end pressed against the object in its way.
 
-        Walks the line in small steps. The first object the *gripper* meets
-        (never the table, the other arm or the body, and never with any other
-        link) becomes the one it may touch; the move then ends ``PRESS_DEPTH``
-        past that object's surface as perceived, or earlier where anything
-        else would be hit, or at ``pose`` if it comes first. ``pressing``
-        names an object the hand already presses (it may slide along it, e.g.
-        dragging a plate). None when the line is blocked before any contact,
-        cannot be followed at all, or touches nothing (a plain
+        Walks the line in small steps. What the *gripper* meets first (never
+        the table, the other arm or the body, and never with any other link)
+        becomes what it may touch — one object, or the pieces perception
+        made of it when an arm hid its middle; the move then ends
+        ``PRESS_DEPTH`` past its surface as perceived, or earlier where
+        anything else would be hit, or at ``pose`` if it comes first.
+        ``pressing`` names what the hand already presses (it may slide along
+        it, e.g. dragging a plate). None when the line is blocked before any
+        contact, cannot be followed at all, or touches nothing (a plain
         :meth:`straight_line` is the move then).
         """
         path = self._cartesian_path(pose, CONTACT_STEP, steer=True)
         if path is None:
             return None
-        touched, travelled, end = pressing, 0.0, 0
+        touched, travelled, end = tuple(pressing), 0.0, 0
         at_start = self.gripper_touching()
-        if pressing is None and len(at_start) == 1:
-            # already within the padding of one object: the press starts here, about half way to its surface
-            touched, travelled = at_start.pop(), OBJECT_PADDING / 2
+        if not pressing and at_start:
+            # already within the padding of the object: the press starts here, about half way to its surface
+            touched, travelled = tuple(sorted(at_start)), OBJECT_PADDING / 2
         acm = self.planner.planning_world.get_allowed_collision_matrix()
-        allowed = {pressing} if pressing else set()
-        for name in allowed:
+        for name in touched:
             acm.set_entry(name, self._gripper_links, True)
         try:
             with self._tolerating_start_contacts():
                 for i, q in enumerate(path[1:], start=1):
                     hits = self._own_collisions(q)
-                    if hits and touched is None:
+                    if hits and not touched:
                         objects = {self._pressable(pair) for pair in hits}
-                        if len(objects) == 1 and None not in objects:
-                            touched = objects.pop()
-                            acm.set_entry(touched, self._gripper_links, True)
-                            allowed.add(touched)
+                        if None not in objects:
+                            touched = tuple(sorted(objects))  # type: ignore[arg-type]
+                            for name in touched:
+                                acm.set_entry(name, self._gripper_links, True)
                             hits = self._own_collisions(q)
                     if hits:
                         log.info("%s arm: the contact move stops short of %s", self.arm, hits)
                         break
                     end = i
-                    if touched is not None and touched != pressing:
+                    if touched and not pressing:
                         travelled += CONTACT_STEP
                         if travelled >= OBJECT_PADDING + PRESS_DEPTH:
                             break
         finally:
-            for name in allowed:
+            for name in touched:
                 acm.set_entry(name, self._gripper_links, False)
-        if touched is None or end == 0:
+        if not touched or end == 0:
             return None
-        if touched != pressing and travelled < OBJECT_PADDING + MIN_PRESS:
+        if not pressing and travelled < OBJECT_PADDING + MIN_PRESS:
             return None   # blocked before the fingers would even reach the object's surface
         return ContactMove(self._parameterise(np.asarray(path[:end + 1])), touched)
 

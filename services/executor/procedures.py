@@ -56,9 +56,9 @@ AWAY = -0.5             # cosine between a move and the press direction below wh
 
 @dataclass(frozen=True)
 class Press:
-    """A hand left pressed against an object: which, in which direction, and where its drives aim."""
+    """A hand left pressed against an object: which (its ids), in which direction, and where its drives aim."""
 
-    object_id: str
+    object_ids: tuple[str, ...]
     direction: np.ndarray
     arm_q: np.ndarray
 
@@ -257,10 +257,15 @@ class Procedures:
     def move_abs_dir(self, arm: str, direction: str) -> Done:
         kin, snap = self._ready(arm)
         unit = np.asarray(geo.DIRECTIONS[direction], float)
+        leaving = self._press[arm] is not None
         press = self._still_pressing(arm, kin, snap, unit)
         goal = geo.direction_target(kin.fk(), direction)
         words = wording.DIRECTION_WORDS[direction]
-        self._move_line(arm, kin, goal, unit, press, wording.sentence(f"I can't move my {arm} hand {words} any further"))
+        why = wording.sentence(f"I can't move my {arm} hand {words} any further")
+        if leaving and press is None:   # off the object it pressed: a plain move
+            self._go(arm, self._line(kin, goal, why))
+            return Done()
+        self._move_line(arm, kin, goal, unit, press, why)
         return Done()
 
     def _still_pressing(self, arm: str, kin: ArmKinematics, snap: SceneSnapshot, unit: np.ndarray) -> Press | None:
@@ -280,7 +285,8 @@ class Procedures:
             self._press[arm] = None
             return None
         if float(np.dot(unit, press.direction)) > -AWAY:
-            what = refer(snap.objects, press.object_id) if press.object_id in snap.objects else "it"
+            seen = [oid for oid in press.object_ids if oid in snap.objects]
+            what = refer(snap.objects, seen[0]) if seen else "it"
             raise StepFailed(wording.sentence(f"My {arm} hand is already pressing against {what}"))
         kin.set_joints(dict(zip([kin.names[i] for i in kin.arm_idx], press.arm_q)))
         return press
@@ -293,7 +299,7 @@ class Procedures:
             if trajectory is not None:
                 self._go(arm, trajectory)
                 return
-        move: ContactMove | None = kin.contact_line(goal, pressing=press.object_id if press else None)
+        move: ContactMove | None = kin.contact_line(goal, pressing=press.object_ids if press else ())
         if move is None:
             raise StepFailed(why)
         if press is None and self._snapshot().gripper_state(arm) == "open":
