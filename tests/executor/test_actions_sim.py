@@ -35,9 +35,6 @@ def teach(stack: Stack) -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=False, reason="placing the held cup left of the moved blue cup is planned anew on every "
-                   "replay and sometimes finds no reachable candidate ('I can't reach to the left of the leftmost "
-                   "cup with my right hand'); it passes on most runs")
 def test_action_replays_on_moved_cups_and_after_a_restart(stack: Stack) -> None:
     teach(stack)
     state = stack.state["robot"]
