@@ -348,7 +348,8 @@ class ArmKinematics:
         """``arm_q`` and the same posture with the roll joints turned by whole turns (within the limits).
 
         They put the tool in the same place, but a straight line from one may
-        run a roll joint into its limit where from another it does not.
+        run a roll joint into its limit where from another it does not; the
+        ones with the rolls nearest the middle of their range come first.
         """
         out = [arm_q]
         for j in ROLL_JOINTS:
@@ -359,7 +360,7 @@ class ArmKinematics:
                         variant = q.copy()
                         variant[j] += turn
                         out.append(variant)
-        return out
+        return sorted(out, key=lambda q: sum(abs(q[j]) for j in ROLL_JOINTS))
 
     def first_reachable(self, poses: list[np.ndarray], **kw: object) -> tuple[int, np.ndarray] | None:
         """Index and joints of the first pose in ``poses`` with an IK solution."""
