@@ -36,11 +36,9 @@ NOT_YET = {
 # Tasks that succeed on some runs and not on others, each for a named reason;
 # they run every time and count when they pass, but do not fail the suite.
 UNRELIABLE = {
-    "task2": "replay re-records the scene right after the objects were re-placed; perception can still be "
-             "settling its tracks then, and the executor's record sees no objects ('I can't see any objects, so "
-             "I can't find the green box')",
-    "task3": "placing into the wide open box: the executor's on_top_of candidates for a 0.20 m box are often "
-             "unreachable for the right hand ('I can't reach on top of the leftmost box with my right hand')",
+    "task3": "replaying the pick-up of the small box behind the wide open one: with the arm reaching past the wide "
+             "box, perception sees only the part of it near the hand and shifts it there, so the checked descent "
+             "collides on arrival ('I couldn't pick up the leftmost box with my right hand: I can't reach down to it')",
 }
 
 
