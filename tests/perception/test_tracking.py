@@ -137,3 +137,18 @@ def test_a_wide_box_an_arm_reaches_across_stays_where_it_stands(tool):
     box = next(o for o in items if o["color"] == "blue")
     assert np.linalg.norm(np.asarray(box["position"][:2]) - WIDE_BOX.center[:2]) < 0.01
     assert box["size"] == pytest.approx([0.20, 0.20, 0.10], abs=0.01)
+
+
+def test_a_wide_box_a_hand_presses_on_follows_what_is_seen():
+    """With the gripper over the box (pushing it), a partial sighting may be a real move: it is not held back."""
+    tracker = Tracker()
+    frame(tracker, scene_with(WIDE_BOX), 0.0)
+    frame(tracker, scene_with(WIDE_BOX), 0.2)
+    capsules, state = reaching_arm((0.64, 0.04, TABLE + 0.12))
+    cloud = render(scene_with(WIDE_BOX, links=capsules), SMALL)
+    detections = detect(cloud, state).objects
+    items = tracker.update(detections, 0.4, state)
+    box = next(o for o in items if o["color"] == "blue")
+    seen = next(d for d in detections if d.color == "blue")
+    assert seen.points < 0.5 * tracker.tracks[0].identity.points, "not a partial sighting: this shows nothing"
+    assert box["position"] == pytest.approx(seen.position.tolist(), abs=1e-3)
