@@ -24,14 +24,7 @@ from shared.tasks.stack import LocalStack
 BOOK = load_tasks()
 
 # Tasks the robot side cannot do yet, each for a reason named in the executor's own words.
-NOT_YET = {
-    "task4": "the executor has no motion that presses a hand against an object: 'towards' stops 5 cm short and "
-             "directional moves that would touch the box are refused (can_move false, so 'right hand left' is "
-             "read as a wrist rotation), so the box cannot be squeezed between both hands",
-    "task5": "the executor refuses every directional move that would touch something ('Move your right hand down.' "
-             "onto the plate: 'I can't move my right hand down any further.'), so the plate cannot be pushed; "
-             "and its pick-up offers grasps only across objects narrower than the gripper, not a plate's overhang",
-}
+NOT_YET: dict[str, str] = {}
 
 # Tasks that succeed on some runs and not on others, each for a named reason;
 # they run every time and count when they pass, but do not fail the suite.
