@@ -62,10 +62,15 @@ def sentence(text: str) -> str:
     return text[:1].upper() + text[1:] + ("" if text.endswith((".", "!", "?")) else ".")
 
 
+HAND_NOUNS = frozenset({"hand", "arm", "gripper", "hands", "arms", "grippers"})
+
+
 def arm_words(arm: str, phrases: Mapping[str, str] | None = None, *, own: bool = False) -> str:
     """"your right hand" in narration (the user's address to the robot), "my right hand" in errors."""
     said = (phrases or {}).get("arm")
     if said and not own:
+        if not HAND_NOUNS.intersection(said.split()):
+            said = f"{said} hand"  # "move your left to the right" is how people talk, not how the robot should answer
         return said if said.split()[0] in ("your", "the", "my") else f"your {said}"
     return f"{'my' if own else 'your'} {arm} hand"
 

@@ -26,6 +26,9 @@ def refer(oid: str) -> str:
     ("look_at", {"object": "obj1"}, {}, "Looking at the blue box."),
     ("rotate", {"arm": "right", "direction": "cw"}, {"verb": "turn"}, "Turning your right hand clockwise."),
     ("open", {"arm": "left"}, {}, "Opening your left hand."),
+    ("move_abs_dir", {"arm": "left", "direction": "right"}, {"verb": "move", "arm": "your left", "direction": "to the right"},
+     "Moving your left hand to the right."),
+    ("move_abs_dir", {"arm": "right", "direction": "up"}, {"arm": "right arm"}, "Moving your right arm up."),
 ])
 def test_narration_uses_the_users_words(procedure: str, args: dict, phrases: dict, expected: str) -> None:
     assert wording.narration(procedure, args, phrases, refer, held="the red cup") == expected
