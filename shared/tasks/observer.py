@@ -44,7 +44,7 @@ class Observer:
         self.truth: dict[str, dict[str, Any]] = {}
         self.truth_at = 0.0
         self.objects: dict[str, dict[str, Any]] = {}
-        self.objects_at = 0.0
+        self.objects_stamp = 0.0                 # when the cloud behind the latest object list was rendered
         self._motion_since: float | None = None
         self.motion_at: float | None = None      # sim stamp of the first arm motion after motion_since
         keys = bus.keys
@@ -93,7 +93,7 @@ class Observer:
     def _on_objects(self, message: dict[str, Any]) -> None:
         with self._changed:
             self.objects = {o["id"]: o for o in message["objects"] if isinstance(o, dict) and "id" in o}
-            self.objects_at = time.time()
+            self.objects_stamp = float(message.get("stamp") or 0.0)
             self._changed.notify_all()
 
     # -- queries ---------------------------------------------------------------------------

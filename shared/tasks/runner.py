@@ -37,6 +37,7 @@ REPLAY_TIMEOUT = 900.0    # s for a whole replay
 TAKEN_UP_GRACE = 0.5    # s for a busy state sent just after the first line to arrive
 SETTLE = 1.0              # s to let objects come to rest before judging
 SEEN_WITHIN = 0.04        # m: perception's object must be this close to the simulator's
+SETTLE_AFTER_LOAD = 0.5   # s: only clouds rendered this long after a load count, when perception has surely seen the load
 
 
 class RunError(RuntimeError):
@@ -127,7 +128,7 @@ class TaskRunner:
         try:
             self.watch.wait_for(lambda: self.watch.truth_at > loaded and set(self.watch.truth) == set(placed), 30,
                                 "ground truth of the new scene")
-            self.watch.wait_for(lambda: self.watch.objects_at > loaded and self._perceived(), 60,
+            self.watch.wait_for(lambda: self.watch.objects_stamp > loaded + SETTLE_AFTER_LOAD and self._perceived(), 60,
                                 f"perception to see exactly the {len(placed)} object(s) of {scene}")
             self.watch.wait_for(lambda: self._reach_covers(), 60, "the executor's reachability map of the new objects")
         except WaitTimeout as exc:

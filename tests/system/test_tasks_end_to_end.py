@@ -23,9 +23,6 @@ from shared.tasks.stack import LocalStack
 
 BOOK = load_tasks()
 
-# Tasks the robot side cannot do yet, each for a reason named in the executor's own words.
-NOT_YET: dict[str, str] = {}
-
 # Tasks that succeed on some runs and not on others, each for a named reason;
 # they run every time and count when they pass, but do not fail the suite.
 UNRELIABLE = {
@@ -58,9 +55,7 @@ def _cases() -> list:
     for task in BOOK.tasks:
         for style in STYLES:
             marks = [pytest.mark.slow, pytest.mark.timeout(1200)]
-            if task.id in NOT_YET:
-                marks.append(pytest.mark.xfail(strict=True, reason=NOT_YET[task.id]))
-            elif task.id in UNRELIABLE:
+            if task.id in UNRELIABLE:
                 marks.append(pytest.mark.xfail(strict=False, reason=UNRELIABLE[task.id]))
             cases.append(pytest.param(task.id, style, marks=marks, id=f"{task.id}-{style}"))
     return cases
