@@ -182,6 +182,20 @@ class ArmKinematics:
                 self.qpos[i] = float(value)
         self.qpos = np.clip(self.qpos, self.limits[:, 0], self.limits[:, 1])
 
+    def set_arm(self, arm_q: np.ndarray) -> None:
+        """Take ``arm_q`` (this arm's seven joints, in order) as the model's state."""
+        self.set_joints(dict(zip((self.names[i] for i in self.arm_idx), arm_q)))
+
+    @contextmanager
+    def posed(self, arm_q: np.ndarray) -> Iterator[None]:
+        """The model with the arm at ``arm_q`` while a check runs from there; put back afterwards (nothing moves)."""
+        now = self.arm_q
+        self.set_arm(arm_q)
+        try:
+            yield
+        finally:
+            self.set_arm(now)
+
     @property
     def arm_q(self) -> np.ndarray:
         return self.qpos[self.arm_idx].copy()

@@ -288,7 +288,7 @@ class Procedures:
             seen = [oid for oid in press.object_ids if oid in snap.objects]
             what = refer(snap.objects, seen[0]) if seen else "it"
             raise StepFailed(wording.sentence(f"My {arm} hand is already pressing against {what}"))
-        kin.set_joints(dict(zip([kin.names[i] for i in kin.arm_idx], press.arm_q)))
+        kin.set_arm(press.arm_q)
         return press
 
     def _move_line(self, arm: str, kin: ArmKinematics, goal: np.ndarray, unit: np.ndarray, press: Press | None,
@@ -420,12 +420,8 @@ class Procedures:
     @staticmethod
     def _descent_clear(kin: ArmKinematics, pre_q: np.ndarray, grasp_pose: np.ndarray, object_id: str) -> bool:
         """Whether the straight approach from the pre-grasp to the grasp is free (checked before moving at all)."""
-        now = kin.arm_q
-        kin.set_joints(dict(zip([kin.names[i] for i in kin.arm_idx], pre_q)))
-        try:
+        with kin.posed(pre_q):
             return kin.straight_line(grasp_pose, ignore=(object_id,)) is not None
-        finally:
-            kin.set_joints(dict(zip([kin.names[i] for i in kin.arm_idx], now)))
 
     def _release_and_back_off(self, arm: str) -> None:
         self._grip(arm, OPEN_WIDTH)
@@ -517,14 +513,8 @@ class Procedures:
         hover_q = kin.ik(hover)
         if hover_q is None:
             return None
-        names = [kin.names[i] for i in kin.arm_idx]
-        now = kin.arm_q
-        kin.set_joints(dict(zip(names, hover_q)))
-        try:
-            with kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):
-                descent = kin.straight_line(release)
-        finally:
-            kin.set_joints(dict(zip(names, now)))
+        with kin.posed(hover_q), kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):
+            descent = kin.straight_line(release)
         return hover_q if descent is not None else None
 
     def _release(self, arm: str, held: Held) -> Done:

@@ -78,7 +78,7 @@ def test_a_held_object_is_carried_around_obstacles(arms: dict[str, ArmKinematics
     kin.set_joints(snap.joints())
     grasp = targets.grasps(snap.objects["held"])[0]
     start = kin.ik(geo.shifted(grasp.grasp, [0, 0, 0.05]), check_collisions=False)
-    kin.set_joints(dict(zip([kin.names[i] for i in kin.arm_idx], start)))
+    kin.set_arm(start)
     held = Held("held", Box(snap.box("held").center + [0, 0, 0.05], snap.box("held").size), kin.fk())
     scene.update_robot({"joints": {**snap.joints(), **dict(zip([kin.names[i] for i in kin.arm_idx], start))}})
     snap = scene.snapshot()
@@ -115,7 +115,7 @@ def test_planning_gives_up_when_the_user_says_stop() -> None:
     here = kin.ik(geo.make_pose([0.55, -0.25, TABLE_TOP_Z + 0.10], geo.facing([1.0, 0.0, 0.0])))
     there = kin.ik(geo.make_pose([0.55, 0.05, TABLE_TOP_Z + 0.10], geo.facing([1.0, 0.0, 0.0])))
     assert here is not None and there is not None
-    kin.set_joints(dict(zip([kin.names[i] for i in kin.arm_idx], here)))
+    kin.set_arm(here)
     assert kin._joint_line(kin.arm_q, there) is None and kin._via_ready(there) is None, "not a random planner's case"
     cancel.set()
     started = time.perf_counter()

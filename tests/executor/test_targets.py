@@ -74,7 +74,7 @@ def test_a_turned_heading_reaches_where_the_grasp_heading_does_not() -> None:
     grasp = targets.grasps({"id": "red", "type": "cup", "position": red.center.tolist(), "size": red.size.tolist()})[0]
     lifted = kin.ik(geo.shifted(grasp.grasp, [0.0, 0.0, 0.10]))
     assert lifted is not None
-    kin.set_joints(dict(zip([kin.names[i] for i in kin.arm_idx], lifted)))
+    kin.set_arm(lifted)
     held = Held("red", Box(red.center + [0.0, 0.0, 0.10], red.size), kin.fk())
     kin.attach("red", held.box, held.tool_pose)
     pairs = targets.place_relation("behind", blue, held.tool_pose, held, TABLE_TOP_Z)
