@@ -13,7 +13,7 @@ each other, and never from the first frames after a scene load, while the new
 objects are still waiting for their ids.
 A cloud is rendered a little before it arrives, so the arms are masked at the
 states that bracket its simulated time, not at the newest one. A scene load
-(the state's ``scene`` name or ``scene_generation`` changes) forgets every
+(the cloud's own ``scene`` name or ``scene_generation`` changes) forgets every
 object at once. Stopping waits for the cloud being processed and publishes
 nothing afterwards, so the bus can close under it.
 """
@@ -120,7 +120,7 @@ class PerceptionService:
             log.warning("%s", status)
             self._publish(stamp, status, message.get("sim_time"))
             return
-        scene = (state.get("scene"), state.get("scene_generation")) if state else None
+        scene = _scene_of(message, state)
         if scene is not None and scene != self._scene and self._scene is not None:
             log.info("scene %s loaded (load %s): forgetting every object", *scene)
             self.tracker.reset()
@@ -167,6 +167,19 @@ class PerceptionService:
                 if left <= 0:
                     raise RuntimeError(_record_failure(fresh, self.record_timeout))
                 self._changed.wait(left)
+
+
+def _scene_of(cloud: Mapping[str, Any], state: Mapping[str, Any] | None) -> tuple[object, object] | None:
+    """Which load of which scene a cloud shows: its own word when it carries one.
+
+    The robot state nearest the cloud is only a fallback: a cloud rendered
+    just before a reload can be paired with the first state after it (the
+    load's settling advances the clock past the cloud), and the old scene's
+    objects would then seed the new scene's tracks.
+    """
+    if "scene_generation" in cloud:
+        return cloud.get("scene"), cloud.get("scene_generation")
+    return (state.get("scene"), state.get("scene_generation")) if state else None
 
 
 def _sim_time(state: Mapping[str, Any]) -> float:

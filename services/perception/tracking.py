@@ -7,14 +7,15 @@ Detections are matched to tracks by an optimal assignment (Hungarian, from
 SciPy) on distance, size and colour, or on footprint overlap (a cluster that an
 arm cuts in half has its centroid far from the object's but still lies on its
 footprint); one cluster never feeds two tracks, and a cluster on the footprint
-of a known object is a piece of it, not a new object. A new object must be
+of a known object, in its colour, is a piece of it, not a new object. A new object must be
 seen in consecutive frames before it gets an id (a one-frame flicker never
 becomes an object). An object hidden behind an arm is kept as long as the arm
 hides it; an object unseen in clear view is removed after ``forget_after``
 seconds, or after ``gone_frames`` frames when new objects appear elsewhere
 meanwhile (the scene was rearranged or reloaded). A held object, or one only
-partly seen, keeps its last confident colour, type and size. Ids are never
-reused.
+partly seen, keeps its last confident colour, type and size; a partly seen
+object is placed where it was, moved only as far as its visible part demands.
+Ids are never reused.
 """
 
 from __future__ import annotations
@@ -60,6 +61,7 @@ class Track:
     missed: int = 0                    # consecutive frames unseen in clear view
     identity: Descriptor | None = None  # last confident full sighting
     near_hand: bool = False            # a gripper is at it: partly hidden by the fingers
+    shown: Descriptor | None = None    # the whole object as last published
 
     @property
     def confirmed(self) -> bool:
@@ -116,13 +118,14 @@ class Tracker:
             if not track.confirmed and track.hits >= self.settings.confirm_frames:
                 track.id = f"obj{self._next_id}"
                 self._next_id += 1
+            track.shown = self._shown(track)
         return self.objects()
 
     def objects(self) -> list[dict]:
         """The confirmed objects as ``perception/objects`` items, by id number."""
         items = []
         for track in sorted((t for t in self.tracks if t.confirmed), key=lambda t: int(t.id[3:])):
-            items.append({"id": track.id, **self._shown(track).as_message(),
+            items.append({"id": track.id, **(track.shown or track.descriptor).as_message(),
                           "held_by": track.held_by, "visible": track.visible})
         return items
 
@@ -147,32 +150,30 @@ class Tracker:
     def _shown(self, track: Track) -> Descriptor:
         """What is published: held or partly seen objects keep their confident words and size.
 
-        An object only partly seen on the footprint where it was last seen
-        whole, with no gripper at it, has an arm in front of it, not a new
-        place: it is published where it stands (the visible sliver's centre
-        can be a box's width away from the box's). Near a gripper it may
-        really be moving (pushed), so there the sighting's position is kept.
+        A partial sighting (an arm in front of the object, fingers at it) says
+        only that the object covers the visible part: the object is published
+        where it was last published, moved just far enough to cover that part.
+        An arm reaching across a box therefore leaves it where it stands,
+        whereas a box pushed or lifted past its old extent follows the push.
+        Taking the visible part's centre instead would put a box up to half
+        its width off, towards the hand that hides the rest.
         """
         current, known = track.descriptor, track.identity
         if known is None or known is current:
             return current
+        partial = current.points < self.settings.partial_share * known.points
         if track.held_by is None and not track.near_hand and current.confidence >= self.settings.confident \
-                and current.points >= self.settings.partial_share * known.points:
+                and not partial:
             return current
         shown = replace(current, color=known.color, type=known.type, size=known.size.copy(),
                         box_size=known.box_size.copy(), volume=known.volume, rgb=known.rgb,
                         confidence=max(current.confidence, known.confidence))
-        if self._occluded_in_place(track):
-            shown = replace(shown, position=known.position.copy(), box_center=known.box_center.copy(),
-                            box_yaw=known.box_yaw)
+        if partial and track.held_by is None:
+            last = track.shown if track.shown is not None else known
+            shift = covering_shift(last.position, known.size, current.position, current.size)
+            shown = replace(shown, position=last.position + shift, box_center=last.box_center + shift,
+                            box_yaw=last.box_yaw)
         return shown
-
-    def _occluded_in_place(self, track: Track) -> bool:
-        """A partial sighting, away from the grippers, lying on the footprint of the last whole sighting."""
-        current, known = track.descriptor, track.identity
-        return (known is not None and track.held_by is None and not track.near_hand
-                and current.points < self.settings.partial_share * known.points
-                and footprint_share(current, known) >= self.settings.overlap_share)
 
     def _match(self, detections: list[Descriptor]) -> tuple[list[tuple[Track, Descriptor]], list[Descriptor]]:
         if not self.tracks or not detections:
@@ -183,6 +184,8 @@ class Tracker:
             gate = s.hold_radius if track.held_by else s.max_jump
             for j, det in enumerate(detections):
                 distance = float(np.linalg.norm(track.descriptor.position - det.position))
+                if track.held_by is None and not self._could_be_part_of(det, track):
+                    continue
                 on_footprint = track.held_by is None and footprint_share(det, track.descriptor) >= s.overlap_share
                 if distance > gate and not on_footprint:
                     continue
@@ -218,9 +221,23 @@ class Tracker:
         piece lies on the box but not on that piece.
         """
         share = self.settings.overlap_share
-        return any(t.confirmed and t.held_by is None
+        return any(t.confirmed and t.held_by is None and self._could_be_part_of(detection, t)
                    and any(footprint_share(detection, d) >= share for d in (t.descriptor, t.identity) if d is not None)
                    for t in self.tracks)
+
+    def _could_be_part_of(self, detection: Descriptor, track: Track) -> bool:
+        """An arm hides part of an object but does not change its colour.
+
+        A cluster much smaller than the object and confidently of another
+        colour word is another object where it stood (the old one was taken
+        away, or the scene changed), however well it lies on its footprint.
+        A cluster too small to be sure of its colour may be a piece; one as
+        big as the object may be the object with its colour word flickering
+        between two neighbours.
+        """
+        known = track.identity or track.descriptor
+        return (detection.color == known.color or detection.confidence < self.settings.confident
+                or detection.points >= self.settings.partial_share * known.points)
 
     def _inside_held(self, detection: Descriptor, tools: dict[str, np.ndarray]) -> bool:
         """A blob at a holding gripper is the held object's visible part, not a new object."""
@@ -268,3 +285,18 @@ def tool_positions(state: Mapping[str, Any] | None) -> list[np.ndarray]:
         if len(values) >= 3 and np.isfinite(values[:3]).all():
             positions.append(values[:3])
     return positions
+
+
+def covering_shift(center: np.ndarray, size: np.ndarray, part_center: np.ndarray,
+                   part_size: np.ndarray) -> np.ndarray:
+    """The smallest move of the box (``center``, ``size``) after which it covers the box of a part.
+
+    Along an axis where the part is longer than the whole (a cluster that
+    took in something else), the whole is centred on the part instead.
+    """
+    low, high = center - size / 2, center + size / 2
+    part_low, part_high = part_center - part_size / 2, part_center + part_size / 2
+    shift = np.clip(part_high - high, 0.0, None) - np.clip(low - part_low, 0.0, None)
+    longer = part_size > size
+    shift[longer] = (part_center - center)[longer]
+    return shift

@@ -30,5 +30,6 @@ def cloud_arrays(capture: Capture) -> tuple[np.ndarray, np.ndarray]:
 def cloud_message(capture: Capture, stamp: float) -> dict:
     xyz, rgb = cloud_arrays(capture)
     height, width = xyz.shape[:2]
-    return {"stamp": stamp, "sim_time": capture.sim_time, "xyz": xyz, "rgb": rgb,
+    return {"stamp": stamp, "sim_time": capture.sim_time, "scene": capture.scene,
+            "scene_generation": capture.scene_generation, "xyz": xyz, "rgb": rgb,
             "camera_pose": capture.camera_pose, "width": width, "height": height, "frame": "base"}

@@ -65,6 +65,8 @@ class Capture:
     model_matrix: np.ndarray    # (4, 4) OpenGL camera frame -> world
     camera_pose: list[float]    # camera link pose (x forward, y left, z up), base frame
     sim_time: float
+    scene: str = ""             # the scene shown and which load of it, so a frame rendered
+    scene_generation: int = 0   # just before a reload is never taken for the new scene
     segmentation: np.ndarray | None = None   # (H, W) entity ids (tests only)
 
 
@@ -409,6 +411,8 @@ class SimWorld:
             model_matrix=np.asarray(self.camera.get_model_matrix(), dtype=np.float64),
             camera_pose=pose_list(self.links[CAMERA_LINK].entity_pose),
             sim_time=self.sim_time,
+            scene=self.scene_name,
+            scene_generation=self.scene_generation,
             segmentation=self.camera.get_picture("Segmentation")[..., 1].copy() if segmentation else None,
         )
 

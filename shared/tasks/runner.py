@@ -128,8 +128,11 @@ class TaskRunner:
         try:
             self.watch.wait_for(lambda: self.watch.truth_at > loaded and set(self.watch.truth) == set(placed), 30,
                                 "ground truth of the new scene")
-            self.watch.wait_for(lambda: self.watch.objects_stamp > loaded + SETTLE_AFTER_LOAD and self._perceived(), 60,
-                                f"perception to see exactly the {len(placed)} object(s) of {scene}")
+            try:
+                self.watch.wait_for(lambda: self.watch.objects_stamp > loaded + SETTLE_AFTER_LOAD and self._perceived(),
+                                    60, f"perception to see exactly the {len(placed)} object(s) of {scene}")
+            except WaitTimeout as exc:
+                raise WaitTimeout(f"{exc}; {self._seen_against_truth()}") from exc
             self.watch.wait_for(lambda: self._reach_covers(), 60, "the executor's reachability map of the new objects")
         except WaitTimeout as exc:
             raise RunError(f"scene {scene!r} is not ready: {exc}") from exc
@@ -140,6 +143,15 @@ class TaskRunner:
         if len(seen) != len(self.watch.truth) or len(self.watch.objects) != len(seen):
             return False
         return all(self._nearest_distance(o["position"]) < SEEN_WITHIN for o in seen)
+
+    def _seen_against_truth(self) -> str:
+        """What perception reports next to where the simulator has the objects, to tell why they disagree."""
+        def where(position: Any) -> str:
+            return "(" + ", ".join(f"{v:.2f}" for v in np.asarray(position, dtype=float)[:3]) + ")"
+        seen = [f"{o['id']} {o.get('color', '?')} {o.get('type', '?')} at {where(o['position'])}"
+                + ("" if o.get("visible", True) else " unseen") for o in self.watch.objects.values()]
+        truth = [f"{tid} at {where(t['position'])}" for tid, t in self.watch.truth.items()]
+        return f"perception reports {'; '.join(seen) or 'nothing'} - the simulator has {'; '.join(truth)}"
 
     def _reach_covers(self) -> bool:
         reach = (self.watch.executor or {}).get("reach") or {}

@@ -143,6 +143,15 @@ def test_a_scene_load_announced_in_the_state_forgets_every_object(feed, good_clo
     assert sorted(o["color"] for o in reloaded["objects"]) == ["blue", "red"]
 
 
+def test_a_cloud_says_which_scene_load_it_shows(feed, good_cloud):
+    """A cloud's own scene word decides, with no robot state to pair it with."""
+    first = feed.until({**good_cloud, "scene": "first", "scene_generation": 1}, lambda m: len(m["objects"]) == 2)
+    reloaded = feed.until({**good_cloud, "scene": "first", "scene_generation": 2},
+                          lambda m: len(m["objects"]) == 2
+                          and not {o["id"] for o in m["objects"]} & {o["id"] for o in first["objects"]})
+    assert sorted(o["color"] for o in reloaded["objects"]) == ["blue", "red"]
+
+
 class Recording:
     """A ``record`` request running in the background while the test feeds clouds."""
 
