@@ -10,8 +10,10 @@ limit, and an object stays in the hand only through friction at the pads.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import count
+from typing import Any
 
 import numpy as np
 import sapien
@@ -317,10 +319,14 @@ class SimWorld:
             self.step()
 
     # -- reading -----------------------------------------------------------------
-    def contacts_by_link(self, links: set[str]) -> dict[str, set[str]]:
-        """Object ids touching each of ``links`` (any contact point closer than 2 mm)."""
+    def contacts_by_link(self, links: set[str], contacts: Sequence[Any] | None = None) -> dict[str, set[str]]:
+        """Object ids touching each of ``links`` (any contact point closer than 2 mm).
+
+        ``contacts`` is this step's contact list when the caller already has
+        it: asking PhysX again for every question would repeat the whole pass.
+        """
         touching: dict[str, set[str]] = {name: set() for name in links}
-        for contact in self.scene.get_contacts():
+        for contact in self.scene.get_contacts() if contacts is None else contacts:
             names = [body.entity.name for body in contact.bodies]
             for mine, other in (names, names[::-1]):
                 if mine in links and other in self.objects:
@@ -334,18 +340,19 @@ class SimWorld:
         links = {name for name, link in self.links.items() if name.startswith(prefix) and link.collision_shapes}
         return sorted(set().union(*self.contacts_by_link(links).values()))
 
-    def squeezed(self, arm: str) -> set[str]:
+    def squeezed(self, arm: str, contacts: Sequence[Any] | None = None) -> set[str]:
         """Objects squeezed between the inner faces of both of ``arm``'s pads.
 
         A pad touching an object with its tip (a hand pressed against a box's
         side, fingertips on a plate) does not hold it: only contacts whose
         normal runs along the closing axis count, so a box squeezed between
-        two hands is held by neither gripper alone.
+        two hands is held by neither gripper alone. ``contacts`` as for
+        :meth:`contacts_by_link`.
         """
         closing = Rotation.from_quat(np.roll(self.links[tool_frame(arm)].entity_pose.q, -1)).apply([0.0, 1.0, 0.0])
         pads = set(self.pad_links(arm))
         faces: dict[str, set[str]] = {name: set() for name in pads}
-        for contact in self.scene.get_contacts():
+        for contact in self.scene.get_contacts() if contacts is None else contacts:
             names = [body.entity.name for body in contact.bodies]
             for mine, other in (names, names[::-1]):
                 if mine in pads and other in self.objects and any(
@@ -362,11 +369,12 @@ class SimWorld:
         qpos = self.robot.get_qpos()
         joints = {name: float(qpos[info.index]) for name, info in self.joints.items()}
         pads = {name for arm in ARMS for name in self.pad_links(arm)}
-        touching = self.contacts_by_link(pads)
+        contacts = self.scene.get_contacts()
+        touching = self.contacts_by_link(pads, contacts)
         grippers = {}
         for arm in ARMS:
             left, right = (touching[name] for name in self.pad_links(arm))
-            both = sorted(self.squeezed(arm))
+            both = sorted(self.squeezed(arm, contacts))
             grippers[arm] = {"width": self.gripper_width(arm), "holding": both[0] if both else None,
                              "contact": sorted(left | right), "force": self.grip_force[arm]}
         links = {name: pose_list(link.entity_pose) for name, link in self.links.items()
