@@ -23,15 +23,6 @@ from shared.tasks.stack import LocalStack
 
 BOOK = load_tasks()
 
-# Tasks that succeed on some runs and not on others, each for a named reason;
-# they run every time and count when they pass, but do not fail the suite.
-UNRELIABLE = {
-    "task3": "replaying the pick-up of the small box behind the wide open one: with the arm reaching past the wide "
-             "box, perception sees only the part of it near the hand and shifts it there, so the checked descent "
-             "collides on arrival ('I couldn't pick up the leftmost box with my right hand: I can't reach down to it')",
-}
-
-
 @pytest.fixture(scope="module")
 def runner(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TaskRunner]:
     namespace, port = "t" + uuid.uuid4().hex[:10], free_port()
@@ -51,14 +42,8 @@ def runner(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TaskRunner]:
 
 
 def _cases() -> list:
-    cases = []
-    for task in BOOK.tasks:
-        for style in STYLES:
-            marks = [pytest.mark.slow, pytest.mark.timeout(1200)]
-            if task.id in UNRELIABLE:
-                marks.append(pytest.mark.xfail(strict=False, reason=UNRELIABLE[task.id]))
-            cases.append(pytest.param(task.id, style, marks=marks, id=f"{task.id}-{style}"))
-    return cases
+    marks = [pytest.mark.slow, pytest.mark.timeout(1200)]
+    return [pytest.param(task.id, style, marks=marks, id=f"{task.id}-{style}") for task in BOOK.tasks for style in STYLES]
 
 
 @pytest.mark.parametrize(("task_id", "style"), _cases())
