@@ -133,6 +133,22 @@ def build_table(scene: sapien.Scene) -> sapien.Entity:
 
 
 def world_aabb(entity: sapien.Entity) -> np.ndarray:
-    """(2, 3) min and max corners of the body's collision shapes in the world."""
+    """(2, 3) min and max corners of the body's collision shapes in the world.
+
+    Computed from the shapes themselves: PhysX bounds a cylinder by a box
+    around it, so a plate turned about its axis by 45 degrees came out 1.4
+    times as wide as it is.
+    """
     body = entity.find_component_by_type(sapien.physx.PhysxRigidBaseComponent)
-    return np.asarray(body.compute_global_aabb_tight(), dtype=float)
+    lows, highs = [], []
+    for shape in body.collision_shapes:
+        pose = entity.pose * shape.get_local_pose()
+        rotation = Rotation.from_quat(np.roll(pose.q, -1)).as_matrix()
+        if isinstance(shape, sapien.physx.PhysxCollisionShapeCylinder):
+            axis = rotation[:, 0]   # a SAPIEN cylinder runs along its local x
+            half = shape.half_length * np.abs(axis) + shape.radius * np.sqrt(np.clip(1.0 - axis ** 2, 0.0, None))
+        else:
+            half = np.abs(rotation) @ np.asarray(shape.half_size, dtype=float)
+        lows.append(pose.p - half)
+        highs.append(pose.p + half)
+    return np.array([np.min(lows, axis=0), np.max(highs, axis=0)], dtype=float)
