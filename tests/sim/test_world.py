@@ -6,6 +6,8 @@ any controller believes.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import mplib
 import numpy as np
 import pytest
@@ -38,6 +40,16 @@ def test_camera_sees_every_object_inside_its_true_box(world: SimWorld, scene: st
         assert len(points) >= 20, f"{item['id']} is not visible"
         low, high = np.array(item["aabb"])
         assert (points >= low - 0.01).all() and (points <= high + 0.01).all(), item["id"]
+
+
+@pytest.mark.parametrize("yaw", [0.0, 0.4, 0.785])
+def test_the_true_box_of_a_turned_round_object_is_as_wide_as_the_object(world: SimWorld, yaw: float) -> None:
+    scene = load_scene("task5_plate_edge")
+    scene = replace(scene, objects=tuple(replace(o, yaw=yaw) for o in scene.objects))
+    world.load(scene)
+    plate = next(o for o in scene.objects if o.type == "plate")
+    low, high = np.array(truth_of(world, plate.id)["aabb"])
+    assert high[:2] - low[:2] == pytest.approx(plate.size[:2], abs=0.004)
 
 
 def _ik(planner: mplib.Planner, world: SimWorld, arm: str, xyz: list[float], seed: np.ndarray | None) -> np.ndarray:
