@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import argparse
 import logging
-import math
 import threading
 from typing import Any
 
@@ -18,7 +17,7 @@ from shared.bus import Bus
 from shared.service import run_service, wait_until_stopped
 from services.nlu.context import Dialogue
 from services.nlu.infer import Clarify, CommandResult, Model, Result
-from services.nlu.nbest import plausibility
+from services.nlu.nbest import NOT_MADE_OUT, most_plausible
 from services.nlu.lexicon import vocabulary
 from services.nlu.templates import sentence_templates
 from services.nlu.world import COLORS, TYPES, WorldError, parse_world
@@ -108,9 +107,18 @@ class NluService:
         with self.live.lock:
             model = self.live.model()
             dialogue = self.live.dialogue
+            picked = None
             if choice is None and isinstance(message.get("nbest"), list):
-                text = _most_plausible(model, dialogue, message["nbest"]) or text
-            result = dialogue.understand(model, text, choice)
+                picked = most_plausible(model, dialogue.history, message["nbest"])
+            result: Result | None = None
+            if picked is not None and picked.rejected():  # a guess: the dialogue stays as it was
+                log.info("%r not acted on: only %.0f%% of the n-best means that command", text, 100 * picked.share)
+            else:
+                text = picked.reading.text if picked is not None else text
+                result = dialogue.understand(model, text, choice)
+        if result is None:
+            self._say_error(NOT_MADE_OUT)
+            return
         self._publish(result, text)
 
     def _publish(self, result: Result, text: str) -> None:
@@ -151,22 +159,6 @@ def _text(request: dict[str, Any]) -> str:
     if not isinstance(text, str):
         raise ValueError("request needs 'text' (a string)")
     return text
-
-
-def _most_plausible(model: Model, dialogue: Dialogue, nbest: list[Any]) -> str | None:
-    """The speech hypothesis the situated model finds most plausible (see :mod:`services.nlu.nbest`)."""
-    best_text, best_key = None, (False, -math.inf)
-    history = dialogue.history
-    for hypothesis in nbest:
-        if not isinstance(hypothesis, dict) or not isinstance(hypothesis.get("text"), str):
-            continue
-        weight = hypothesis.get("score", 1.0)
-        if not isinstance(weight, (int, float)) or weight <= 0:
-            continue
-        key = plausibility(model.parse(hypothesis["text"], history), weight)
-        if key > best_key:
-            best_text, best_key = hypothesis["text"], key
-    return best_text
 
 
 def _body(bus: Bus, _args: argparse.Namespace, stop: threading.Event) -> None:

@@ -8,6 +8,7 @@ from typing import Any
 
 import pytest
 
+from services.nlu.nbest import NOT_MADE_OUT
 from shared.bus import RemoteError
 from tests.nlu.scenes import table_scene
 from tests.processes import Launcher, Network
@@ -87,6 +88,18 @@ def test_nbest_picks_the_plausible_hypothesis(live: Network) -> None:
                                                   {"text": "pick up the red cup", "score": 0.4}])
     result = next_result(results)
     assert result["utterance"] == "pick up the red cup" and result["args"]["object"] == "obj0"
+
+
+def test_a_command_few_hypotheses_support_is_not_acted_on(live: Network) -> None:
+    results = collect(live, live.hub.keys.nlu_result)
+    spoken = collect(live, live.hub.keys.say)
+    time.sleep(0.3)
+    say(live, text="the", nbest=[{"text": "the", "score": 0.95}, {"text": "pick up the red cup", "score": 0.05}])
+    line = next_result(spoken)
+    assert (line["kind"], line["text"]) == ("error", NOT_MADE_OUT)
+    say(live, text="point at the plate")
+    result = next_result(results)  # nothing was published for the rejected guess
+    assert result["utterance"] == "point at the plate" and result["procedure"] == "point_to"
 
 
 def test_malformed_messages_do_not_crash_it(live: Network, launcher: Launcher) -> None:

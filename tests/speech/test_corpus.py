@@ -1,0 +1,15 @@
+"""The spoken corpus and its held-out set: same sentences, different speakers."""
+
+from __future__ import annotations
+
+from services.speech.corpus import SPEEDS, VOICES, corpus, held_out
+
+
+def test_held_out_set_says_the_benchmark_sentences_with_other_voices_and_speeds() -> None:
+    benchmark, other = corpus(), held_out()
+    assert len(benchmark) == 111 and len(other) == 2 * len(benchmark)
+    assert {(i.text, i.scene) for i in other} == {(i.text, i.scene) for i in benchmark}
+    assert not {i.voice for i in other} & set(VOICES) and not {i.speed for i in other} & set(SPEEDS)
+    # the second round gives each sentence another speaker
+    first, second = other[:len(benchmark)], other[len(benchmark):]
+    assert all(a.text == b.text and (a.voice, a.speed) != (b.voice, b.speed) for a, b in zip(first, second))
