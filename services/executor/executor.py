@@ -14,7 +14,9 @@ Threads and why:
   while a command runs: a map computed between two motions of a pick-up
   takes the CPU from the pick-up's own IK and planning (for seconds on a busy
   machine), and no command can be given then anyway; the map is recomputed
-  the moment the command ends.
+  the moment the command ends. For the same reason a map still being
+  computed when a command arrives is abandoned at once, so the command's
+  planning does not wait behind it.
 
 Every change (a command started or ended, a gripper changed, a new reach
 map) republishes the situated state on ``executor/state``.
@@ -371,15 +373,24 @@ class Executor:
             self._reach_stale.clear()
             started = time.perf_counter()
             try:
-                reach, can_move = reach_map(self._reach_arms, snap, held)
+                computed = reach_map(self._reach_arms, snap, held, interrupted=self._command_waiting)
             except Exception:
                 log.exception("reachability computation failed")
                 continue
+            if computed is None:  # a command came in: it has the CPU, and the map is made again after it
+                self._reach_stale.set()
+                continue
+            reach, can_move = computed
             log.debug("reach map for %d objects in %.3f s", len(snap.objects), time.perf_counter() - started)
             last_q, last_held = q, held_ids
             with self._lock:
                 self._reach, self._can_move = reach, can_move
             self.publish_state()
+
+    def _command_waiting(self) -> bool:
+        """Whether a command has been taken up (the reach map gives way to it)."""
+        with self._lock:
+            return self._busy is not None
 
     def state_message(self) -> dict[str, Any]:
         number = self.store.current

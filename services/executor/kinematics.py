@@ -22,6 +22,7 @@ on top:
 
 from __future__ import annotations
 
+import itertools
 import logging
 import threading
 from collections.abc import Iterator
@@ -37,7 +38,7 @@ from mplib.planning.ompl import FixedJoint
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation, Slerp
 
-from services.executor.geometry import Box, rotation_of
+from services.executor.geometry import Box, rotation_of, shifted
 
 log = logging.getLogger("hfpbd.executor.kinematics")
 logging.getLogger("toppra").setLevel(logging.WARNING)  # it logs every parameterisation at INFO
@@ -64,13 +65,15 @@ TABLE_PADDING = 0.005
 # two tries, as the C++ planner cannot be interrupted inside one.
 PLANNING_SLICE = 1.0
 PLANNING_TRIES = 7
-CARTESIAN_STEP = 0.01
-JOINT_RESOLUTION = 0.05  # rad between checked waypoints of a planned path  # straight-line moves are interpolated every centimetre
+CARTESIAN_STEP = 0.01   # metres: straight-line moves are interpolated every centimetre
+VIA_LIFT = 0.10        # metres the hand is lifted before a joint-space line when the direct ones are blocked
+JOINT_RESOLUTION = 0.05  # rad between checked waypoints of a planned path
 ROLL_JOINTS = (4, 6)
 HELD_PREFIX = "held:"
 CONTACT_STEP = 0.0025  # metres between checked poses of a contact move (how exactly its end is found)
 PRESS_DEPTH = 0.02     # a press is planned this far past the touched object's perceived surface
 MIN_PRESS = 0.003      # ... and must get at least this far past it to count as pressing
+MIN_LEAD = 0.01        # metres of a press's approach worth travelling while the fingers still close
 STEER_NUDGE = 0.1      # rad the elbow is swung to look for solutions with more room to the joint limits
 STEER_JUMP = 0.15      # rad: the most any joint may move between two poses of a contact move
 # The ready posture (the PR2 "untucked" arm: bent in front of the body, above the table's near edge).
@@ -99,10 +102,17 @@ class Trajectory:
 
 @dataclass(frozen=True)
 class ContactMove:
-    """A straight move that ends pressed against ``touched`` (obstacle names: an object, or its pieces)."""
+    """A straight move that ends pressed against ``touched`` (obstacle names: an object, or its pieces).
 
-    trajectory: Trajectory
+    ``path`` is untimed (see :meth:`ArmKinematics.timed`): a feasibility
+    check needs no timing. Its first ``lead`` poses come before the gripper
+    nears what it presses — the part a hand may travel while its fingers
+    still close for the press.
+    """
+
+    path: np.ndarray
     touched: tuple[str, ...]
+    lead: int
 
 
 def _densified(path: np.ndarray, resolution: float) -> np.ndarray:
@@ -401,7 +411,7 @@ class ArmKinematics:
         return hits or None
 
     # -- motion ------------------------------------------------------------------------
-    def _parameterise(self, arm_path: np.ndarray) -> Trajectory:
+    def timed(self, arm_path: np.ndarray) -> Trajectory:
         """Time a joint path by the speed/acceleration limits (time grows with distance)."""
         if len(arm_path) < 2 or np.max(np.abs(arm_path[-1] - arm_path[0])) < 1e-4 and len(arm_path) == 2:
             return Trajectory(arm_path[-1:], np.array([0.0]))
@@ -462,12 +472,14 @@ class ArmKinematics:
             if not self.collisions(self.arm_q):
                 straight = self._joint_line(self.arm_q, arm_q)
                 if straight is not None:
-                    return self._parameterise(straight)
+                    return self.timed(straight)
             start = self.full(self.arm_q)
             fixed = {FixedJoint(0, self.torso_idx, float(start[self.torso_idx]))}
             via = self._via_ready(arm_q)
+            if via is None:
+                via = self._via_lifts(arm_q)
             if via is not None:
-                return self._parameterise(via)
+                return self.timed(via)
             for _ in range(PLANNING_TRIES):
                 if self.cancelled:
                     return None
@@ -485,7 +497,7 @@ class ArmKinematics:
                     log.info("%s arm: the planned path grazes an obstacle; planning again", self.arm)
                     continue
                 shortened = self._shortcut(raw)
-                return None if shortened is None else self._parameterise(shortened)
+                return None if shortened is None else self.timed(shortened)
         return None
 
     def _via_ready(self, arm_q: np.ndarray) -> np.ndarray | None:
@@ -504,6 +516,37 @@ class ArmKinematics:
             return None
         return np.vstack([first, second[1:]])
 
+    def _via_lifts(self, arm_q: np.ndarray) -> np.ndarray | None:
+        """Clear joint-space lines (direct or through ready) with the hand lifted straight up first, last, or both.
+
+        A hand just above an object it released, or a pre-grasp low beside a
+        cup, makes the lines above swing the fingers through the object or the
+        table, and the random planner then often takes seconds (or all its
+        tries) before anything moves; a short straight lift clears the way.
+        The path still ends exactly at ``arm_q``: the lift at that end is
+        planned up from it and run backwards.
+        """
+        starts = [p for p in (self.arm_q[None], self._lift(self.arm_q)) if p is not None]
+        ends = [p for p in (arm_q[None], self._lift(arm_q)) if p is not None]
+        for head, tail in itertools.product(starts, ends):
+            if len(head) == 1 and len(tail) == 1:
+                continue  # no lift at all: the lines tried before
+            middle = self._joint_line(head[-1], tail[-1])
+            if middle is None:
+                with self.posed(head[-1]):
+                    middle = self._via_ready(tail[-1])
+            if middle is not None:
+                return np.vstack([head, middle[1:], tail[::-1][1:]])
+        return None
+
+    def _lift(self, arm_q: np.ndarray) -> np.ndarray | None:
+        """Joints lifting the hand ``VIA_LIFT`` straight up from ``arm_q`` (first row ``arm_q``), if clear."""
+        with self.posed(arm_q):
+            up = self._cartesian_path(shifted(self.fk(), [0.0, 0.0, VIA_LIFT]))
+        if up is None or any(self.collisions(q) for q in up[1:]):
+            return None
+        return np.asarray(up)
+
     def _shortcut(self, path: np.ndarray) -> np.ndarray | None:
         """Greedy shortcutting: from each waypoint jump to the farthest one reachable by a clear straight line.
 
@@ -519,6 +562,15 @@ class ArmKinematics:
             out.append(path[j])
             i = j
         return _densified(np.asarray(out), JOINT_RESOLUTION)
+
+    def path_clear(self, points: np.ndarray) -> bool:
+        """Whether a joint path (e.g. a timed trajectory's points) is clear in the model as it is now.
+
+        For a path planned with the model changed (the fingers set to the
+        opening they will have), checked for the state the robot is in.
+        """
+        with self._tolerating_start_contacts():
+            return self._clear(points)
 
     def _clear(self, points: np.ndarray, subdivisions: int = 4) -> bool:
         """Every pose along the trajectory, including between its samples, is collision-free.
@@ -579,6 +631,12 @@ class ArmKinematics:
         Collisions with obstacles in ``ignore`` (the object being grasped)
         are allowed along the way; ``steer`` as in :meth:`_cartesian_path`.
         """
+        path = self.line_path(pose, check_collisions=check_collisions, ignore=ignore, steer=steer)
+        return None if path is None else self.timed(path)
+
+    def line_path(self, pose: np.ndarray, *, check_collisions: bool = True,
+                  ignore: tuple[str, ...] = (), steer: bool = False) -> np.ndarray | None:
+        """The joint path of :meth:`straight_line`, untimed: for checking a line clear before moving at all."""
         path = self._cartesian_path(pose, steer=steer)
         if path is None:
             return None
@@ -594,7 +652,7 @@ class ArmKinematics:
             finally:
                 for name in ignore:
                     self.allow_touching(name, False)
-        return self._parameterise(np.asarray(path))
+        return np.asarray(path)
 
     def contact_line(self, pose: np.ndarray, *, pressing: tuple[str, ...] = ()) -> ContactMove | None:
         """A straight move towards ``pose`` that may end pressed against the object in its way.
@@ -613,7 +671,7 @@ class ArmKinematics:
         path = self._cartesian_path(pose, CONTACT_STEP, steer=True)
         if path is None:
             return None
-        touched, travelled, end = tuple(pressing), 0.0, 0
+        touched, travelled, end, lead = tuple(pressing), 0.0, 0, 1
         at_start = self.gripper_touching()
         if not pressing and at_start:
             # already within the padding of the object: the press starts here, about half way to its surface
@@ -628,7 +686,7 @@ class ArmKinematics:
                     if hits and not touched:
                         objects = {self._pressable(pair) for pair in hits}
                         if None not in objects:
-                            touched = tuple(sorted(objects))  # type: ignore[arg-type]
+                            touched, lead = tuple(sorted(objects)), i  # type: ignore[arg-type]
                             for name in touched:
                                 acm.set_entry(name, self._gripper_links, True)
                             hits = self._own_collisions(q)
@@ -647,7 +705,33 @@ class ArmKinematics:
             return None
         if not pressing and travelled < OBJECT_PADDING + MIN_PRESS:
             return None   # blocked before the fingers would even reach the object's surface
-        return ContactMove(self._parameterise(np.asarray(path[:end + 1])), touched)
+        return ContactMove(np.asarray(path[:end + 1]), touched, lead)
+
+    def free_lead(self, move: ContactMove) -> np.ndarray | None:
+        """The start of ``move`` that is clear with the gripper as the model has it now (None: too short to bother).
+
+        A press is planned with the fingers closed; the hand travels this
+        part while they still close, so it is checked with them as they are
+        (open, reaching wider) too.
+        """
+        clear = 1
+        with self._tolerating_start_contacts():
+            for q in move.path[1:move.lead]:
+                if self._own_collisions(q):
+                    break
+                clear += 1
+        return move.path[:clear] if (clear - 1) * CONTACT_STEP >= MIN_LEAD else None
+
+    @contextmanager
+    def fingers(self, width: float) -> Iterator[None]:
+        """The model with this gripper opened to ``width`` (metres between the pads) for the block."""
+        idx = [self.index[f"{PREFIX[self.arm]}_gripper_{side}_finger_joint"] for side in ("l", "r")]
+        now = self.qpos[idx].copy()
+        self.qpos[idx] = np.clip(width / 2, self.limits[idx, 0], self.limits[idx, 1])
+        try:
+            yield
+        finally:
+            self.qpos[idx] = now
 
     def _steered_ik(self, pose: np.ndarray, previous: np.ndarray) -> np.ndarray | None:
         """The solution near ``previous`` that keeps the joints farthest from their limits.

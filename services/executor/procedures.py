@@ -21,9 +21,10 @@ moves of a pressing hand start from where its drives aim, so the press
 
 from __future__ import annotations
 
+import itertools
 import logging
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -33,10 +34,10 @@ from services.executor import geometry as geo
 from services.executor import targets, wording
 from services.executor.geometry import Box
 from services.executor.grounding import descriptor
-from services.executor.kinematics import ArmKinematics, ContactMove, Trajectory
+from services.executor.kinematics import ArmKinematics, Trajectory
 from services.executor.reach import sync
 from services.executor.referring import refer
-from services.executor.robot import MotionError, SimRobot, Stopped
+from services.executor.robot import MotionError, SimRobot, Started, Stopped
 from services.executor.scene import Scene, SceneSnapshot
 from services.executor.targets import EdgeGrasp, Held, overhang, thin_and_wide
 from services.sim.layout import HEAD_LOOK_AT, arm_pose
@@ -61,6 +62,14 @@ class Press:
     object_ids: tuple[str, ...]
     direction: np.ndarray
     arm_q: np.ndarray
+
+
+@dataclass(frozen=True)
+class Gripping:
+    """A gripper motion under way, and the robot state version from before it started."""
+
+    motion: Started
+    version: int
 
 
 class StepFailed(RuntimeError):
@@ -185,12 +194,23 @@ class Procedures:
         self.scene.wait_robot(version, STATE_WAIT)
 
     def _grip(self, arm: str, width: float) -> None:
+        self._end_grip(arm, self._start_grip(arm, width))
+
+    def _start_grip(self, arm: str, width: float) -> Gripping:
+        """Start the gripper moving; the arm may move meanwhile (see :meth:`_end_grip`)."""
         version = self.scene.snapshot().robot_version
         try:
-            self.robot.gripper(arm, width, GRIP_FORCE)
+            return Gripping(self.robot.start_gripper(arm, width, GRIP_FORCE), version)
         except MotionError as exc:
             raise StepFailed(wording.sentence(f"My {arm} gripper could not move: {exc}")) from exc
-        self.scene.wait_robot(version, STATE_WAIT)
+
+    def _end_grip(self, arm: str, gripping: Gripping) -> None:
+        """Wait until the gripper is done and the robot state shows it."""
+        try:
+            self.robot.finish(gripping.motion)
+        except MotionError as exc:
+            raise StepFailed(wording.sentence(f"My {arm} gripper could not move: {exc}")) from exc
+        self.scene.wait_robot(gripping.version, STATE_WAIT)
         # the state after the motion's report: one more fresh sample so contacts are current
         self.scene.wait_robot(self.scene.snapshot().robot_version, STATE_WAIT)
 
@@ -299,20 +319,36 @@ class Procedures:
             if trajectory is not None:
                 self._go(arm, trajectory)
                 return
-        move: ContactMove | None = kin.contact_line(goal, pressing=press.object_ids if press else ())
+        if press is None and self._snapshot().gripper_state(arm) == "open":
+            kin = self._close_on_the_way(arm, kin, goal, why)
+        move = kin.contact_line(goal, pressing=press.object_ids if press else ())
         if move is None:
             raise StepFailed(why)
-        if press is None and self._snapshot().gripper_state(arm) == "open":
-            # press with the closed fingers: one contact patch on the tool's axis, not whichever
-            # fingertip of the open hand happens to meet the object first (it would twist the object)
-            self._grip(arm, CLOSE_WIDTH)
-            kin, _ = self._ready(arm)
-            move = kin.contact_line(goal)
-            if move is None:
-                raise StepFailed(why)
         log.info("%s hand presses against %s", arm, move.touched)
-        self._go(arm, move.trajectory, contact=True)
-        self._press[arm] = Press(move.touched, press.direction if press else unit, move.trajectory.points[-1].copy())
+        self._go(arm, kin.timed(move.path), contact=True)
+        self._press[arm] = Press(move.touched, press.direction if press else unit, move.path[-1].copy())
+
+    def _close_on_the_way(self, arm: str, kin: ArmKinematics, goal: np.ndarray, why: str) -> ArmKinematics:
+        """Close the fingers for a press while the hand travels the clear part of the line; the model after.
+
+        A press is made with the closed fingers: one contact patch on the
+        tool's axis, not whichever fingertip of the open hand happens to meet
+        the object first (it would twist the object). So the press is checked
+        with the fingers closed before anything moves; closing takes about a
+        second, and the hand covers the stretch before the object meanwhile
+        instead of waiting for it.
+        """
+        with kin.fingers(CLOSE_WIDTH):
+            move = kin.contact_line(goal)
+        if move is None:
+            raise StepFailed(why)
+        lead = kin.free_lead(move)
+        closing = self._start_grip(arm, CLOSE_WIDTH)
+        if lead is not None:
+            self._go(arm, kin.timed(lead))
+        self._end_grip(arm, closing)
+        kin, _ = self._ready(arm)
+        return kin
 
     # -- p4 -------------------------------------------------------------------------------------
     def move_rel_dir(self, arm: str, direction: str, object: str) -> Done:
@@ -334,16 +370,15 @@ class Procedures:
         obj = self._object(snap, object)
         words = refer(snap.objects, object)
         plans = self._grasp_plans(kin, obj)
-        if not plans:
+        first = next(plans, None)
+        if first is None:
             box = Box.of(obj)
             if thin_and_wide(box) and overhang(box) < targets.MIN_OVERHANG:
                 raise StepFailed(wording.sentence(f"{words} is too wide to grasp; push it over the table edge first"))
             raise StepFailed(wording.cannot_pick(arm, words, "I can't reach around it"))
         reason = "it slipped out of my fingers"
-        for attempt, (grasp, pre_q) in enumerate(plans[:PICK_ATTEMPTS]):
-            if snap.gripper_state(arm) != "open":
-                self._grip(arm, OPEN_WIDTH)
-            self._go(arm, self._plan(kin, pre_q, wording.cannot_pick(arm, words, "I can't find a clear path to it")))
+        for attempt, (grasp, pre_q) in enumerate(itertools.islice(itertools.chain([first], plans), PICK_ATTEMPTS)):
+            self._open_on_the_way(arm, kin, snap, pre_q, wording.cannot_pick(arm, words, "I can't find a clear path to it"))
             kin, snap = self._ready(arm)
             if isinstance(grasp, EdgeGrasp):
                 self._go(arm, self._line(kin, grasp.pregrasp, wording.cannot_pick(arm, words, "I can't reach down to its edge")))
@@ -385,9 +420,33 @@ class Procedures:
                 return trajectory
         return None
 
-    def _grasp_plans(self, kin: ArmKinematics, obj: dict[str, Any]) -> list[tuple[geo.Grasp, np.ndarray]]:
-        """Grasps whose pre-grasp and grasp both have IK solutions, in preference order (with the joints to plan to)."""
-        plans = []
+    def _open_on_the_way(self, arm: str, kin: ArmKinematics, snap: SceneSnapshot, pre_q: np.ndarray, why: str) -> None:
+        """To the pre-grasp with the fingers open; a closed hand opens them on the way there.
+
+        The path is planned for the open fingers it ends with and, to be
+        taken while they open, must be clear with them as they are now too;
+        otherwise they open first (opening takes about a second).
+        """
+        if snap.gripper_state(arm) == "open":
+            self._go(arm, self._plan(kin, pre_q, why))
+            return
+        with kin.fingers(OPEN_WIDTH):
+            trajectory = self._plan(kin, pre_q, why)
+        if kin.path_clear(trajectory.points):
+            opening = self._start_grip(arm, OPEN_WIDTH)
+            self._go(arm, trajectory)
+            self._end_grip(arm, opening)
+            return
+        self._grip(arm, OPEN_WIDTH)
+        kin, _ = self._ready(arm)
+        self._go(arm, self._plan(kin, pre_q, why))
+
+    def _grasp_plans(self, kin: ArmKinematics, obj: dict[str, Any]) -> Iterator[tuple[geo.Grasp, np.ndarray]]:
+        """Grasps whose pre-grasp and grasp both have IK solutions, in preference order (with the joints to plan to).
+
+        Found one at a time: the arm sets off as soon as the first is known,
+        and the next is looked for only if that grasp fails.
+        """
         for grasp in targets.grasps(obj):
             pre_q = kin.ik(grasp.hover if isinstance(grasp, EdgeGrasp) else grasp.pregrasp)
             if pre_q is None:
@@ -395,7 +454,7 @@ class Procedures:
             if isinstance(grasp, EdgeGrasp):
                 hover_q = self._edge_approach(kin, grasp, pre_q, obj["id"])
                 if hover_q is not None:
-                    plans.append((grasp, hover_q))
+                    yield grasp, hover_q
                 continue
             kin.allow_touching(obj["id"], True)
             try:
@@ -403,8 +462,7 @@ class Procedures:
             finally:
                 kin.allow_touching(obj["id"], False)
             if grasp_q is not None and self._descent_clear(kin, pre_q, grasp.grasp, obj["id"]):
-                plans.append((grasp, pre_q))
-        return plans
+                yield grasp, pre_q
 
     def _edge_approach(self, kin: ArmKinematics, grasp: EdgeGrasp, hover_q: np.ndarray, object_id: str) -> np.ndarray | None:
         """Joints at the hover pose from which both straight legs (down to the pre-grasp, in to the grasp) are clear."""
@@ -421,7 +479,7 @@ class Procedures:
     def _descent_clear(kin: ArmKinematics, pre_q: np.ndarray, grasp_pose: np.ndarray, object_id: str) -> bool:
         """Whether the straight approach from the pre-grasp to the grasp is free (checked before moving at all)."""
         with kin.posed(pre_q):
-            return kin.straight_line(grasp_pose, ignore=(object_id,)) is not None
+            return kin.line_path(grasp_pose, ignore=(object_id,)) is not None
 
     def _release_and_back_off(self, arm: str) -> None:
         self._grip(arm, OPEN_WIDTH)
@@ -514,7 +572,7 @@ class Procedures:
         if hover_q is None:
             return None
         with kin.posed(hover_q), kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):
-            descent = kin.straight_line(release)
+            descent = kin.line_path(release)
         return hover_q if descent is not None else None
 
     def _release(self, arm: str, held: Held) -> Done:

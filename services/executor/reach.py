@@ -11,6 +11,7 @@ two IK solves per key.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -37,6 +38,18 @@ def sync(kin: ArmKinematics, snap: SceneSnapshot, held: Held | None) -> None:
         kin.attach(held.object_id, held.box, kin.fk())
 
 
+Interruption = Callable[[], bool]
+
+
+class _GaveWay(Exception):
+    """The map's computation was abandoned for a command (see :func:`reach_map`)."""
+
+
+def _give_way(interrupted: Interruption) -> None:
+    if interrupted():
+        raise _GaveWay
+
+
 def _any(kin: ArmKinematics, poses: list[np.ndarray]) -> bool:
     return kin.first_reachable(poses) is not None
 
@@ -55,8 +68,9 @@ def can_pick(kin: ArmKinematics, obj: dict[str, Any]) -> bool:
     return False
 
 
-def object_reach(kin: ArmKinematics, snap: SceneSnapshot, oid: str, held: Held | None) -> dict[str, bool]:
-    """Every reach key of one object for one (already synced) arm."""
+def object_reach(kin: ArmKinematics, snap: SceneSnapshot, oid: str, held: Held | None,
+                 interrupted: Interruption = lambda: False) -> dict[str, bool]:
+    """Every reach key of one object for one (already synced) arm (``interrupted`` as in :func:`reach_map`)."""
     obj = snap.objects[oid]
     box = Box.of(obj)
     tool = kin.fk()
@@ -65,10 +79,12 @@ def object_reach(kin: ArmKinematics, snap: SceneSnapshot, oid: str, held: Held |
     if held is not None and held.object_id == oid:
         return {key: False for key in REACH_KEYS}
     for relation in ("above", "on_top_of", *SIDES):
+        _give_way(interrupted)
         side[relation] = _any(kin, targets.move_relation(relation, box, tool, held, snap.table_z))
     out.update(side)
     out["next_to"] = side["left_of"] or side["right_of"]
     out["near"] = out["next_to"] or side["in_front_of"] or side["behind"]
+    _give_way(interrupted)
     out["pick_up"] = held is None and obj.get("held_by") is None and can_pick(kin, obj)
     # With something in the hand the relation keys above were computed for the *held object*: their
     # poses are the hover poses of placing it there, the first thing place_rel needs, so "place" is
@@ -81,24 +97,35 @@ def object_reach(kin: ArmKinematics, snap: SceneSnapshot, oid: str, held: Held |
     return out
 
 
-def can_move(kin: ArmKinematics) -> dict[str, bool]:
+def can_move(kin: ArmKinematics, interrupted: Interruption = lambda: False) -> dict[str, bool]:
     """Per direction: is the tool pose one step that way reachable without collision, or a press against an object?"""
     tool = kin.fk()
     moves = {}
     for d in geo.DIRECTIONS:
+        _give_way(interrupted)
         goal = geo.direction_target(tool, d)
         moves[d] = kin.ik(goal, seeds=[kin.arm_q]) is not None or kin.contact_line(goal) is not None
     return moves
 
 
-def reach_map(arms: dict[str, ArmKinematics], snap: SceneSnapshot,
-              held: dict[str, Held | None]) -> tuple[dict[str, dict[str, dict[str, bool]]], dict[str, dict[str, bool]]]:
-    """``(reach[object][arm][key], can_move[arm][direction])`` for the scene in ``snap``."""
+def reach_map(arms: dict[str, ArmKinematics], snap: SceneSnapshot, held: dict[str, Held | None],
+              interrupted: Interruption = lambda: False
+              ) -> tuple[dict[str, dict[str, dict[str, bool]]], dict[str, dict[str, bool]]] | None:
+    """``(reach[object][arm][key], can_move[arm][direction])`` for the scene in ``snap``.
+
+    None when ``interrupted()`` turned true on the way (it is asked before
+    each direction, relation and grasp check, tens of milliseconds apart): a
+    command has arrived, and the map, which takes the CPU from the
+    command's own planning, is computed again after it.
+    """
     reach: dict[str, dict[str, dict[str, bool]]] = {oid: {} for oid in snap.objects}
     moves: dict[str, dict[str, bool]] = {}
-    for arm, kin in arms.items():
-        sync(kin, snap, held.get(arm))
-        moves[arm] = can_move(kin)
-        for oid in snap.objects:
-            reach[oid][arm] = object_reach(kin, snap, oid, held.get(arm))
+    try:
+        for arm, kin in arms.items():
+            sync(kin, snap, held.get(arm))
+            moves[arm] = can_move(kin, interrupted)
+            for oid in snap.objects:
+                reach[oid][arm] = object_reach(kin, snap, oid, held.get(arm), interrupted)
+    except _GaveWay:
+        return None
     return reach, moves

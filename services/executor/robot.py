@@ -25,6 +25,7 @@ EVENT_SLACK = 8.0      # simulated seconds a motion may take beyond its planned 
 WAIT_SLICE = 0.25      # wall seconds between checks of the simulation clock
 SIM_SILENCE = 10.0     # wall seconds without a new simulator state before it counts as gone
 REQUEST_TIMEOUT = 5.0
+SHORT_MOTION = 3.0     # simulated seconds a gripper or head motion takes at most
 
 
 class MotionError(RuntimeError):
@@ -39,6 +40,14 @@ class Stopped(RuntimeError):
 class Outcome:
     status: str   # done / stopped / failed
     message: str
+
+
+@dataclass(frozen=True)
+class Started:
+    """A motion the simulator accepted: its id (None when it was done at once) and its planned duration."""
+
+    motion_id: str | None
+    expected: float
 
 
 class SimRobot:
@@ -98,17 +107,24 @@ class SimRobot:
             if start_sim is not None and now_sim is not None and now_sim - start_sim > expected + EVENT_SLACK:
                 raise MotionError("the motion did not finish in time")
 
-    def _run(self, name: str, payload: dict[str, Any], expected: float) -> Outcome:
+    def _start(self, name: str, payload: dict[str, Any], expected: float) -> Started:
         if self.cancel.is_set():
             raise Stopped()
         reply = self._request(name, payload)
         motion_id = reply.get("motion_id")
-        if not isinstance(motion_id, str):
+        return Started(motion_id if isinstance(motion_id, str) else None, expected)
+
+    def finish(self, started: Started) -> Outcome:
+        """Wait for a started motion's report (at once for one the simulator did at once)."""
+        if started.motion_id is None:
             return Outcome("done", "")
-        outcome = self._wait(motion_id, expected)
+        outcome = self._wait(started.motion_id, started.expected)
         if outcome.status == "stopped" and self.cancel.is_set():
             raise Stopped()
         return outcome
+
+    def _run(self, name: str, payload: dict[str, Any], expected: float) -> Outcome:
+        return self.finish(self._start(name, payload, expected))
 
     # -- motions ----------------------------------------------------------------
     def move_arm(self, arm: str, points: np.ndarray, times: np.ndarray, contact: bool = False) -> Outcome:
@@ -123,10 +139,14 @@ class SimRobot:
         return self._run("arm", payload, float(times[-1]) if len(times) else 0.0)
 
     def gripper(self, arm: str, width: float, force: float) -> Outcome:
-        return self._run("gripper", {"arm": arm, "width": float(width), "force": float(force)}, 3.0)
+        return self.finish(self.start_gripper(arm, width, force))
+
+    def start_gripper(self, arm: str, width: float, force: float) -> Started:
+        """Start opening or closing a gripper without waiting, so the arm can move meanwhile (see :meth:`finish`)."""
+        return self._start("gripper", {"arm": arm, "width": float(width), "force": float(force)}, SHORT_MOTION)
 
     def look_at(self, point: np.ndarray) -> Outcome:
-        return self._run("head", {"look_at": [float(v) for v in point]}, 3.0)
+        return self._run("head", {"look_at": [float(v) for v in point]}, SHORT_MOTION)
 
     def stop(self) -> None:
         """Stop every motion now (best effort: called while another thread waits on it)."""

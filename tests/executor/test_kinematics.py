@@ -11,11 +11,11 @@ import pytest
 from services.executor import geometry as geo
 from services.executor import targets
 from services.executor.geometry import Box
-from services.executor.kinematics import PLANNING_SLICE, PLANNING_TRIES, ArmKinematics
+from services.executor.kinematics import CONTACT_STEP, MIN_LEAD, PLANNING_SLICE, PLANNING_TRIES, ArmKinematics
 from services.executor.reach import REACH_KEYS, reach_map, sync
 from services.executor.scene import Scene
 from services.executor.targets import Held
-from services.sim.layout import TABLE_TOP_Z, TORSO_HEIGHT, arm_pose_map
+from services.sim.layout import TABLE_TOP_Z, TORSO_HEIGHT, arm_pose, arm_pose_map
 
 
 @pytest.fixture(scope="module")
@@ -116,7 +116,8 @@ def test_planning_gives_up_when_the_user_says_stop() -> None:
     there = kin.ik(geo.make_pose([0.55, 0.05, TABLE_TOP_Z + 0.10], geo.facing([1.0, 0.0, 0.0])))
     assert here is not None and there is not None
     kin.set_arm(here)
-    assert kin._joint_line(kin.arm_q, there) is None and kin._via_ready(there) is None, "not a random planner's case"
+    assert kin._joint_line(kin.arm_q, there) is None and kin._via_ready(there) is None \
+        and kin._via_lifts(there) is None, "not a random planner's case"
     cancel.set()
     started = time.perf_counter()
     assert kin.plan_to(there) is None and kin.cancelled
@@ -125,3 +126,54 @@ def test_planning_gives_up_when_the_user_says_stop() -> None:
     started = time.perf_counter()
     # without the stop the random planner runs: it finds a path, or gives up only after its tries
     assert kin.plan_to(there) is not None or time.perf_counter() - started >= PLANNING_TRIES * PLANNING_SLICE
+
+
+def test_reach_map_gives_way_to_a_command(arms: dict[str, ArmKinematics]) -> None:
+    assert reach_map(arms, scene_with(cup("c", 0.55, -0.10)).snapshot(), {}, interrupted=lambda: True) is None
+
+
+def test_the_model_fingers_are_set_for_a_block_only(arms: dict[str, ArmKinematics]) -> None:
+    kin = arms["right"]
+    sync(kin, scene_with().snapshot(), None)
+    before = kin.qpos.copy()
+    with kin.fingers(0.08):
+        opened = kin.qpos.copy()
+    assert np.array_equal(kin.qpos, before)
+    fingers = [kin.index[f"r_gripper_{side}_finger_joint"] for side in ("l", "r")]
+    assert np.allclose(opened[fingers], 0.04) and np.array_equal(np.delete(opened, fingers), np.delete(before, fingers))
+
+
+def test_a_press_starts_with_a_stretch_clear_for_the_open_fingers(arms: dict[str, ArmKinematics]) -> None:
+    """The part of a press travelled while the fingers close ends before the object and is clear with them open."""
+    kin = arms["right"]
+    box = {"id": "box", "color": "orange", "type": "box", "position": [0.58, 0.0, TABLE_TOP_Z + 0.09],
+           "size": [0.20, 0.30, 0.18]}
+    sync(kin, scene_with(box).snapshot(), None)
+    start = kin.ik(geo.make_pose([0.58, -0.23, TABLE_TOP_Z + 0.09], geo.facing([1.0, 0.0, 0.0])))
+    assert start is not None
+    kin.set_arm(start)
+    goal = geo.direction_target(kin.fk(), "left")
+    with kin.fingers(0.0):
+        move = kin.contact_line(goal)
+    assert move is not None and move.touched == ("box",)
+    lead = kin.free_lead(move)
+    assert lead is not None and (len(lead) - 1) * CONTACT_STEP >= MIN_LEAD
+    assert len(lead) <= move.lead < len(move.path)
+    assert np.array_equal(lead, move.path[:len(lead)])
+    assert all(kin.collisions(q) == [] for q in lead)
+
+
+def test_a_hand_above_what_it_released_lifts_before_swinging_away(arms: dict[str, ArmKinematics]) -> None:
+    """The joint-space lines to the side would sweep the fingers through the cup below: a lift first, no random planner."""
+    kin = arms["right"]
+    sync(kin, scene_with(cup("c", 0.62, 0.256, size=(0.072, 0.072, 0.10))).snapshot(), None)
+    above = kin.ik(np.array([0.61, 0.259, TABLE_TOP_Z + 0.165, 0.989, 0.0, 0.0, -0.145]))
+    assert above is not None
+    kin.set_arm(above)
+    side = np.asarray(arm_pose("side", "right"), float)
+    assert kin._joint_line(kin.arm_q, side) is None and kin._via_ready(side) is None, "no longer a case for the lift"
+    path = kin._via_lifts(side)
+    assert path is not None
+    assert np.array_equal(path[0], kin.arm_q) and np.array_equal(path[-1], side)
+    assert kin.fk(path[1])[2] > kin.fk()[2]
+    assert all(kin.collisions(q) == [] for q in path)
