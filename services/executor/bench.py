@@ -147,9 +147,6 @@ class WorldRobot:
                                     motion_id, contact)
         return self._finish(motion_id)
 
-    def gripper(self, arm: str, width: float, force: float) -> Outcome:
-        return self.finish(self.start_gripper(arm, width, force))
-
     def start_gripper(self, arm: str, width: float, force: float) -> Started:
         motion_id = self.world.new_motion_id()
         self.world.move_gripper(arm, width, force, motion_id)

@@ -353,9 +353,7 @@ class Executor:
             self._reach_stale.wait(REACH_POLL)
             if self._closing.is_set():
                 return
-            with self._lock:
-                busy = self._busy is not None
-            if busy:  # see the module notes: the map waits until the command is done
+            if self._command_waiting():  # see the module notes: the map waits until the command is done
                 self._closing.wait(REACH_POLL)
                 continue
             snap = self.scene.snapshot()

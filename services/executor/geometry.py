@@ -227,9 +227,7 @@ def carry_pose(tool_pose: np.ndarray, held_center: np.ndarray, new_center: np.nd
     Turning about the vertical through the held object keeps it upright (no
     tipping); only its heading changes.
     """
-    turn = Rotation.from_euler("z", yaw)
-    lever = turn.apply(np.asarray(tool_pose[:3], float) - np.asarray(held_center, float))
-    return make_pose(np.asarray(new_center, float) + lever, turn * rotation_of(tool_pose))
+    return carry_poses(tool_pose, held_center, [new_center], (yaw,))[0]
 
 
 def carry_poses(tool_pose: np.ndarray, held_center: np.ndarray, centers: list[np.ndarray],

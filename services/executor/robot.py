@@ -138,9 +138,6 @@ class SimRobot:
             payload["contact"] = True
         return self._run("arm", payload, float(times[-1]) if len(times) else 0.0)
 
-    def gripper(self, arm: str, width: float, force: float) -> Outcome:
-        return self.finish(self.start_gripper(arm, width, force))
-
     def start_gripper(self, arm: str, width: float, force: float) -> Started:
         """Start opening or closing a gripper without waiting, so the arm can move meanwhile (see :meth:`finish`)."""
         return self._start("gripper", {"arm": arm, "width": float(width), "force": float(force)}, SHORT_MOTION)
