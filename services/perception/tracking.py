@@ -6,7 +6,7 @@ it moves a little, while an arm passes over it, and while it is in a gripper.
 Detections are matched to tracks by an optimal assignment (Hungarian, from
 SciPy) on distance, size and colour, or on footprint overlap (a cluster that an
 arm cuts in half has its centroid far from the object's but still lies on its
-footprint); one cluster never feeds two tracks, and a cluster on the footprint
+footprint, or on the whole object's as last published); one cluster never feeds two tracks, and a cluster on the footprint
 of a known object, in its colour, is a piece of it, not a new object. A new object must be
 seen in consecutive frames before it gets an id (a one-frame flicker never
 becomes an object). An object hidden behind an arm is kept as long as the arm
@@ -182,11 +182,13 @@ class Tracker:
         cost = np.full((len(self.tracks), len(detections)), NO_MATCH)
         for i, track in enumerate(self.tracks):
             gate = s.hold_radius if track.held_by else s.max_jump
+            views = _views(track)
             for j, det in enumerate(detections):
-                distance = float(np.linalg.norm(track.descriptor.position - det.position))
+                distance = min(float(np.linalg.norm(view.position - det.position)) for view in views)
                 if track.held_by is None and not self._could_be_part_of(det, track):
                     continue
-                on_footprint = track.held_by is None and footprint_share(det, track.descriptor) >= s.overlap_share
+                on_footprint = track.held_by is None and max(
+                    footprint_share(det, view) for view in views) >= s.overlap_share
                 if distance > gate and not on_footprint:
                     continue
                 cost[i, j] = (distance + 0.5 * float(np.linalg.norm(track.descriptor.size - det.size))
@@ -222,7 +224,7 @@ class Tracker:
         """
         share = self.settings.overlap_share
         return any(t.confirmed and t.held_by is None and self._could_be_part_of(detection, t)
-                   and any(footprint_share(detection, d) >= share for d in (t.descriptor, t.identity) if d is not None)
+                   and any(footprint_share(detection, view) >= share for view in (*_views(t), t.identity) if view is not None)
                    for t in self.tracks)
 
     def _could_be_part_of(self, detection: Descriptor, track: Track) -> bool:
@@ -253,6 +255,18 @@ class Tracker:
         if track.missed >= self.settings.gone_frames and newest > track.last_seen:
             return False  # plainly absent while new objects appeared: it moved, or the scene changed
         return now - track.last_seen <= self.settings.forget_after
+
+
+def _views(track: Track) -> tuple[Descriptor, ...]:
+    """Where a track's object may be: its last sighting and the whole object as last published.
+
+    The last sighting alone is not enough: while an arm sweeps over a plate,
+    the track follows one visible piece after another, and the next piece,
+    on the far side of the plate, lies neither near that piece nor on it;
+    it does lie on the whole plate.
+    """
+    return (track.descriptor,) if track.shown is None or track.shown is track.descriptor \
+        else (track.descriptor, track.shown)
 
 
 def holding_tools(state: Mapping[str, Any] | None) -> dict[str, np.ndarray]:

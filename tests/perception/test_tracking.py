@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from services.perception.cloud import camera_position
+from services.perception.descriptors import Descriptor
 from services.perception.pipeline import detect
 from services.perception.robot_mask import hides, segments_from_states
 from services.perception.synthetic import Box, Camera, Cylinder, Scene, reaching_arm, render
@@ -171,3 +172,37 @@ def test_an_object_of_another_colour_on_a_removed_objects_footprint_is_a_new_obj
     assert np.linalg.norm(np.asarray(yellow["position"][:2]) - inside.center[:2]) < 0.01
     assert wide_id not in {o["id"] for o in items}, "the wide box lingers after the scene changed"
 
+
+
+def _sighting(center, size, points, color="red", kind="unknown", confidence=0.5) -> Descriptor:
+    """A cluster as the pipeline describes it (resting on the table), for sequences a renderer can't pose."""
+    center, size = np.asarray(center, float), np.asarray(size, float)
+    return Descriptor(position=center, size=size, box_center=center.copy(), box_size=size.copy(), box_yaw=0.0,
+                      volume=float(np.prod(size)), rgb=(200, 30, 30), color=color, type=kind, points=points,
+                      confidence=confidence, bottom_on_table=True)
+
+
+def test_a_plate_an_arm_sweeps_across_keeps_its_id_piece_after_piece():
+    """The arm hides one part of the plate after another, then the hand pushes the whole plate 19 cm back.
+
+    The pieces (from a live run) wander: the track follows the near-side one,
+    and the next lies on the far side, on neither that piece nor near it. The
+    plate must stay one object under one id, seen throughout, not be lost and
+    come back as a second plate once it has been pushed.
+    """
+    plate = (0.219, 0.219, 0.012)
+    tracker = Tracker()
+    whole = _sighting((0.59, -0.18, 0.726), plate, 10818, kind="plate", confidence=0.98)
+    tracker.update([whole], 0.0)
+    plate_id = tracker.update([whole], 0.2)[0]["id"]
+    sweep = [[_sighting((0.572, -0.146, 0.726), (0.184, 0.150, 0.012), 4546)],
+             [_sighting((0.530, -0.130, 0.726), (0.099, 0.118, 0.012), 1391),
+              _sighting((0.678, -0.237, 0.726), (0.029, 0.043, 0.012), 134, confidence=0.45)],
+             [_sighting((0.640, -0.197, 0.726), (0.118, 0.186, 0.012), 2651)],
+             [_sighting((0.651, -0.185, 0.726), (0.097, 0.207, 0.012), 3401)]]
+    push = [_sighting((x, -0.177, 0.726), (0.217, 0.214, 0.012), 6300) for x in np.linspace(0.589, 0.397, 12)]
+    frames = sweep + [[d] for d in push]
+    for k, detections in enumerate(frames):
+        items = tracker.update(detections, 0.4 + 0.2 * k)
+        assert [(o["id"], o["visible"]) for o in items] == [(plate_id, True)], f"frame {k}"
+    assert items[0]["position"][0] == pytest.approx(0.397, abs=0.01)
