@@ -372,6 +372,9 @@ class Procedures:
         plans = self._grasp_plans(kin, obj)
         first = next(plans, None)
         if first is None:
+            kin, obj, plans = self._look_again(arm, object)
+            first = next(plans, None)
+        if first is None:
             box = Box.of(obj)
             if thin_and_wide(box) and overhang(box) < targets.MIN_OVERHANG:
                 raise StepFailed(wording.sentence(f"{words} is too wide to grasp; push it over the table edge first"))
@@ -440,6 +443,19 @@ class Procedures:
         self._grip(arm, OPEN_WIDTH)
         kin, _ = self._ready(arm)
         self._go(arm, self._plan(kin, pre_q, why))
+
+    def _look_again(self, arm: str, object_id: str) -> tuple[ArmKinematics, dict[str, Any], Iterator[tuple[geo.Grasp, np.ndarray]]]:
+        """Grasp plans from a fresh settled view, before a pick-up is refused.
+
+        The view at hand may date from while a hand was on the object: a plate
+        just pushed over the table edge is then still seen short of it, for
+        as long as the hand hid its near part, and would be refused as too
+        wide to grasp. Only a refusal pays for the second look.
+        """
+        self._record_objects()
+        kin, snap = self._ready(arm)
+        obj = self._object(snap, object_id)
+        return kin, obj, self._grasp_plans(kin, obj)
 
     def _grasp_plans(self, kin: ArmKinematics, obj: dict[str, Any]) -> Iterator[tuple[geo.Grasp, np.ndarray]]:
         """Grasps whose pre-grasp and grasp both have IK solutions, in preference order (with the joints to plan to).
