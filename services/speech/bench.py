@@ -1,8 +1,8 @@
 """``hfpbd bench speech``: espeak-ng corpus -> PocketSphinx -> NLU, in fixed scenes.
 
 Reports word error rate, command accuracy from the top hypothesis and from
-the n-best rescored by the NLU (:func:`services.nlu.nbest.most_plausible`,
-the NLU service's own rule), how many commands it would not act on for too
+the n-best rescored by the NLU (:func:`services.nlu.nbest.choose`, the NLU
+service's own rule, on each hypothesis parsed once), how many commands it would not act on for too
 little support in the n-best and the accuracy among the rest, and decoding
 time per second of audio. The rescoring is shown for several acoustic
 scales, off-grammar priors, NLU weights and rejection thresholds; these are
@@ -24,7 +24,7 @@ import numpy as np
 from rapidfuzz.distance import Levenshtein
 
 from services.nlu.infer import CommandResult, Model, Result
-from services.nlu.nbest import NLU_WEIGHT, REJECT_BELOW, Choice, most_plausible
+from services.nlu.nbest import NLU_WEIGHT, REJECT_BELOW, Choice, Reading, choose
 from services.nlu.world import parse_world
 from services.speech import espeak
 from services.speech.audio import RATE, read_wav, silence
@@ -46,7 +46,6 @@ class Outcome:
     hypotheses: list[Hypothesis]
     seconds: float
     decode_s: float
-    model: Model
     results: list[Result] = field(default_factory=list)
 
 
@@ -62,8 +61,9 @@ def rescored(outcome: Outcome, scale: float = ACOUSTIC_SCALE, off_grammar: float
              nlu_weight: float = NLU_WEIGHT) -> Choice | None:
     """The NLU's choice from the n-best as the speech service would send it at these weights."""
     members = {h.text for h in outcome.hypotheses if h.in_grammar}
+    results = {h.text: r for h, r in zip(outcome.hypotheses, outcome.results)}
     nbest = posteriors({h.text: h.loglik for h in outcome.hypotheses}, scale, members, off_grammar)
-    return most_plausible(outcome.model, None, [h.to_json() for h in nbest], nlu_weight)
+    return choose((Reading(h.text, h.score, results[h.text]) for h in nbest if h.score > 0), nlu_weight)
 
 
 def _right(outcome: Outcome, choice: Choice | None) -> bool:
@@ -91,7 +91,7 @@ def run(items: list[Item], vocabulary: str, out: Path) -> list[Outcome]:
         hypotheses = recogniser.decode(pcm, acoustic_scale=0.0)  # keep every alternative; re-weighted below
         decode_s = time.perf_counter() - started
         model = Model(parse_world(item.world))
-        outcome = Outcome(item, hypotheses, len(pcm) / RATE, decode_s, model, [model.parse(h.text) for h in hypotheses])
+        outcome = Outcome(item, hypotheses, len(pcm) / RATE, decode_s, [model.parse(h.text) for h in hypotheses])
         outcomes.append(outcome)
     return outcomes
 
