@@ -6,8 +6,9 @@ it moves a little, while an arm passes over it, and while it is in a gripper.
 Detections are matched to tracks by an optimal assignment (Hungarian, from
 SciPy) on distance, size and colour, or on footprint overlap (a cluster that an
 arm cuts in half has its centroid far from the object's but still lies on its
-footprint, or on the whole object's as last published); one cluster never feeds two tracks, and a cluster on the footprint
-of a known object, in its colour, is a piece of it, not a new object. A new object must be
+footprint, or on the whole object's as last published); one cluster never
+feeds two tracks, and a cluster on the footprint of a known object, in its
+colour, is a piece of it, not a new object. A new object must be
 seen in consecutive frames before it gets an id (a one-frame flicker never
 becomes an object). An object hidden behind an arm is kept as long as the arm
 hides it; an object unseen in clear view is removed after ``forget_after``
@@ -224,7 +225,8 @@ class Tracker:
         """
         share = self.settings.overlap_share
         return any(t.confirmed and t.held_by is None and self._could_be_part_of(detection, t)
-                   and any(footprint_share(detection, view) >= share for view in (*_views(t), t.identity) if view is not None)
+                   and any(footprint_share(detection, view) >= share
+                           for view in (*_views(t), t.identity) if view is not None)
                    for t in self.tracks)
 
     def _could_be_part_of(self, detection: Descriptor, track: Track) -> bool:
