@@ -173,7 +173,6 @@ def test_an_object_of_another_colour_on_a_removed_objects_footprint_is_a_new_obj
     assert wide_id not in {o["id"] for o in items}, "the wide box lingers after the scene changed"
 
 
-
 def _sighting(center, size, points, color="red", kind="unknown", confidence=0.5) -> Descriptor:
     """A cluster as the pipeline describes it (resting on the table), for sequences a renderer can't pose."""
     center, size = np.asarray(center, float), np.asarray(size, float)
