@@ -82,7 +82,7 @@ def _peer(namespace: str, port: int, impl: str) -> None:
 
 # -- the measuring process ----------------------------------------------------
 def _start_peer(namespace: str, port: int, impl: str) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "shared.bench_bus", "--peer", impl, "--namespace", namespace,
+    return subprocess.Popen([sys.executable, "-m", "hfpbd.bench_bus", "--peer", impl, "--namespace", namespace,
                              "--port", str(port)])
 
 
