@@ -22,6 +22,7 @@ from services.perception.plane import Plane, PlaneSettings, find_table
 from services.perception.robot_mask import robot_points, segments_from_states
 from services.perception.segment import SegmentSettings, cluster, object_candidates, table_outline
 from services.perception.support import supported
+from services.perception.table_edges import TableExtent, table_extent
 from services.perception.tracking import holding_tools
 
 
@@ -41,6 +42,7 @@ class Detection:
     objects: list[Descriptor]
     plane: Plane
     table_outline: np.ndarray
+    table_extent: TableExtent
 
 
 def detect(message: Mapping[str, Any], state: Mapping[str, Any] | None = None,
@@ -63,6 +65,7 @@ def detect(message: Mapping[str, Any], state: Mapping[str, Any] | None = None,
         on_table = np.flatnonzero(np.abs(height) <= settings.plane.inlier_distance)
         above = object_candidates(height, plane, settings.segment)
     outline = table_outline(cloud.xyz[on_table[::TABLE_STRIDE], :2], settings.segment)
+    extent = table_extent(cloud.xyz, on_table, cloud.shape, outline)
     xyz = cloud.xyz[above]
     robot = robot_points(xyz, arms)
     above, xyz = above[~robot], xyz[~robot]
@@ -71,4 +74,4 @@ def detect(message: Mapping[str, Any], state: Mapping[str, Any] | None = None,
     camera = camera_position(dict(message))
     objects = supported([describe(xyz[g], rgb[g], plane) for g in groups], holding_tools(state), camera)
     objects.sort(key=lambda d: (round(float(d.position[0]), 3), round(float(d.position[1]), 3)))
-    return Detection(objects, plane, outline)
+    return Detection(objects, plane, outline, extent)

@@ -135,7 +135,8 @@ class PerceptionService:
         centre = detection.table_outline.mean(axis=0)
         self._table = {"height": round(plane.z_at(float(centre[0]), float(centre[1])), 4),
                        "normal": [round(float(v), 4) for v in plane.normal],
-                       "outline": np.round(detection.table_outline, 3).tolist()}
+                       "outline": np.round(detection.table_outline, 3).tolist(),
+                       **detection.table_extent.message()}
         self._publish(stamp, OK, message.get("sim_time"))
 
     def _publish(self, stamp: float, status: str, sim_time: Any = None) -> None:
