@@ -25,7 +25,6 @@ from services.perception.support import supported
 from services.perception.table_edges import TableExtent, table_extent
 from services.perception.tracking import holding_tools
 
-
 TABLE_STRIDE = 8   # every 8th table point is plenty for its 2 cm outline grid
 
 
