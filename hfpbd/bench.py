@@ -10,8 +10,8 @@ BENCHMARKS: dict[str, str] = {
     "bus": "hfpbd.bench_bus",
     "nlu": "services.nlu.bench",
     "sim": "services.sim.bench",
-    "perception": "services.perception.bench",
-    "executor": "services.executor.bench",
+    "perception": "hfpbd.bench_perception",
+    "executor": "hfpbd.bench_executor",
     "tasks": "hfpbd.tasks.bench",
     "speech": "services.speech.bench",
 }

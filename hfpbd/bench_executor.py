@@ -39,7 +39,8 @@ from services.executor.procedures import Procedures, StepFailed
 from services.executor.reach import reach_map
 from services.executor.robot import SHORT_MOTION, Outcome, Started
 from services.executor.scene import Scene
-from services.sim.layout import TABLE_TOP_Z, TORSO_HEIGHT, arm_pose_map
+from services.sim.layout import TABLE_TOP_Z, table_truth
+from shared.robot import ROBOT
 from shared.stats import markdown_table
 
 OBJECT_COUNTS = (1, 2, 5, 10, 15)
@@ -61,8 +62,8 @@ def synthetic_scene(count: int, rng: np.random.Generator) -> Scene:
         objects.append({"id": f"obj{len(objects)}", "color": "red", "type": "cup" if len(objects) % 2 else "box",
                         "position": [*xy, TABLE_TOP_Z + size[2] / 2], "size": size.tolist()})
     scene = Scene()
-    scene.update_objects(objects)
-    scene.update_robot({"joints": {"torso_lift_joint": TORSO_HEIGHT, **arm_pose_map("untucked")}})
+    scene.update_objects(objects, table_truth())
+    scene.update_robot({"joints": {ROBOT.torso_joint: ROBOT.working_torso, **ROBOT.arm_pose_map("untucked")}})
     return scene
 
 
@@ -123,7 +124,7 @@ class WorldRobot:
 
     def publish(self) -> None:
         self.scene.update_robot(self.world.state())
-        self.scene.update_objects(self.world.truth())
+        self.scene.update_objects(self.world.truth(), table_truth())
 
     def _finish(self, motion_id: str) -> Outcome:
         start = self.world.sim_time

@@ -39,17 +39,14 @@ from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation, Slerp
 
 from services.executor.geometry import Box, rotation_of, shifted
+from shared.robot import ROBOT
+from shared.robot.pr2 import ARM_PREFIX as PREFIX
 
 log = logging.getLogger("hfpbd.executor.kinematics")
 logging.getLogger("toppra").setLevel(logging.WARNING)  # it logs every parameterisation at INFO
 
-ROBOT_DIR = Path(__file__).resolve().parents[1] / "sim" / "robot"
-URDF = ROBOT_DIR / "pr2.urdf"
-SRDF = ROBOT_DIR / "pr2.srdf"
-PREFIX = {"right": "r", "left": "l"}
-ARM_JOINTS = ("shoulder_pan_joint", "shoulder_lift_joint", "upper_arm_roll_joint", "elbow_flex_joint",
-              "forearm_roll_joint", "wrist_flex_joint", "wrist_roll_joint")
-TORSO = "torso_lift_joint"
+URDF = ROBOT.urdf_path
+SRDF = ROBOT.srdf_path
 SEED_COUNT = 24000
 NEIGHBOURS = 5
 APPROACH_WEIGHT, FINGER_WEIGHT = 0.2, 0.1   # metres per unit axis difference in the seed index
@@ -68,7 +65,7 @@ PLANNING_TRIES = 7
 CARTESIAN_STEP = 0.01   # metres: straight-line moves are interpolated every centimetre
 VIA_LIFT = 0.10        # metres the hand is lifted before a joint-space line when the direct ones are blocked
 JOINT_RESOLUTION = 0.05  # rad between checked waypoints of a planned path
-ROLL_JOINTS = (4, 6)
+ROLL_JOINTS = (4, 6)     # forearm and wrist roll: sampled over one turn only
 HELD_PREFIX = "held:"
 CONTACT_STEP = 0.0025  # metres between checked poses of a contact move (how exactly its end is found)
 PRESS_DEPTH = 0.02     # a press is planned this far past the touched object's perceived surface
@@ -76,16 +73,9 @@ MIN_PRESS = 0.003      # ... and must get at least this far past it to count as 
 MIN_LEAD = 0.01        # metres of a press's approach worth travelling while the fingers still close
 STEER_NUDGE = 0.1      # rad the elbow is swung to look for solutions with more room to the joint limits
 STEER_JUMP = 0.15      # rad: the most any joint may move between two poses of a contact move
-# The ready posture (the PR2 "untucked" arm: bent in front of the body, above the table's near edge).
-READY = {"right": (-0.4, 1.0, 0.0, -2.05, 0.0, -0.1, 0.0), "left": (0.4, 1.0, 0.0, -2.05, 0.0, -0.1, 0.0)}   # forearm and wrist roll: sampled over one turn only
-
-
-def joint_names(arm: str) -> list[str]:
-    return [f"{PREFIX[arm]}_{name}" for name in ARM_JOINTS]
-
-
-def tool_frame(arm: str) -> str:
-    return f"{PREFIX[arm]}_gripper_tool_frame"
+READY = "untucked"  # the ready posture: the arm bent in front of the body, above the table's near edge
+joint_names = ROBOT.arm_joint_names
+tool_frame = ROBOT.tool_frame
 
 
 @dataclass(frozen=True)
@@ -166,7 +156,7 @@ class ArmKinematics:
         self.names = list(self.planner.user_joint_names)
         self.index = {name: i for i, name in enumerate(self.names)}
         self.arm_idx = np.array([self.index[n] for n in joint_names(arm)])
-        self.torso_idx = self.index[TORSO]
+        self.torso_idx = self.index[ROBOT.torso_joint]
         self.group_idx = np.asarray(self.planner.move_group_joint_indices)
         if list(self.group_idx) != [self.torso_idx, *self.arm_idx]:
             raise RuntimeError(f"unexpected move group for the {arm} arm: {[self.names[i] for i in self.group_idx]}")
@@ -507,7 +497,8 @@ class ArmKinematics:
         back from the side) are solved this way at once; the random planner
         is left for the cluttered cases.
         """
-        ready = np.clip(np.asarray(READY[self.arm], float), self.limits[self.arm_idx, 0], self.limits[self.arm_idx, 1])
+        ready = np.clip(np.asarray(ROBOT.arm_pose(READY, self.arm), float),
+                        self.limits[self.arm_idx, 0], self.limits[self.arm_idx, 1])
         if self.collisions(ready):
             return None
         first = self._joint_line(self.arm_q, ready)
@@ -725,7 +716,7 @@ class ArmKinematics:
     @contextmanager
     def fingers(self, width: float) -> Iterator[None]:
         """The model with this gripper opened to ``width`` (metres between the pads) for the block."""
-        idx = [self.index[f"{PREFIX[self.arm]}_gripper_{side}_finger_joint"] for side in ("l", "r")]
+        idx = [self.index[name] for name in ROBOT.finger_joint_names(self.arm)]
         now = self.qpos[idx].copy()
         self.qpos[idx] = np.clip(width / 2, self.limits[idx, 0], self.limits[idx, 1])
         try:

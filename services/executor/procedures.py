@@ -8,8 +8,8 @@ action recorder keeps (the landmark and the tool pose relative to it), or
 raises :class:`StepFailed` with the sentence to say.
 
 Pick-up is physical: approach, straight descent, close with force, lift,
-and the grasp counts only if the simulator's finger contacts still hold the
-object after the lift.
+and the grasp counts only if the gripper still holds the object after the
+lift (its fingers kept apart while it squeezes).
 
 A directional move may end pressed against the object in its way (a hand
 pushed onto a plate, or against a box to squeeze it between both hands):
@@ -40,13 +40,13 @@ from services.executor.referring import refer
 from services.executor.robot import MotionError, SimRobot, Started, Stopped
 from services.executor.scene import Scene, SceneSnapshot
 from services.executor.targets import EdgeGrasp, Held, overhang, thin_and_wide
-from services.sim.layout import HEAD_LOOK_AT, arm_pose
+from shared.robot import ROBOT
 
 log = logging.getLogger("hfpbd.executor.procedures")
 
-OPEN_WIDTH = 0.08
+OPEN_WIDTH = ROBOT.gripper.open_width
 CLOSE_WIDTH = 0.0
-GRIP_FORCE = 30.0
+GRIP_FORCE = ROBOT.gripper.default_effort
 RETREAT = 0.08          # after releasing, the hand backs off this far
 STATE_WAIT = 1.0        # seconds to wait for a robot state newer than a finished motion
 PICK_ATTEMPTS = 2
@@ -238,7 +238,7 @@ class Procedures:
     # -- p1 ----------------------------------------------------------------------------------
     def move_abs_dest(self, arm: str, destination: str = "side") -> Done:
         kin, _ = self._ready(arm)
-        goal = np.asarray(arm_pose("side", arm), float)
+        goal = np.asarray(ROBOT.arm_pose("side", arm), float)
         self._go(arm, self._plan(kin, goal, wording.sentence(f"I can't find a clear path to move my {arm} hand to the side")))
         return Done()
 
@@ -376,7 +376,7 @@ class Procedures:
             first = next(plans, None)
         if first is None:
             box = Box.of(obj)
-            if thin_and_wide(box) and overhang(box) < targets.MIN_OVERHANG:
+            if thin_and_wide(box) and overhang(box, self._snapshot().near_edge) < targets.MIN_OVERHANG:
                 raise StepFailed(wording.sentence(f"{words} is too wide to grasp; push it over the table edge first"))
             raise StepFailed(wording.cannot_pick(arm, words, "I can't reach around it"))
         reason = "it slipped out of my fingers"
@@ -463,7 +463,7 @@ class Procedures:
         Found one at a time: the arm sets off as soon as the first is known,
         and the next is looked for only if that grasp fails.
         """
-        for grasp in targets.grasps(obj):
+        for grasp in targets.grasps(obj, self._snapshot().near_edge):
             pre_q = kin.ik(grasp.hover if isinstance(grasp, EdgeGrasp) else grasp.pregrasp)
             if pre_q is None:
                 continue
@@ -658,13 +658,13 @@ class Procedures:
         """Arms out of the view, head on the table, a fresh settled observation."""
         for arm in ("right", "left"):
             kin, _ = self._ready(arm)
-            goal = np.asarray(arm_pose("side", arm), float)
+            goal = np.asarray(ROBOT.arm_pose("side", arm), float)
             if np.max(np.abs(goal - kin.arm_q)) > 0.05:
                 trajectory = kin.plan_to(goal)
                 if trajectory is not None:
                     self._go(arm, trajectory)
         try:
-            self.robot.look_at(np.asarray(HEAD_LOOK_AT, float))
+            self.robot.look_at(np.asarray(ROBOT.keyframe("start").gaze, float))
         except MotionError as exc:
             raise StepFailed(wording.sentence(f"I can't turn my head to the table: {exc}")) from exc
         objects = self._record_objects()

@@ -54,9 +54,9 @@ def _any(kin: ArmKinematics, poses: list[np.ndarray]) -> bool:
     return kin.first_reachable(poses) is not None
 
 
-def can_pick(kin: ArmKinematics, obj: dict[str, Any]) -> bool:
+def can_pick(kin: ArmKinematics, obj: dict[str, Any], near_edge: float | None) -> bool:
     """Some grasp whose pre-grasp is collision-free and whose grasp touches only the object."""
-    for grasp in targets.grasps(obj):
+    for grasp in targets.grasps(obj, near_edge):
         if kin.ik(grasp.pregrasp) is None:
             continue
         kin.allow_touching(obj["id"], True)
@@ -85,7 +85,7 @@ def object_reach(kin: ArmKinematics, snap: SceneSnapshot, oid: str, held: Held |
     out["next_to"] = side["left_of"] or side["right_of"]
     out["near"] = out["next_to"] or side["in_front_of"] or side["behind"]
     _give_way(interrupted)
-    out["pick_up"] = held is None and obj.get("held_by") is None and can_pick(kin, obj)
+    out["pick_up"] = held is None and obj.get("held_by") is None and can_pick(kin, obj, snap.near_edge)
     # With something in the hand the relation keys above were computed for the *held object*: their
     # poses are the hover poses of placing it there, the first thing place_rel needs, so "place" is
     # their union. With an empty hand it says whether the hand itself gets beside or on top of the

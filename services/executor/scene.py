@@ -1,5 +1,9 @@
 """The executor's live picture of the world: perceived objects, the table, the robot's measured state.
 
+Everything comes from the bus as a real robot would report it: objects and
+the table from perception, joints and grippers (opening and effort) from
+the robot's state.
+
 Written by subscription threads, read by the command worker and the
 reachability thread, so every read returns a consistent copy. A version
 number counts object changes that matter for reachability (an object
@@ -17,15 +21,15 @@ from typing import Any
 import numpy as np
 
 from services.executor.geometry import Box
-from services.sim.layout import TABLE_THICKNESS, TABLE_TOP_Z, TABLE_X, TABLE_Y
+from services.executor.table import Table, parse_table
+from shared.robot import ROBOT, GripperState
 
 MOVED = 0.01  # metres an object must move to count as a change
-ARMS = ("right", "left")
-CLOSED_WIDTH = 0.0025
+ARMS = ROBOT.arms
 SUPPORT_GAP = 0.025  # metres between an object's bottom and what it stands on
 MAX_STACK = 4
 FAINT_CONFIDENCE = 0.6
-REMEMBER = 256  # objects no longer seen whose descriptions are kept, for "the red cup is gone"  # gripper gap below which the fingers met: closed on nothing
+REMEMBER = 256  # objects no longer seen whose descriptions are kept, for "the red cup is gone"
 
 
 @dataclass
@@ -33,8 +37,7 @@ class SceneSnapshot:
     """A consistent copy of what is known at one moment."""
 
     objects: dict[str, dict[str, Any]]
-    table_z: float
-    table: Box
+    table: Table | None              # None until perception has seen one
     robot: dict[str, Any] | None
     version: int
     robot_version: int = 0
@@ -42,6 +45,16 @@ class SceneSnapshot:
 
     def box(self, object_id: str) -> Box:
         return Box.of(self.objects[object_id])
+
+    @property
+    def table_z(self) -> float:
+        """Height of the table top (NaN before one is seen: nothing then stands on it)."""
+        return self.table.height if self.table is not None else float("nan")
+
+    @property
+    def near_edge(self) -> float | None:
+        """x of the table edge facing the robot, when it has been seen."""
+        return self.table.near_edge if self.table is not None else None
 
     def obstacles(self, *, skip: set[str] = frozenset()) -> dict[str, Box]:
         """Boxes for the planning world: the table and every supported object not in ``skip``.
@@ -52,7 +65,7 @@ class SceneSnapshot:
         and treating it as an obstacle would block the arm against itself.
         So is a faint blob perception could neither type nor see clearly.
         """
-        boxes = {"table": self.table}
+        boxes = {"table": self.table.box()} if self.table is not None else {}
         boxes.update({oid: Box.of(o) for oid, o in self.objects.items()
                       if oid not in skip and self.supported(oid) and not _faint(o)})
         return boxes
@@ -88,25 +101,21 @@ class SceneSnapshot:
                 return oid
         return None
 
-    def gripper_state(self, arm: str) -> str:
-        """``open`` / ``closed`` / ``holding``, from the simulator's contact sensing."""
+    def gripper_state(self, arm: str) -> GripperState:
+        """``open`` / ``closed`` / ``holding``, from the gripper's opening and squeezing effort."""
         grippers = (self.robot or {}).get("grippers", {})
         g = grippers.get(arm)
         if not isinstance(g, dict):
             return "open"
-        if g.get("holding"):
-            return "holding"
-        return "closed" if float(g.get("width", 0.09)) < CLOSED_WIDTH else "open"
+        return ROBOT.gripper.state(_reading(g, "width", ROBOT.gripper.max_opening), _reading(g, "effort", 0.0))
 
     def joints(self) -> dict[str, float]:
         return dict((self.robot or {}).get("joints", {}))
 
 
-def table_box(height: float) -> Box:
-    """The table as a box whose top is at ``height`` (its extent comes from the scene layout)."""
-    cx, cy = (TABLE_X[0] + TABLE_X[1]) / 2, (TABLE_Y[0] + TABLE_Y[1]) / 2
-    size = np.array([TABLE_X[1] - TABLE_X[0], TABLE_Y[1] - TABLE_Y[0], TABLE_THICKNESS])
-    return Box(np.array([cx, cy, height - TABLE_THICKNESS / 2]), size)
+def _reading(gripper: dict[str, Any], name: str, default: float) -> float:
+    value = gripper.get(name)
+    return float(value) if isinstance(value, (int, float)) and np.isfinite(value) else default
 
 
 class Scene:
@@ -115,14 +124,17 @@ class Scene:
     def __init__(self) -> None:
         self._lock = threading.Condition()
         self._objects: dict[str, dict[str, Any]] = {}
-        self._table_z = TABLE_TOP_Z
+        self._table: Table | None = None
         self._robot: dict[str, Any] | None = None
         self._version = 0
         self._robot_version = 0
         self._remembered: dict[str, dict[str, Any]] = {}
 
     def update_objects(self, objects: list[dict[str, Any]], table: dict | None = None) -> bool:
-        """Take a perception message's objects; True when something changed that matters."""
+        """Take a perception message's objects and table; True when something changed that matters.
+
+        A message without a usable ``table`` keeps the table known before.
+        """
         fresh = {o["id"]: o for o in objects if _valid_object(o)}
         with self._lock:
             changed = _differs(self._objects, fresh)
@@ -130,9 +142,10 @@ class Scene:
             self._remembered.update(copy.deepcopy(fresh))
             while len(self._remembered) > REMEMBER:
                 del self._remembered[next(iter(self._remembered))]
-            if isinstance(table, dict) and isinstance(table.get("height"), (int, float)):
-                changed |= abs(float(table["height"]) - self._table_z) > MOVED
-                self._table_z = float(table["height"])
+            seen = parse_table(table)
+            if seen is not None:
+                changed |= self._table is None or _table_moved(self._table, seen)
+                self._table = seen
             if changed:
                 self._version += 1
             self._lock.notify_all()
@@ -146,8 +159,8 @@ class Scene:
 
     def snapshot(self) -> SceneSnapshot:
         with self._lock:
-            return SceneSnapshot(copy.deepcopy(self._objects), self._table_z, table_box(self._table_z),
-                                 copy.deepcopy(self._robot), self._version, self._robot_version,
+            return SceneSnapshot(copy.deepcopy(self._objects), self._table, copy.deepcopy(self._robot),
+                                 self._version, self._robot_version,
                                  {k: v for k, v in self._remembered.items() if k not in self._objects})
 
     def sim_time(self) -> float | None:
@@ -180,6 +193,15 @@ def _valid_object(obj: Any) -> bool:
                 and all(np.isfinite(np.asarray(obj["size"], float))))
     except (TypeError, ValueError, KeyError, AttributeError):
         return False
+
+
+def _table_moved(old: Table, new: Table) -> bool:
+    """Whether the table changed by more than ``MOVED`` in height, extent or an edge, or an edge came or went."""
+    if set(old.edges) != set(new.edges) or abs(old.height - new.height) > MOVED:
+        return True
+    if np.any(np.abs(old.extent - new.extent) > MOVED):
+        return True
+    return any(abs(old.edges[side] - new.edges[side]) > MOVED for side in new.edges)
 
 
 def _differs(old: dict[str, dict], new: dict[str, dict]) -> bool:

@@ -20,7 +20,6 @@ import numpy as np
 
 from services.executor import geometry as geo
 from services.executor.geometry import Box
-from services.sim.layout import TABLE_X
 
 HOVER = 0.06          # a carried object is brought this far above its release point first
 # Headings (rad about the vertical) a carried object may be turned to: the hand keeps the grasp's
@@ -83,12 +82,15 @@ def place_table(tool_pose: np.ndarray, held: Held, table_z: float) -> tuple[np.n
     return np.asarray(tool_pose, float), geo.carry_pose(tool_pose, current_center, center)
 
 
-def grasps(obj: dict) -> list[geo.Grasp]:
-    """Grasps around the object where it fits the gripper, else on its overhang beyond the table's near edge."""
+def grasps(obj: dict, near_edge: float | None) -> list[geo.Grasp]:
+    """Grasps around the object where it fits the gripper, else on its overhang beyond the table's near edge.
+
+    ``near_edge`` is the x of the table edge facing the robot (None: not seen, so no overhang is known).
+    """
     box = Box.of(obj)
     found = geo.grasp_candidates(box, round_shape=obj.get("type") in ROUND_TYPES)
-    if not found and thin_and_wide(box) and overhang(box) >= MIN_OVERHANG:
-        found.append(edge_grasp(box))
+    if not found and near_edge is not None and thin_and_wide(box) and overhang(box, near_edge) >= MIN_OVERHANG:
+        found.append(edge_grasp(box, near_edge))
     return found
 
 
@@ -97,9 +99,12 @@ def thin_and_wide(box: Box) -> bool:
     return box.size[2] <= MAX_EDGE_THICKNESS and float(np.min(box.size[:2])) > geo.MAX_GRIP_WIDTH
 
 
-def overhang(box: Box) -> float:
-    """How far the object reaches past the table's near edge, towards the robot (metres; negative: not at all)."""
-    return TABLE_X[0] - float(box.center[0] - box.half[0])
+def overhang(box: Box, near_edge: float | None) -> float:
+    """How far the object reaches past the table's near edge, towards the robot (metres; negative: not at all).
+
+    With the edge unseen (None) nothing is known to stick out: -inf.
+    """
+    return -np.inf if near_edge is None else near_edge - float(box.center[0] - box.half[0])
 
 
 @dataclass(frozen=True)
@@ -114,14 +119,14 @@ class EdgeGrasp(geo.Grasp):
     hover: np.ndarray
 
 
-def edge_grasp(box: Box) -> EdgeGrasp:
+def edge_grasp(box: Box, table_edge: float) -> EdgeGrasp:
     """Gripper level, pointing +x at the overhang, fingers closing across the object's thickness.
 
     The fingertips stop ``EDGE_CLEARANCE`` short of the table edge, so the
     lower finger passes under the object without touching the table.
     """
     rot = geo.facing(np.array([1.0, 0.0, 0.0]), np.pi / 2)   # closing axis vertical
-    point = np.array([TABLE_X[0] - EDGE_CLEARANCE - FINGERTIP, box.center[1], box.center[2]])
+    point = np.array([table_edge - EDGE_CLEARANCE - FINGERTIP, box.center[1], box.center[2]])
     grasp = geo.make_pose(point, rot)
     near_edge = float(box.center[0] - box.half[0])
     back = max(EDGE_APPROACH, point[0] + FINGERTIP + EDGE_CLEARANCE - near_edge)   # fingertips clear of the edge

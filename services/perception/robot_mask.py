@@ -2,7 +2,7 @@
 
 Why capsules built from the robot model: the simulator publishes the pose of
 every arm link that has a shape, and the project's PR2 model
-(``services/sim/robot/build_urdf.py``) says exactly which boxes and cylinders
+(``shared/robot/build_urdf.py``) says exactly which boxes and cylinders
 each link is made of. Each shape becomes the smallest capsule along its
 longest axis that contains it, so the mask covers the real geometry instead
 of a guess. A margin absorbs depth noise, and because a cloud is rendered a
@@ -21,7 +21,9 @@ from typing import Any
 
 import numpy as np
 
-from services.sim.robot.build_urdf import ARMS, Shape, arm as arm_model
+from shared.robot import ROBOT
+from shared.robot.build_urdf import Shape
+from shared.robot.build_urdf import arm as arm_model
 
 MARGIN = 0.02   # m around every shape: depth noise and the pose's own latency
 
@@ -57,7 +59,7 @@ def _shape_capsule(shape: Shape) -> tuple[np.ndarray, np.ndarray, float]:
 def link_capsules() -> dict[str, tuple[tuple[np.ndarray, np.ndarray, float], ...]]:
     """Link name → its shapes as capsules in the link frame, for both arms of the model."""
     capsules = {}
-    for side in ARMS:
+    for side in ROBOT.arms:
         links, _ = arm_model(side)
         for link in links:
             if link.shapes:

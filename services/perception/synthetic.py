@@ -18,6 +18,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from services.perception.robot_mask import segments_from_state
+from shared.robot import ROBOT
+from shared.robot.pr2 import TOOL_OFFSET
 
 RGB = tuple[int, int, int]
 
@@ -30,10 +32,6 @@ COLOURS: dict[str, RGB] = {
 TABLE_RGB: RGB = (150, 110, 70)
 FLOOR_RGB: RGB = (90, 90, 95)
 ARM_RGB: RGB = (210, 210, 215)
-
-# PR2 Kinect-like camera: 640x480, 57 degrees horizontal field of view.
-KINECT_FX_640 = 589.4
-
 
 @dataclass(frozen=True)
 class Box:
@@ -128,7 +126,7 @@ class Camera:
 
     def rays(self) -> np.ndarray:
         """Unit ray directions (H, W, 3) in the base frame."""
-        f = KINECT_FX_640 * self.width / 640.0
+        f = ROBOT.camera.intrinsics(self.width, self.height)[0]   # the robot's head camera at this size
         u, v = np.meshgrid(np.arange(self.width) + 0.5, np.arange(self.height) + 0.5)
         local = np.stack([(u - self.width / 2) / f, (v - self.height / 2) / f, np.ones_like(u)], axis=-1)
         directions = local @ self.rotation().T
@@ -292,7 +290,7 @@ def _hit_capsule(origin: np.ndarray, rays: np.ndarray, cap: Capsule) -> tuple[np
 SHOULDER = {"right": (-0.05, -0.188, 1.121), "left": (-0.05, 0.188, 1.121)}
 POINTING_DOWN = (0.7071068, 0.0, 0.7071068, 0.0)   # tool x axis along -z
 UPPER_ARM, FOREARM = 0.4, 0.321                     # shoulder lift -> elbow -> wrist flex (m)
-SHOULDER_LIFT_OFFSET, TOOL_OFFSET = 0.1, 0.18
+SHOULDER_LIFT_OFFSET = 0.1
 
 
 def _frame(x_axis: np.ndarray, origin: np.ndarray) -> list[float]:
@@ -343,7 +341,7 @@ def reaching_arm(tool: tuple[float, float, float], arm: str = "right",
     state = {
         "links": {name: [float(v) for v in pose] for name, pose in links.items()},
         "ee": {arm: [*map(float, tool_p), *POINTING_DOWN]},
-        "grippers": {arm: {"width": width, "holding": holding, "contact": holding}},
+        "grippers": {arm: {"width": width, "effort": ROBOT.gripper.default_effort if holding else 0.0}},
     }
     capsules = [Capsule(tuple(s.a), tuple(s.b), s.radius) for s in segments_from_state(state, margin=0.0)]
     return capsules, state

@@ -31,8 +31,9 @@ from scipy.optimize import linear_sum_assignment
 
 from services.perception.descriptors import Descriptor
 from services.perception.support import HOLD_RADIUS, footprint_share
+from shared.robot import ROBOT
 
-ARMS = ("right", "left")
+ARMS = ROBOT.arms
 NO_MATCH = 1e6
 
 
@@ -272,7 +273,7 @@ def _views(track: Track) -> tuple[Descriptor, ...]:
 
 
 def holding_tools(state: Mapping[str, Any] | None) -> dict[str, np.ndarray]:
-    """Tool-frame positions of the grippers that report holding something."""
+    """Tool-frame positions of the grippers holding something: fingers kept apart while they squeeze."""
     if not state:
         return {}
     grippers = state.get("grippers") or {}
@@ -280,7 +281,7 @@ def holding_tools(state: Mapping[str, Any] | None) -> dict[str, np.ndarray]:
     tools = {}
     for arm in ARMS:
         gripper = grippers.get(arm)
-        if isinstance(gripper, Mapping) and gripper.get("holding") and arm in ee:
+        if isinstance(gripper, Mapping) and _holding(gripper) and arm in ee:
             try:
                 pose = np.asarray(ee[arm], dtype=float).reshape(-1)
             except (TypeError, ValueError):
@@ -288,6 +289,13 @@ def holding_tools(state: Mapping[str, Any] | None) -> dict[str, np.ndarray]:
             if len(pose) >= 3 and np.isfinite(pose[:3]).all():
                 tools[arm] = pose[:3]
     return tools
+
+
+def _holding(gripper: Mapping[str, Any]) -> bool:
+    width, effort = gripper.get("width"), gripper.get("effort")
+    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in (width, effort)):
+        return False
+    return ROBOT.gripper.state(float(width), float(effort)) == "holding"
 
 
 def tool_positions(state: Mapping[str, Any] | None) -> list[np.ndarray]:

@@ -19,11 +19,10 @@ from collections.abc import Sequence
 import numpy as np
 
 from services.sim.cloud import cloud_message
-from services.sim.layout import arm_pose
-from services.sim.robot.build_urdf import arm_joint_names
 from services.sim.scene_file import load_scene
 from services.sim.world import SimWorld
 from shared.codec import encode
+from shared.robot import ROBOT
 
 TASK_SCENES = ["default", "task1_stack_cups", "task2_side_by_side", "task3_in_box", "task4_large_box",
                "task5_plate_edge"]
@@ -33,8 +32,8 @@ RESOLUTIONS = [(640, 480), (320, 240)]
 def measure(world: SimWorld, scene: str, seconds: float, rate: float) -> dict[str, float]:
     world.load(load_scene(scene))
     world.settle(0.2)
-    names = arm_joint_names("right")
-    world.move_joints("right", names, np.array(arm_pose("untucked", "right")), world.new_motion_id())
+    names = ROBOT.arm_joint_names("right")
+    world.move_joints("right", names, np.array(ROBOT.arm_pose("untucked", "right")), world.new_motion_id())
     render, convert, physics = [], [], []
     steps_per_frame = max(1, round(1.0 / (rate * world.timestep)))
     frames = max(1, int(seconds * rate))

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from services.sim.world import CAMERA_FAR, CAMERA_NEAR, Capture
+from services.sim.world import Capture
+from shared.robot import ROBOT
 
 
 def cloud_arrays(capture: Capture) -> tuple[np.ndarray, np.ndarray]:
@@ -18,7 +19,7 @@ def cloud_arrays(capture: Capture) -> tuple[np.ndarray, np.ndarray]:
     position = capture.position
     camera_xyz = position[..., :3]
     distance = -camera_xyz[..., 2]                  # OpenGL camera looks along -z
-    valid = (position[..., 3] < 1.0) & (distance >= CAMERA_NEAR) & (distance <= CAMERA_FAR)
+    valid = (position[..., 3] < 1.0) & (distance >= ROBOT.camera.near) & (distance <= ROBOT.camera.far)
     rotation = capture.model_matrix[:3, :3].astype(np.float32)
     translation = capture.model_matrix[:3, 3].astype(np.float32)
     xyz = camera_xyz @ rotation.T + translation

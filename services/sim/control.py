@@ -16,11 +16,8 @@ from typing import Any
 import numpy as np
 
 from services.sim.motion import check_limits, check_waypoints
-from services.sim.robot.build_urdf import ARMS, arm_joint_names
-from services.sim.world import DEFAULT_GRIP_FORCE, JointInfo
-
-MAX_GRIP_FORCE = 100.0         # N, the PR2 gripper's effort limit
-MAX_GRIPPER_WIDTH = 0.09
+from services.sim.world import ARMS, JointInfo
+from shared.robot import ROBOT
 
 
 def arm_of(request: Mapping[str, Any]) -> str:
@@ -70,7 +67,7 @@ def contact_flag(request: Mapping[str, Any]) -> bool:
 def arm_request(request: Mapping[str, Any], joints: Mapping[str, JointInfo]) -> tuple[str, list[str], Any]:
     """``(arm, joint names, goal)`` where goal is an array of 7 positions or ``(times, points)``."""
     arm = arm_of(request)
-    names = arm_joint_names(arm)
+    names = ROBOT.arm_joint_names(arm)
     if "joints" in request:
         given = request["joints"]
         if not isinstance(given, list) or given != names:
@@ -93,8 +90,8 @@ def arm_request(request: Mapping[str, Any], joints: Mapping[str, JointInfo]) -> 
 
 def gripper_request(request: Mapping[str, Any]) -> tuple[str, float, float]:
     arm = arm_of(request)
-    width = number(request, "width", 0.0, MAX_GRIPPER_WIDTH)
-    force = number(request, "force", 1.0, MAX_GRIP_FORCE, DEFAULT_GRIP_FORCE)
+    width = number(request, "width", 0.0, ROBOT.gripper.max_opening)
+    force = number(request, "force", *ROBOT.gripper.effort_range, ROBOT.gripper.default_effort)
     return arm, width, force
 
 

@@ -28,10 +28,16 @@ import numpy as np
 from services.sim import control
 from services.sim.cloud import cloud_message
 from services.sim.motion import Motion
-from services.sim.robot.build_urdf import ARMS
-from services.sim.scene_file import (DEFAULT_SCENE, SceneError, SceneSpec, load_scene, parse_scene,
-                                     randomized, with_positions)
-from services.sim.world import Capture, SimWorld
+from services.sim.scene_file import (
+    DEFAULT_SCENE,
+    SceneError,
+    SceneSpec,
+    load_scene,
+    parse_scene,
+    randomized,
+    with_positions,
+)
+from services.sim.world import ARMS, Capture, SimWorld
 from shared.bus import Bus
 
 log = logging.getLogger("hfpbd.sim")

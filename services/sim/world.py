@@ -21,18 +21,15 @@ from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
 from services.sim import objects as object_builder
-from services.sim.layout import HEAD_LOOK_AT, TORSO_HEIGHT, arm_pose_map
 from services.sim.motion import MinimumJerk, Motion, Waypoints
-from services.sim.robot.build_urdf import (ARMS, CAMERA_LINK, URDF_PATH, arm_joint_names,
-                                           finger_joint_names, tool_frame)
 from services.sim.scene_file import ObjectSpec, SceneSpec
+from shared.robot import ROBOT
+from shared.robot.build_urdf import model
+
+ARMS = ROBOT.arms
 
 TIMESTEP = 1.0 / 250.0
-KINECT_HFOV = math.radians(57.0)
-CAMERA_NEAR, CAMERA_FAR = 0.4, 4.5       # a Kinect returns nothing nearer or farther
-GRIPPER_OPEN = 0.08                      # start-up opening (m)
 GRIPPER_SPEED = 0.08                     # gap closing/opening speed (m/s)
-DEFAULT_GRIP_FORCE = 30.0                # N per pad, the PR2 gripper's usual effort
 PAD_FRICTION = 1.5
 GRIPPER_SETTLE_TRAVEL = 0.0005          # m: the pads have stopped when the opening changes less than this
 GRIPPER_SETTLE_TIME = 0.15               # s ... over this long
@@ -111,7 +108,7 @@ class SimWorld:
         self.scene_name = ""
         self.scene_generation = 0  # counts loads, so a reload of the same scene is visible too
         self.motions: dict[str, Motion] = {}
-        self.grip_force = {arm: DEFAULT_GRIP_FORCE for arm in ARMS}
+        self.grip_force = {arm: ROBOT.gripper.default_effort for arm in ARMS}
         self.sim_time = 0.0
         self._ids = count(1)
         self.home()
@@ -120,7 +117,8 @@ class SimWorld:
     def _load_robot(self) -> sapien.physx.PhysxArticulation:
         loader = self.scene.create_urdf_loader()
         loader.fix_root_link = True
-        robot = loader.load(str(URDF_PATH), srdf_file="")  # planning-only SRDF: physics ignores self-contact below
+        # the SRDF is for planners only: physics ignores self-contact (below)
+        robot = loader.load(str(ROBOT.urdf_path), srdf_file="")
         robot.set_name("pr2")
         pad_material = sapien.physx.PhysxMaterial(PAD_FRICTION, PAD_FRICTION, 0.0)
         pads = {name for arm in ARMS for name in self.pad_links(arm)}
@@ -135,7 +133,7 @@ class SimWorld:
         for joint in robot.get_active_joints():
             name = joint.name
             if "finger" in name:
-                joint.set_drive_properties(*FINGER_DRIVE, DEFAULT_GRIP_FORCE)
+                joint.set_drive_properties(*FINGER_DRIVE, ROBOT.gripper.default_effort)
             elif name == "torso_lift_joint":
                 joint.set_drive_properties(*TORSO_DRIVE)
             elif name.startswith("head"):
@@ -147,7 +145,6 @@ class SimWorld:
         return robot
 
     def _joint_info(self) -> dict[str, JointInfo]:
-        from services.sim.robot.build_urdf import model
         _, joint_specs = model()
         by_name = {j.name: j for j in joint_specs}
         info = {}
@@ -157,10 +154,9 @@ class SimWorld:
         return info
 
     def _mount_camera(self, width: int, height: int) -> sapien.render.RenderCameraComponent:
-        focal = (width / 2) / math.tan(KINECT_HFOV / 2)
-        fovy = 2 * math.atan((height / 2) / focal)
-        camera = self.scene.add_mounted_camera("head_camera", self.links[CAMERA_LINK].entity, sapien.Pose(),
-                                               width, height, fovy, 0.05, CAMERA_FAR + 1.0)
+        spec = ROBOT.camera
+        camera = self.scene.add_mounted_camera("head_camera", self.links[spec.link].entity, sapien.Pose(), width,
+                                               height, spec.vertical_fov(width, height), 0.05, spec.far + 1.0)
         return camera
 
     @staticmethod
@@ -171,12 +167,10 @@ class SimWorld:
     # -- robot posture ---------------------------------------------------------
     def home(self) -> None:
         """Torso up, arms to the side, grippers open, head on the table: the start posture."""
-        targets = {"torso_lift_joint": TORSO_HEIGHT, **arm_pose_map("side")}
-        pan, tilt = self.head_angles_for(np.array(HEAD_LOOK_AT), TORSO_HEIGHT)
-        targets.update(head_pan_joint=pan, head_tilt_joint=tilt)
-        for arm in ARMS:
-            for name in finger_joint_names(arm):
-                targets[name] = GRIPPER_OPEN / 2
+        start = ROBOT.keyframe("start")
+        targets = dict(start.joints)
+        pan, tilt = self.head_angles_for(np.array(start.gaze), targets[ROBOT.torso_joint])
+        targets.update(zip(ROBOT.head_joints, (pan, tilt)))
         qpos = np.zeros(len(self.joints))
         for name, value in targets.items():
             qpos[self.joints[name].index] = value
@@ -246,7 +240,7 @@ class SimWorld:
         return self.start_motion(Motion(motion_id, part, names, Waypoints(times, points), self.sim_time, contact))
 
     def move_gripper(self, arm: str, width: float, force: float, motion_id: str) -> Motion | None:
-        names = finger_joint_names(arm)
+        names = ROBOT.finger_joint_names(arm)
         start = self.joint_targets(names)
         goal = np.full(2, width / 2)
         self.grip_force[arm] = force
@@ -349,7 +343,8 @@ class SimWorld:
         two hands is held by neither gripper alone. ``contacts`` as for
         :meth:`contacts_by_link`.
         """
-        closing = Rotation.from_quat(np.roll(self.links[tool_frame(arm)].entity_pose.q, -1)).apply([0.0, 1.0, 0.0])
+        tool = self.links[ROBOT.tool_frame(arm)].entity_pose
+        closing = Rotation.from_quat(np.roll(tool.q, -1)).apply([0.0, 1.0, 0.0])
         pads = set(self.pad_links(arm))
         faces: dict[str, set[str]] = {name: set() for name in pads}
         for contact in self.scene.get_contacts() if contacts is None else contacts:
@@ -362,7 +357,28 @@ class SimWorld:
         return set.intersection(*faces.values())
 
     def gripper_width(self, arm: str) -> float:
-        return float(self.qpos(finger_joint_names(arm)).sum())
+        return float(self.qpos(ROBOT.finger_joint_names(arm)).sum())
+
+    def gripper_effort(self, arm: str) -> float:
+        """How hard the pads squeeze (N, closing positive): what a gripper motor's current tells a real robot.
+
+        Each pad's drive pushes with its PD law towards the drive target,
+        bounded by the grip's force limit; a pad blocked by an object pushes
+        at the limit, a pad moving freely or at rest at its goal barely at
+        all. The lesser of the two pads is reported: both must press for the
+        hand to squeeze anything.
+        """
+        active = self.robot.get_active_joints()
+        qpos, qvel = self.robot.get_qpos(), self.robot.get_qvel()
+        squeeze = []
+        for name in ROBOT.finger_joint_names(arm):
+            index = self.joints[name].index
+            joint = active[index]
+            target = float(np.asarray(joint.drive_target).reshape(-1)[0])
+            target_velocity = float(np.asarray(joint.drive_velocity_target).reshape(-1)[0])
+            push = joint.stiffness * (target - qpos[index]) + joint.damping * (target_velocity - qvel[index])
+            squeeze.append(-float(np.clip(push, -joint.force_limit, joint.force_limit)))  # a pad opens along +q
+        return min(squeeze)
 
     def state(self) -> dict:
         """Everything ``sim/state`` carries except the stamp and the real-time factor."""
@@ -375,14 +391,15 @@ class SimWorld:
         for arm in ARMS:
             left, right = (touching[name] for name in self.pad_links(arm))
             both = sorted(self.squeezed(arm, contacts))
-            grippers[arm] = {"width": self.gripper_width(arm), "holding": both[0] if both else None,
-                             "contact": sorted(left | right), "force": self.grip_force[arm]}
+            grippers[arm] = {"width": self.gripper_width(arm), "effort": self.gripper_effort(arm),
+                             "holding": both[0] if both else None, "contact": sorted(left | right),
+                             "force": self.grip_force[arm]}
         links = {name: pose_list(link.entity_pose) for name, link in self.links.items()
                  if name[:2] in ("r_", "l_") and (link.collision_shapes or name.endswith("tool_frame"))}
         return {
             "sim_time": self.sim_time,
             "joints": joints,
-            "ee": {arm: pose_list(self.links[tool_frame(arm)].entity_pose) for arm in ARMS},
+            "ee": {arm: pose_list(self.links[ROBOT.tool_frame(arm)].entity_pose) for arm in ARMS},
             "grippers": grippers,
             "moving": {arm: arm in self.motions for arm in ARMS},
             "head": {"pan": joints["head_pan_joint"], "tilt": joints["head_tilt_joint"]},
@@ -417,7 +434,7 @@ class SimWorld:
             position=self.camera.get_picture("Position"),
             color=self.camera.get_picture("Color"),
             model_matrix=np.asarray(self.camera.get_model_matrix(), dtype=np.float64),
-            camera_pose=pose_list(self.links[CAMERA_LINK].entity_pose),
+            camera_pose=pose_list(self.links[ROBOT.camera.link].entity_pose),
             sim_time=self.sim_time,
             scene=self.scene_name,
             scene_generation=self.scene_generation,

@@ -10,7 +10,8 @@ pads per hand (0–0.045 m each, a 0–0.09 m gap) closing along the tool frame'
 y axis. Continuous joints (forearm and wrist roll) are revolute with ±2π
 limits so planners and IK see plain bounded joints.
 
-Run ``python -m services.sim.robot.build_urdf`` after changing a number.
+Run ``python -m shared.robot.build_urdf`` after changing a number; names (joints, frames)
+come from ``pr2.py``.
 """
 
 from __future__ import annotations
@@ -19,36 +20,25 @@ import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from itertools import combinations
-from pathlib import Path
 
 import numpy as np
 
-ROBOT_DIR = Path(__file__).resolve().parent
-URDF_PATH = ROBOT_DIR / "pr2.urdf"
-SRDF_PATH = ROBOT_DIR / "pr2.srdf"
+from shared.robot.pr2 import (
+    ARM_PREFIX,
+    ARMS,
+    CAMERA_LINK,
+    CAMERA_OPTICAL_FRAME,
+    FINGER_TRAVEL,
+    PR2,
+    TOOL_OFFSET,
+    TORSO_JOINT,
+    arm_joint_names,
+    tool_frame,
+)
 
-ARMS = ("right", "left")
-ARM_PREFIX = {"right": "r", "left": "l"}
-ARM_JOINT_SUFFIXES = ("shoulder_pan_joint", "shoulder_lift_joint", "upper_arm_roll_joint",
-                      "elbow_flex_joint", "forearm_roll_joint", "wrist_flex_joint", "wrist_roll_joint")
-TOOL_OFFSET = 0.18          # wrist roll axis -> tool frame, along the gripper's x
-FINGER_TRAVEL = 0.045       # each pad; the gap is twice the joint position
-CAMERA_LINK = "head_mount_kinect_rgb_link"
+URDF_PATH = PR2.urdf_path
+SRDF_PATH = PR2.srdf_path
 TWO_PI = 2.0 * math.pi
-
-
-def arm_joint_names(arm: str) -> list[str]:
-    """The seven arm joints of ``arm`` ("right"/"left") from shoulder to wrist."""
-    return [f"{ARM_PREFIX[arm]}_{suffix}" for suffix in ARM_JOINT_SUFFIXES]
-
-
-def finger_joint_names(arm: str) -> list[str]:
-    p = ARM_PREFIX[arm]
-    return [f"{p}_gripper_l_finger_joint", f"{p}_gripper_r_finger_joint"]
-
-
-def tool_frame(arm: str) -> str:
-    return f"{ARM_PREFIX[arm]}_gripper_tool_frame"
 
 
 # --- model description ------------------------------------------------------
@@ -102,6 +92,7 @@ class Joint:
 X, Y, Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
 DARK = (0.18, 0.18, 0.2)
 LIGHT = (0.82, 0.82, 0.85)
+PAD = (0.3, 0.3, 0.3)
 
 
 def box(x: float, y: float, z: float, at: tuple[float, float, float] = (0, 0, 0)) -> Shape:
@@ -124,19 +115,19 @@ def body() -> tuple[list[Link], list[Joint]]:
         Link("head_pan_link", 6.34, [span_box((-0.113, 0.145), (-0.161, 0.161), (-0.066, 0.079))], DARK),
         Link("head_tilt_link", 4.48, [span_box((-0.184, 0.077), (-0.148, 0.148), (-0.062, 0.155))], DARK),
         Link(CAMERA_LINK, 0.1, [box(0.06, 0.28, 0.04)], (0.1, 0.1, 0.1)),
-        Link("head_mount_kinect_rgb_optical_frame"),
+        Link(CAMERA_OPTICAL_FRAME),
     ]
     joints = [
         Joint("base_footprint_joint", "fixed", "base_footprint", "base_link", (0, 0, 0.051)),
-        Joint("torso_lift_joint", "prismatic", "base_link", "torso_lift_link", (-0.05, 0, 0.739675),
+        Joint(TORSO_JOINT, "prismatic", "base_link", "torso_lift_link", (-0.05, 0, 0.739675),
               axis=Z, lower=0.0, upper=0.33, velocity=0.05, effort=10000.0),
         Joint("head_pan_joint", "revolute", "torso_lift_link", "head_pan_link", (-0.01707, 0, 0.38145),
               axis=Z, lower=-3.007, upper=3.007, velocity=6.0, effort=2.645),
         Joint("head_tilt_joint", "revolute", "head_pan_link", "head_tilt_link", (0.068, 0, 0),
               axis=Y, lower=-0.471, upper=1.396, velocity=5.0, effort=18.0),
         Joint("head_mount_kinect_rgb_joint", "fixed", "head_tilt_link", CAMERA_LINK, (-0.14707, -0.0175, 0.29195)),
-        Joint("head_mount_kinect_rgb_optical_frame_joint", "fixed", CAMERA_LINK,
-              "head_mount_kinect_rgb_optical_frame", rpy=(-math.pi / 2, 0.0, -math.pi / 2)),
+        Joint("head_mount_kinect_rgb_optical_frame_joint", "fixed", CAMERA_LINK, CAMERA_OPTICAL_FRAME,
+              rpy=(-math.pi / 2, 0.0, -math.pi / 2)),
     ]
     return links, joints
 
@@ -158,12 +149,13 @@ def arm(side: str) -> tuple[list[Link], list[Joint]]:
         Link(f"{p}_wrist_flex_link", 0.61, [box(0.065, 0.042, 0.078)], DARK),
         Link(f"{p}_wrist_roll_link", 0.1),
         Link(f"{p}_gripper_palm_link", 0.58, [span_box((0.029, 0.125), (-0.05, 0.05), (-0.024, 0.024))], DARK),
-        Link(f"{p}_gripper_l_finger_link", 0.2, [span_box((0.125, 0.20), (0.0, 0.01), (-0.013, 0.013))], (0.3, 0.3, 0.3)),
-        Link(f"{p}_gripper_r_finger_link", 0.2, [span_box((0.125, 0.20), (-0.01, 0.0), (-0.013, 0.013))], (0.3, 0.3, 0.3)),
+        Link(f"{p}_gripper_l_finger_link", 0.2, [span_box((0.125, 0.20), (0.0, 0.01), (-0.013, 0.013))], PAD),
+        Link(f"{p}_gripper_r_finger_link", 0.2, [span_box((0.125, 0.20), (-0.01, 0.0), (-0.013, 0.013))], PAD),
         Link(f"{p}_gripper_tool_frame"),
     ]
     joints = [
-        Joint(f"{p}_shoulder_pan_joint", "revolute", "torso_lift_link", f"{p}_shoulder_pan_link", (0, side_sign * 0.188, 0),
+        Joint(f"{p}_shoulder_pan_joint", "revolute", "torso_lift_link", f"{p}_shoulder_pan_link",
+              (0, side_sign * 0.188, 0),
               axis=Z, lower=pan_limits[0], upper=pan_limits[1], velocity=2.088, effort=30.0),
         Joint(f"{p}_shoulder_lift_joint", "revolute", f"{p}_shoulder_pan_link", f"{p}_shoulder_lift_link", (0.1, 0, 0),
               axis=Y, lower=-0.5236, upper=1.3963, velocity=2.082, effort=30.0),
@@ -184,7 +176,7 @@ def arm(side: str) -> tuple[list[Link], list[Joint]]:
               axis=Y, lower=0.0, upper=FINGER_TRAVEL, velocity=0.1, effort=100.0),
         Joint(f"{p}_gripper_r_finger_joint", "prismatic", f"{p}_gripper_palm_link", f"{p}_gripper_r_finger_link",
               axis=(0.0, -1.0, 0.0), lower=0.0, upper=FINGER_TRAVEL, velocity=0.1, effort=100.0),
-        Joint(f"{p}_gripper_tool_joint", "fixed", f"{p}_gripper_palm_link", f"{p}_gripper_tool_frame", (TOOL_OFFSET, 0, 0)),
+        Joint(f"{p}_gripper_tool_joint", "fixed", f"{p}_gripper_palm_link", tool_frame(side), (TOOL_OFFSET, 0, 0)),
     ]
     return links, joints
 
@@ -222,7 +214,8 @@ def _link_element(robot: ET.Element, link: Link) -> None:
     if link.shapes:
         # each shape carries an equal share of the mass; parallel-axis about the centre
         share = mass / len(link.shapes)
-        diag = sum(s.inertia(share) + share * (np.sum((np.array(s.xyz) - centre) ** 2) - (np.array(s.xyz) - centre) ** 2)
+        diag = sum(s.inertia(share)
+                   + share * (np.sum((np.array(s.xyz) - centre) ** 2) - (np.array(s.xyz) - centre) ** 2)
                    for s in link.shapes)
     else:
         diag = np.full(3, 1e-5)
@@ -252,7 +245,7 @@ def _joint_element(robot: ET.Element, joint: Joint) -> None:
 
 def urdf_text(links: list[Link], joints: list[Joint]) -> str:
     robot = ET.Element("robot", name="pr2")
-    robot.append(ET.Comment(" Generated by services/sim/robot/build_urdf.py from the PR2 fact sheet; do not edit. "))
+    robot.append(ET.Comment(" Generated by shared/robot/build_urdf.py from the PR2 fact sheet; do not edit. "))
     for link in links:
         _link_element(robot, link)
     for joint in joints:
@@ -314,7 +307,8 @@ def _near_pairs(links: list[Link], joints: list[Joint]) -> set[frozenset[str]]:
     return pairs
 
 
-def _sampled_pairs(known: set[frozenset[str]], samples: int, seed: int) -> tuple[set[frozenset[str]], set[frozenset[str]]]:
+def _sampled_pairs(known: set[frozenset[str]], samples: int,
+                   seed: int) -> tuple[set[frozenset[str]], set[frozenset[str]]]:
     """Link pairs colliding at the zero pose ("default") and in ≥ 95 % of random poses ("always").
 
     The planner is loaded with the ``known`` pairs already disabled (an SRDF
@@ -341,7 +335,7 @@ def _sampled_pairs(known: set[frozenset[str]], samples: int, seed: int) -> tuple
 
 def _srdf_document(reasons: dict[frozenset[str], str]) -> str:
     robot = ET.Element("robot", name="pr2")
-    robot.append(ET.Comment(" Generated by services/sim/robot/build_urdf.py; do not edit. "))
+    robot.append(ET.Comment(" Generated by shared/robot/build_urdf.py; do not edit. "))
     for side in ARMS:
         group = ET.SubElement(robot, "group", name=f"{side}_arm")
         for name in arm_joint_names(side):

@@ -15,7 +15,8 @@ from services.executor.kinematics import CONTACT_STEP, MIN_LEAD, PLANNING_SLICE,
 from services.executor.reach import REACH_KEYS, reach_map, sync
 from services.executor.scene import Scene
 from services.executor.targets import Held
-from services.sim.layout import TABLE_TOP_Z, TORSO_HEIGHT, arm_pose, arm_pose_map
+from services.sim.layout import TABLE_TOP_Z, table_truth
+from shared.robot import ROBOT
 
 
 @pytest.fixture(scope="module")
@@ -29,8 +30,8 @@ def cup(oid: str, x: float, y: float, color: str = "red", size: tuple[float, flo
 
 def scene_with(*objects: dict, pose: str = "untucked") -> Scene:
     scene = Scene()
-    scene.update_objects(list(objects))
-    scene.update_robot({"joints": {"torso_lift_joint": TORSO_HEIGHT, **arm_pose_map(pose)}})
+    scene.update_objects(list(objects), table_truth())
+    scene.update_robot({"joints": {ROBOT.torso_joint: ROBOT.working_torso, **ROBOT.arm_pose_map(pose)}})
     return scene
 
 
@@ -76,7 +77,7 @@ def test_a_held_object_is_carried_around_obstacles(arms: dict[str, ArmKinematics
     scene = scene_with(tall, cup("held", 0.55, -0.30))
     snap = scene.snapshot()
     kin.set_joints(snap.joints())
-    grasp = targets.grasps(snap.objects["held"])[0]
+    grasp = targets.grasps(snap.objects["held"], snap.near_edge)[0]
     start = kin.ik(geo.shifted(grasp.grasp, [0, 0, 0.05]), check_collisions=False)
     kin.set_arm(start)
     held = Held("held", Box(snap.box("held").center + [0, 0, 0.05], snap.box("held").size), kin.fk())
@@ -170,7 +171,7 @@ def test_a_hand_above_what_it_released_lifts_before_swinging_away(arms: dict[str
     above = kin.ik(np.array([0.61, 0.259, TABLE_TOP_Z + 0.165, 0.989, 0.0, 0.0, -0.145]))
     assert above is not None
     kin.set_arm(above)
-    side = np.asarray(arm_pose("side", "right"), float)
+    side = np.asarray(ROBOT.arm_pose("side", "right"), float)
     assert kin._joint_line(kin.arm_q, side) is None and kin._via_ready(side) is None, "no longer a case for the lift"
     path = kin._via_lifts(side)
     assert path is not None

@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 
 from services.executor.geometry import ROTATE_STEP, approach_axis
-from services.sim.layout import arm_pose
-from services.sim.robot.build_urdf import arm_joint_names
+from shared.robot import ROBOT
 from tests.executor.stack import Stack, texts
 
 CUP_HEIGHT = 0.10
@@ -117,8 +116,8 @@ def test_close_then_open_and_no_op_refusals(scene: Stack) -> None:
 def test_side_pose_and_record(scene: Stack) -> None:
     said = scene.command("move_abs_dest", {"arm": "right", "destination": "side"})
     assert texts(said, "error") == []
-    joints = [scene.robot["joints"][n] for n in arm_joint_names("right")]
-    assert np.allclose(joints, arm_pose("side", "right"), atol=0.05)
+    joints = [scene.robot["joints"][n] for n in ROBOT.arm_joint_names("right")]
+    assert np.allclose(joints, ROBOT.arm_pose("side", "right"), atol=0.05)
     said = scene.command("record")
     assert "Found 4 objects." in texts(said, "info")
 

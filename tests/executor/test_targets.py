@@ -12,7 +12,8 @@ from services.executor.kinematics import ArmKinematics
 from services.executor.reach import sync
 from services.executor.scene import Scene
 from services.executor.targets import Held
-from services.sim.layout import TABLE_TOP_Z, TORSO_HEIGHT, arm_pose_map
+from services.sim.layout import TABLE_TOP_Z, TABLE_X, table_truth
+from shared.robot import ROBOT
 
 CUP = np.array([0.07, 0.07, 0.10])
 SIDE_GRASP = geo.make_pose([0.55, -0.10, 0.84], geo.facing([1.0, -0.2, 0.0]))  # level, pointing ahead and a little right
@@ -68,10 +69,11 @@ def test_a_turned_heading_reaches_where_the_grasp_heading_does_not() -> None:
     scene = Scene()
     red, blue = standing(0.54, -0.11), standing(0.47, 0.0)
     scene.update_objects([{"id": "blue", "color": "blue", "type": "cup", "position": blue.center.tolist(),
-                           "size": blue.size.tolist()}])
-    scene.update_robot({"joints": {"torso_lift_joint": TORSO_HEIGHT, **arm_pose_map("side")}})
+                           "size": blue.size.tolist()}], table_truth())
+    scene.update_robot({"joints": {ROBOT.torso_joint: ROBOT.working_torso, **ROBOT.arm_pose_map("side")}})
     sync(kin, scene.snapshot(), None)
-    grasp = targets.grasps({"id": "red", "type": "cup", "position": red.center.tolist(), "size": red.size.tolist()})[0]
+    red_cup = {"id": "red", "type": "cup", "position": red.center.tolist(), "size": red.size.tolist()}
+    grasp = targets.grasps(red_cup, TABLE_X[0])[0]
     lifted = kin.ik(geo.shifted(grasp.grasp, [0.0, 0.0, 0.10]))
     assert lifted is not None
     kin.set_arm(lifted)

@@ -16,8 +16,8 @@ from services.perception.pipeline import detect
 
 sim_world = pytest.importorskip("services.sim.world", reason="the simulator library is not available")
 from services.sim.cloud import cloud_message  # noqa: E402
-from services.sim.robot.build_urdf import arm_joint_names  # noqa: E402
 from services.sim.scene_file import load_scene  # noqa: E402
+from shared.robot import ROBOT  # noqa: E402
 
 OVER_THE_TABLE = np.array([-0.6, 0.6, 0.0, -1.0, 0.0, -0.9, 0.0])
 ACROSS = np.array([0.3, 0.5, 0.0, -0.8, 0.0, -1.0, 0.0])
@@ -31,7 +31,7 @@ def sweep() -> list[tuple]:
     world = sim_world.SimWorld()
     world.load(load_scene("refexp_4_mixed"))
     world.settle(0.3)
-    names = arm_joint_names("right")
+    names = ROBOT.arm_joint_names("right")
     world.move_joints("right_arm", names, OVER_THE_TABLE, "m1")
     world.settle(3.0)
     world.move_joints("right_arm", names, ACROSS, "m2")

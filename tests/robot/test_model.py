@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 import sapien
 
-from services.sim.layout import TORSO_HEIGHT, arm_pose
-from services.sim.robot.build_urdf import (ARMS, SRDF_PATH, URDF_PATH, arm_joint_names, finger_joint_names,
-                                           model, tool_frame, urdf_text)
+from shared.robot import ROBOT
+from shared.robot.build_urdf import SRDF_PATH, URDF_PATH, model, urdf_text
+from shared.robot.pr2 import ARMS, arm_joint_names, finger_joint_names, tool_frame
 
 
 def test_urdf_file_is_what_the_generator_writes() -> None:
@@ -36,8 +36,8 @@ def test_mplib_plans_a_top_down_reach(arm: str) -> None:
     planner = mplib.Planner(urdf=str(URDF_PATH), srdf=str(SRDF_PATH), move_group=tool_frame(arm))
     names = planner.user_joint_names
     start = np.zeros(len(names))
-    start[names.index("torso_lift_joint")] = TORSO_HEIGHT
-    for name, value in zip(arm_joint_names(arm), arm_pose("untucked", arm)):
+    start[names.index(ROBOT.torso_joint)] = ROBOT.working_torso
+    for name, value in zip(arm_joint_names(arm), ROBOT.arm_pose("untucked", arm)):
         start[names.index(name)] = value
     mask = np.zeros(len(names), dtype=bool)
     mask[names.index("torso_lift_joint")] = True

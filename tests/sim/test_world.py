@@ -14,7 +14,7 @@ import pytest
 
 from services.sim.cloud import cloud_arrays
 from services.sim.layout import TABLE_TOP_Z
-from services.sim.robot.build_urdf import SRDF_PATH, URDF_PATH, arm_joint_names, tool_frame
+from shared.robot import ROBOT
 from services.sim.scene_file import load_scene
 from services.sim.world import SimWorld
 
@@ -55,7 +55,7 @@ def test_the_true_box_of_a_turned_round_object_is_as_wide_as_the_object(world: S
 def _ik(planner: mplib.Planner, world: SimWorld, arm: str, xyz: list[float], seed: np.ndarray | None) -> np.ndarray:
     names = planner.user_joint_names
     current = np.array([world.qpos([n])[0] for n in names]) if seed is None else seed
-    mask = np.array([n not in arm_joint_names(arm) for n in names])
+    mask = np.array([n not in ROBOT.arm_joint_names(arm) for n in names])
     status, solutions = planner.IK(mplib.Pose(xyz, DOWN), current, mask=mask, n_init_qpos=40)
     assert status == "Success", f"no IK for {xyz}: {status}"
     return solutions[0]
@@ -71,7 +71,7 @@ def _run(world: SimWorld, motion_id: str, limit: float = 15.0) -> tuple[str, str
 
 
 def _move(world: SimWorld, planner: mplib.Planner, arm: str, solution: np.ndarray) -> tuple[str, str]:
-    names = arm_joint_names(arm)
+    names = ROBOT.arm_joint_names(arm)
     goal = np.array([solution[planner.user_joint_names.index(n)] for n in names])
     motion_id = world.new_motion_id()
     world.move_joints(arm, names, goal, motion_id)
@@ -82,7 +82,7 @@ def _move(world: SimWorld, planner: mplib.Planner, arm: str, solution: np.ndarra
 def test_scripted_grasp_lifts_holds_and_drops_a_cup(world: SimWorld, arm: str, cup: str) -> None:
     world.load(load_scene("default"))
     world.settle(0.3)
-    planner = mplib.Planner(urdf=str(URDF_PATH), srdf=str(SRDF_PATH), move_group=tool_frame(arm))
+    planner = mplib.Planner(urdf=str(ROBOT.urdf_path), srdf=str(ROBOT.srdf_path), move_group=ROBOT.tool_frame(arm))
     x, y, z = truth_of(world, cup)["position"]
     above = _ik(planner, world, arm, [x, y, z + 0.17], None)
     assert _move(world, planner, arm, above)[0] == "done"
@@ -138,7 +138,7 @@ def test_look_at_points_the_camera_at_the_target(world: SimWorld) -> None:
 def test_a_press_onto_a_plate_ends_done_only_as_a_contact_motion_and_holds_nothing(world: SimWorld, contact: bool) -> None:
     world.load(load_scene("task5_plate_edge"))
     world.settle(0.3)
-    planner = mplib.Planner(urdf=str(URDF_PATH), srdf=str(SRDF_PATH), move_group=tool_frame("right"))
+    planner = mplib.Planner(urdf=str(ROBOT.urdf_path), srdf=str(ROBOT.srdf_path), move_group=ROBOT.tool_frame("right"))
     plate = truth_of(world, "obj0")
     x, y, _ = plate["position"]
     top = plate["aabb"][1][2]
@@ -148,7 +148,7 @@ def test_a_press_onto_a_plate_ends_done_only_as_a_contact_motion_and_holds_nothi
     assert _move(world, planner, "right", above)[0] == "done"
     # the fingertips (2 cm past the tool frame) aimed 3 cm past the plate's top: blocked on it
     pressed = _ik(planner, world, "right", [x, y, top + 0.02 - 0.03], above)
-    names = arm_joint_names("right")
+    names = ROBOT.arm_joint_names("right")
     index = [planner.user_joint_names.index(n) for n in names]
     motion_id = world.new_motion_id()
     world.follow_waypoints("right", names, np.array([0.0, 2.0]), np.array([above[index], pressed[index]]),

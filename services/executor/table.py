@@ -1,0 +1,88 @@
+"""The table as perception measured it: its height, its extent and the edges it was seen to end at.
+
+Why from perception: a real robot learns its table from what its camera
+sees, not from a simulator's scene file. Perception publishes the top's
+height, its extent in the base frame and, for each side (``near``, ``far``,
+``right``, ``left``), where the top was seen to end; a side the camera
+could not see the end of (the top runs out of view) is absent. For planning
+the table is a slab that reaches to every seen edge and, on an unseen side,
+``UNSEEN_REACH`` past what was seen: the arm must not sweep through a part
+of the table just because the camera never saw it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from services.executor.geometry import Box
+
+SLAB = 0.04          # m: thickness planned under the top (the camera sees only the top)
+UNSEEN_REACH = 0.5   # m the table is assumed to go on past the last point seen, on a side whose edge was not seen
+SIDES = {"near": (0, 0), "far": (0, 1), "right": (1, 0), "left": (1, 1)}   # side -> (axis, lower/upper end)
+
+
+@dataclass(frozen=True)
+class Table:
+    """The table top: ``height`` (m), its ``extent`` [[x min, x max], [y min, y max]] and the edges seen."""
+
+    height: float
+    extent: np.ndarray
+    edges: dict[str, float]
+
+    @property
+    def near_edge(self) -> float | None:
+        """x of the edge facing the robot, or None when the camera did not see it."""
+        return self.edges.get("near")
+
+    def box(self) -> Box:
+        """The slab the planner keeps the arms out of."""
+        bounds = self.extent.astype(float).copy()
+        for side, (axis, end) in SIDES.items():
+            if side in self.edges:
+                bounds[axis, end] = self.edges[side]
+            else:
+                bounds[axis, end] += UNSEEN_REACH if end else -UNSEEN_REACH
+        size = np.array([bounds[0, 1] - bounds[0, 0], bounds[1, 1] - bounds[1, 0], SLAB])
+        return Box(np.array([bounds[0].mean(), bounds[1].mean(), self.height - SLAB / 2]), size)
+
+
+def parse_table(field: Any) -> Table | None:
+    """A :class:`Table` from perception's ``table`` field, or None when it is missing or malformed.
+
+    ``extent`` is taken from the field, or from the bounding box of its
+    ``outline`` when a publisher sends only that; ``edges`` entries that are
+    not numbers are ignored.
+    """
+    if not isinstance(field, Mapping) or not _number(field.get("height")):
+        return None
+    extent = _extent(field)
+    if extent is None:
+        return None
+    edges = field.get("edges") if isinstance(field.get("edges"), Mapping) else {}
+    return Table(float(field["height"]), extent,
+                 {side: float(value) for side, value in edges.items() if side in SIDES and _number(value)})
+
+
+def _extent(field: Mapping[str, Any]) -> np.ndarray | None:
+    extent = field.get("extent")
+    try:
+        if isinstance(extent, Mapping):
+            bounds = np.array([extent["x"], extent["y"]], float)
+        else:
+            bounds = np.asarray(field.get("outline"), float)
+            bounds = np.stack([bounds.min(axis=0), bounds.max(axis=0)], axis=1) if bounds.ndim == 2 else None
+    except (KeyError, TypeError, ValueError):
+        return None
+    if bounds is None or bounds.shape != (2, 2) or not np.isfinite(bounds).all():
+        return None
+    if np.any(bounds[:, 1] <= bounds[:, 0]):
+        return None
+    return bounds
+
+
+def _number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and bool(np.isfinite(value))
