@@ -27,6 +27,9 @@ from shared.robot import ROBOT
 from shared.robot.build_urdf import model
 
 ARMS = ROBOT.arms
+# the model's joints from the floor to the head camera, for aiming the head (origins in the parent frame)
+_HEAD_CHAIN = ("base_footprint_joint", ROBOT.torso_joint, *ROBOT.head_joints, "head_mount_kinect_rgb_joint")
+_ORIGINS = {joint.name: np.array(joint.xyz, float) for joint in model()[1] if joint.name in _HEAD_CHAIN}
 
 TIMESTEP = 1.0 / 250.0
 GRIPPER_SPEED = 0.08                     # gap closing/opening speed (m/s)
@@ -192,14 +195,15 @@ class SimWorld:
 
     def head_angles_for(self, target: np.ndarray, torso: float | None = None) -> tuple[float, float]:
         """Pan and tilt that put ``target`` on the head camera's optical axis (clamped to the limits)."""
-        torso = self.qpos(["torso_lift_joint"])[0] if torso is None else torso
-        pan_axis = np.array([-0.05 - 0.01707, 0.0, 0.051 + 0.739675 + torso + 0.38145])
+        torso = self.qpos([ROBOT.torso_joint])[0] if torso is None else torso
+        base, lift, pan_joint, tilt_joint, camera = (_ORIGINS[name] for name in _HEAD_CHAIN)
+        pan_axis = base + lift + pan_joint + np.array([0.0, 0.0, torso])
         offset = target - pan_axis
         pan = float(np.clip(math.atan2(offset[1], offset[0]), self.joints["head_pan_joint"].lower,
                             self.joints["head_pan_joint"].upper))
-        ahead = math.hypot(offset[0], offset[1]) - 0.068
+        ahead = math.hypot(offset[0], offset[1]) - tilt_joint[0]
         rise = offset[2]
-        cam_x, cam_z = -0.14707, 0.29195
+        cam_x, cam_z = camera[0], camera[2]     # the camera's small sideways offset is neglected
 
         def miss(tilt: float) -> float:
             c, s = math.cos(tilt), math.sin(tilt)
