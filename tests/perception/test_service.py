@@ -63,10 +63,15 @@ def feed(network, launcher) -> Feed:
 
 
 def test_publishes_objects_with_ids_and_words(feed, good_cloud):
+    """A cloud with no scene counters and no robot state at all: what a camera alone gives."""
+    assert "scene" not in good_cloud and "scene_generation" not in good_cloud
     message = feed.until(good_cloud, lambda m: len(m["objects"]) == 2)
     assert message["status"] == "ok"
     assert {(o["id"], o["color"], o["type"]) for o in message["objects"]} == {("obj0", "red", "cup"), ("obj1", "blue", "box")}
-    assert message["table"]["height"] == pytest.approx(0.75, abs=0.005)
+    table = message["table"]
+    assert table["height"] == pytest.approx(0.75, abs=0.005)
+    assert table["edges"]["near"] == pytest.approx(SCENE.table_x[0], abs=0.006)
+    assert table["extent"]["x"][0] == pytest.approx(SCENE.table_x[0], abs=0.006)
 
 
 def test_late_joiner_gets_the_current_list_at_once(feed, good_cloud, network):

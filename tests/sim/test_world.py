@@ -14,15 +14,21 @@ import pytest
 
 from services.sim.cloud import cloud_arrays
 from services.sim.layout import TABLE_TOP_Z
-from shared.robot import ROBOT
 from services.sim.scene_file import load_scene
 from services.sim.world import SimWorld
+from shared.robot import ROBOT
 
 DOWN = [0.7071068, 0.0, 0.7071068, 0.0]    # tool frame x pointing down
 
 
 def truth_of(world: SimWorld, object_id: str) -> dict:
     return next(o for o in world.truth() if o["id"] == object_id)
+
+
+def read_back(world: SimWorld, arm: str) -> str:
+    """The gripper's state as the robot side judges it: from its opening and effort alone."""
+    gripper = world.state()["grippers"][arm]
+    return ROBOT.gripper.state(gripper["width"], gripper["effort"])
 
 
 @pytest.mark.parametrize("scene", ["default", "refexp_4_mixed", "task3_in_box", "task4_large_box"])
@@ -93,6 +99,8 @@ def test_scripted_grasp_lifts_holds_and_drops_a_cup(world: SimWorld, arm: str, c
     status, message = _run(world, close)
     assert status == "done" and cup in message
     assert world.state()["grippers"][arm]["holding"] == cup
+    assert world.state()["grippers"][arm]["effort"] == pytest.approx(30.0, abs=1.0), "the pads squeeze at the limit"
+    assert read_back(world, arm) == "holding"
 
     lift = _ik(planner, world, arm, [x, y, z + 0.13], grasp)
     assert _move(world, planner, arm, lift)[0] == "done"
@@ -101,6 +109,7 @@ def test_scripted_grasp_lifts_holds_and_drops_a_cup(world: SimWorld, arm: str, c
     world.settle(5.0)
     assert truth_of(world, cup)["position"][2] == pytest.approx(lifted, abs=0.005), "the cup slipped"
     assert world.state()["grippers"][arm]["holding"] == cup
+    assert read_back(world, arm) == "holding"
 
     release = world.new_motion_id()
     world.move_gripper(arm, 0.08, 30.0, release)
@@ -110,15 +119,25 @@ def test_scripted_grasp_lifts_holds_and_drops_a_cup(world: SimWorld, arm: str, c
     assert dropped["position"][2] == pytest.approx(TABLE_TOP_Z + 0.05, abs=0.005), "the cup is back on the table"
     assert np.hypot(dropped["position"][0] - x, dropped["position"][1] - y) < 0.03
     assert world.state()["grippers"][arm]["holding"] is None
+    assert read_back(world, arm) == "open"
 
 
 def test_gripper_closing_on_nothing_reports_its_goal(world: SimWorld) -> None:
     world.load(load_scene("default"))
     motion_id = world.new_motion_id()
     world.move_gripper("left", 0.0, 30.0, motion_id)
-    status, message = _run(world, motion_id)
+    efforts, outcome = [], None
+    for _ in range(int(15.0 / world.timestep)):
+        outcome = next(((st, msg) for motion, st, msg in world.step() if motion.motion_id == motion_id), None)
+        efforts.append(world.state()["grippers"]["left"]["effort"])
+        if outcome is not None:
+            break
+    assert outcome is not None, "the gripper did not finish"
+    status, message = outcome
     assert status == "done" and "0.000 m" in message
     assert world.state()["grippers"]["left"]["holding"] is None
+    assert max(abs(e) for e in efforts) < ROBOT.gripper.hold_effort / 2, "pads moving freely barely push"
+    assert read_back(world, "left") == "closed"
 
 
 def test_look_at_points_the_camera_at_the_target(world: SimWorld) -> None:
@@ -162,3 +181,4 @@ def test_a_press_onto_a_plate_ends_done_only_as_a_contact_motion_and_holds_nothi
     assert fingertips > top - 0.004, "the fingers went into the plate"
     assert truth_of(world, "obj0")["aabb"][0][2] == pytest.approx(TABLE_TOP_Z, abs=0.003), "the plate left the table"
     assert world.state()["grippers"]["right"]["holding"] is None, "fingertips pressing on a plate do not hold it"
+    assert read_back(world, "right") != "holding"
