@@ -18,6 +18,8 @@ from services.executor.targets import Held
 from services.sim.layout import TABLE_TOP_Z, table_truth
 from shared.robot import ROBOT
 
+pytestmark = pytest.mark.unit
+
 
 @pytest.fixture(scope="module")
 def arms() -> dict[str, ArmKinematics]:

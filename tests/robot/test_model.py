@@ -11,6 +11,8 @@ from shared.robot import ROBOT
 from shared.robot.build_urdf import SRDF_PATH, URDF_PATH, model, urdf_text
 from shared.robot.pr2 import ARMS, arm_joint_names, finger_joint_names, tool_frame
 
+pytestmark = pytest.mark.unit
+
 
 def test_urdf_file_is_what_the_generator_writes() -> None:
     assert URDF_PATH.read_text() == urdf_text(*model())
