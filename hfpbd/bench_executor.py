@@ -89,7 +89,7 @@ def bench_ik_against_mplib(queries: int) -> tuple[float, float, float]:
     kin = ArmKinematics("right")
     snap = synthetic_scene(1, np.random.default_rng(3)).snapshot()
     kin.set_joints(snap.joints())
-    kin.set_obstacles({"table": snap.table})
+    kin.set_obstacles({"table": snap.table.box()} if snap.table else {})
     rng = np.random.default_rng(11)
     poses = []
     for _ in range(queries):
@@ -241,7 +241,7 @@ def bench_procedures(rounds: int) -> list[list[object]]:
                     spent[0] += time.perf_counter() - t0
             return wrapper
         robot._finish, scene.wait_robot = clocked(robot._finish), clocked(scene.wait_robot)  # type: ignore[method-assign]
-        robot.move_arm = first_motion  # type: ignore[method-assign]
+        robot.move_arm = first_motion  # type: ignore[method-assign, assignment]
         try:
             run()
         except StepFailed as exc:

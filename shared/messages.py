@@ -149,10 +149,17 @@ class PerceivedObject(WorldObject):
     reach: dict[str, dict[str, bool]] | None = None
 
 
+class TableExtent(msgspec.Struct, kw_only=True):
+    x: tuple[float, float]   # min, max
+    y: tuple[float, float]
+
+
 class Table(msgspec.Struct, kw_only=True):
     height: float
     normal: Vector3 | None = None
     outline: list[tuple[float, float]] | None = None
+    extent: TableExtent | None = None
+    edges: dict[Literal["near", "far", "right", "left"], float] = {}   # only the sides seen to end
 
 
 class Objects(Message):

@@ -173,7 +173,7 @@ class SimWorld:
         start = ROBOT.keyframe("start")
         targets = dict(start.joints)
         pan, tilt = self.head_angles_for(np.array(start.gaze), targets[ROBOT.torso_joint])
-        targets.update(zip(ROBOT.head_joints, (pan, tilt)))
+        targets.update(zip(ROBOT.head_joints, (pan, tilt), strict=True))
         qpos = np.zeros(len(self.joints))
         for name, value in targets.items():
             qpos[self.joints[name].index] = value

@@ -318,7 +318,8 @@ def _sampled_pairs(known: set[frozenset[str]], samples: int,
 
     SRDF_PATH.write_text(_srdf_document({pair: "Adjacent" for pair in known}))
     planner = mplib.Planner(urdf=str(URDF_PATH), srdf=str(SRDF_PATH), move_group=tool_frame("right"))
-    limits = np.array([lim for joint_limits in planner.pinocchio_model.get_joint_limits() for lim in joint_limits])
+    per_joint: list[np.ndarray] = list(planner.pinocchio_model.get_joint_limits())
+    limits = np.array([lim for joint_limits in per_joint for lim in joint_limits])
     rng = np.random.default_rng(seed)
 
     def colliding(qpos: np.ndarray) -> set[frozenset[str]]:

@@ -54,7 +54,7 @@ class RobotDescription:
     def arm_pose_map(self, name: str) -> dict[str, float]:
         """Joint name -> position of both arms in the named posture."""
         return {joint: value for arm in self.arms
-                for joint, value in zip(self.arm_joint_names(arm), self.arm_pose(name, arm))}
+                for joint, value in zip(self.arm_joint_names(arm), self.arm_pose(name, arm), strict=True)}
 
 
 _REGISTRY: dict[str, type[RobotDescription]] = {}

@@ -59,8 +59,9 @@ def tool_frame(arm: str) -> str:
 
 def _arm_posture(name: str) -> dict[str, float]:
     right = _RIGHT_ARM_POSES[name]
-    left = tuple(m * v for m, v in zip(_MIRROR, right))
-    return {**dict(zip(arm_joint_names("right"), right)), **dict(zip(arm_joint_names("left"), left))}
+    left = tuple(m * v for m, v in zip(_MIRROR, right, strict=True))
+    return {**dict(zip(arm_joint_names("right"), right, strict=True)),
+            **dict(zip(arm_joint_names("left"), left, strict=True))}
 
 
 def _keyframes() -> dict[str, Keyframe]:

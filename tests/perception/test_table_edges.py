@@ -7,6 +7,8 @@ import pytest
 from services.perception.pipeline import detect
 from services.perception.synthetic import Box, Camera, Scene, render
 
+pytestmark = pytest.mark.unit
+
 CUP = Box((0.70, 0.0, 0.80), (0.10, 0.10, 0.10), "red")
 
 

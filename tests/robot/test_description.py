@@ -9,6 +9,8 @@ import pytest
 
 from shared.robot import ROBOT, RobotDescription, registered_robots, robot_description
 
+pytestmark = pytest.mark.unit
+
 ROBOTS = registered_robots()
 
 
@@ -68,7 +70,7 @@ def test_the_left_arm_mirrors_the_right_in_every_arm_posture() -> None:
     mirror = (-1, 1, -1, 1, -1, 1, -1)
     for name in ("side", "untucked"):
         right, left = ROBOT.arm_pose(name, "right"), ROBOT.arm_pose(name, "left")
-        assert left == pytest.approx([m * v for m, v in zip(mirror, right)])
+        assert left == pytest.approx([m * v for m, v in zip(mirror, right, strict=True)])
 
 
 @pytest.mark.parametrize(("opening", "effort", "state"), [

@@ -39,7 +39,7 @@ def test_mplib_plans_a_top_down_reach(arm: str) -> None:
     names = planner.user_joint_names
     start = np.zeros(len(names))
     start[names.index(ROBOT.torso_joint)] = ROBOT.working_torso
-    for name, value in zip(arm_joint_names(arm), ROBOT.arm_pose("untucked", arm)):
+    for name, value in zip(arm_joint_names(arm), ROBOT.arm_pose("untucked", arm), strict=True):
         start[names.index(name)] = value
     mask = np.zeros(len(names), dtype=bool)
     mask[names.index("torso_lift_joint")] = True

@@ -44,6 +44,7 @@ def sim_imports(path: Path) -> list[str]:
     return found
 
 
+@pytest.mark.unit
 def test_no_robot_side_module_imports_the_simulator() -> None:
     modules = [p for folder in ROBOT_SIDE for p in sorted((ROOT / folder).rglob("*.py"))]
     assert len(modules) > 20
