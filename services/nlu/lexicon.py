@@ -14,9 +14,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from services.nlu.weights import LANGUAGE as W
-
-MOVE = frozenset({"move_abs_dest", "move_rel_dest", "move_abs_dir", "move_rel_dir"})
-PLACE = frozenset({"place_abs", "place_rel"})
+from shared.contract import MOVES as MOVE
+from shared.contract import PLACES as PLACE
 
 # slots whose meaning is a property of an object rather than a command argument
 OBJECT_SLOTS = frozenset({"color", "type", "label", "generic", "anaphor"})
@@ -79,6 +78,10 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     (("previous action", "the previous action", "last action", "the last action", "prior action"),
      ((verb(_procs("switch_action")), option("target", "previous")),)),
     (("execute", "run", "perform", "replay", "play", "do it", "go ahead", "start", "test", "execute action", "run action"), ((verb(_procs("execute")),),)),
+    (("undo", "undo that", "undo it", "take that back", "take it back", "revert", "revert that", "go back a step",
+      "undo the last step", "scratch that"), ((verb(_procs("undo")),),)),
+    (("repeat", "again", "do it again", "do that again", "once more", "one more time", "same again", "repeat that"),
+     ((verb(_procs("repeat")),),)),
     (("stop", "halt", "freeze", "abort", "cancel", "pause", "stop executing", "stop it", "stop moving"), ((verb(_procs("stop")),),)),
     # arms
     (("right hand", "right arm", "right gripper", "your right"), ((option("arm", "right", W.arm),),)),
@@ -137,7 +140,7 @@ TYPE_WORDS: dict[str, str] = {
 
 FILLERS = frozenset(
     "please now could can would will you your my the a an robot kindly just then and ok okay hey with of at "
-    "i want like me is for so use using hmm um uh well also again let us lets s its".split())
+    "i want like me is for so use using hmm um uh well also let us lets s its".split())
 
 NUMBER_WORDS: dict[str, int] = {
     w: i for i, w in enumerate(

@@ -10,41 +10,19 @@ from __future__ import annotations
 
 from services.nlu.commands import NUMBER, Command
 from services.nlu.refexp import Scene
+from shared.contract import PROCEDURES, arm_words
+from shared.contract import value_words as option_words
 
-DEFAULT_VERBS = {
-    "move_abs_dest": "move", "move_rel_dest": "move", "move_abs_dir": "move", "move_rel_dir": "move",
-    "pick_up": "pick up", "place_abs": "place", "place_rel": "place", "point_to": "point to",
-    "look_at": "look at", "rotate": "rotate", "open": "open", "close": "close", "record": "record",
-    "create_action": "create", "switch_action": "switch to", "execute": "execute", "stop": "stop",
-}
-OPTION_WORDS = {
-    "side": "to the side", "table": "on the table", "here": "here",
-    "above": "above", "next_to": "next to", "left_of": "to the left of", "right_of": "to the right of",
-    "in_front_of": "in front of", "behind": "behind", "on_top_of": "on top of", "near": "near",
-    "up": "up", "down": "down", "left": "to the left", "right": "to the right", "forward": "forward",
-    "backward": "backward", "towards": "towards", "away_from": "away from",
-    "cw": "clockwise", "ccw": "counterclockwise", "next": "the next action", "previous": "the previous action",
-}
 SLOT_QUESTIONS = {
     "arm": "Which hand", "object": "Which object", "relation": "Where exactly", "direction": "Which direction",
     "destination": "Where", "target": "Which action",
 }
 
 
-def arm_words(arm: str) -> str:
-    return f"{arm} hand"
-
-
-def option_words(value: object) -> str:
-    if isinstance(value, int):
-        return f"action {value}"
-    return OPTION_WORDS.get(str(value), str(value).replace("_", " "))
-
-
 def command_text(command: Command, scene: Scene, phrases: dict[str, str] | None = None) -> str:
     """The sentence for ``command``, in the user's words where they gave them."""
     phrases = phrases or {}
-    verb = phrases.get("verb", DEFAULT_VERBS[command.procedure])
+    verb = phrases.get("verb", PROCEDURES[command.procedure].verb)
     arm = command.arg("arm")
     said_arm = phrases.get("arm", "")
     names_limb = arm is not None and arm in said_arm and any(w in said_arm for w in ("hand", "arm", "gripper"))

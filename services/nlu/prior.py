@@ -16,6 +16,10 @@ import numpy as np
 from services.nlu.commands import Command
 from services.nlu.weights import PRIOR
 from services.nlu.world import ARMS, World, WorldObject
+from shared.contract import REL_DIRECTIONS, RELATIONS
+
+# the reach keys these rules read (each must be one the executor publishes: tests/nlu/test_contract.py)
+READ_KEYS = frozenset({"pick_up", "place", *RELATIONS, *REL_DIRECTIONS})
 
 
 @dataclass(frozen=True)
@@ -71,8 +75,6 @@ def _situation(world: World, objects: dict[str, WorldObject], command: Command) 
             score += PRIOR.impossible
     elif procedure == "place_rel":
         unreachable_if(command.arg("relation"), "place")
-    elif procedure == "point_to":
-        unreachable_if("point_to")
     elif procedure == "open" and gripper == "open":
         score += PRIOR.impossible
     elif procedure == "close" and gripper in ("closed", "holding"):

@@ -70,6 +70,8 @@ PROCEDURE_CASES = [
     ("switch to action two", None, {"procedure": "switch_action", "target": 2}),
     ("execute", None, {"procedure": "execute"}),
     ("stop", dict(executing=True), {"procedure": "stop"}),
+    ("undo", None, {"procedure": "undo"}),
+    ("again", None, {"procedure": "repeat"}),
 ]
 
 
