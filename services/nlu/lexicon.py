@@ -18,7 +18,9 @@ from shared.contract import MOVES as MOVE
 from shared.contract import PLACES as PLACE
 
 # slots whose meaning is a property of an object rather than a command argument
-OBJECT_SLOTS = frozenset({"color", "type", "label", "generic", "anaphor"})
+OBJECT_SLOTS = frozenset({"color", "type", "label", "generic", "anaphor", "refer"})
+# words of relational referring expressions (``relational.py``): they weigh nothing in the bag of words
+REFERRING_SLOTS = frozenset({"relate", "ordinal", "order"})
 
 
 @dataclass(frozen=True)
@@ -53,7 +55,9 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     (("retreat", "back off", "back away"), ((verb(MOVE), option("direction", "away_from")),)),
     (("tuck", "put away"), ((verb(MOVE), option("destination", "side")),)),
     # pick and place
-    (("pick up", "pick", "pickup", "grab", "take", "grasp", "lift", "get", "collect", "seize"), ((verb(_procs("pick_up")),),)),
+    (("pick up", "pick", "pickup", "grab", "take", "grasp", "get", "collect", "seize"), ((verb(_procs("pick_up")),),)),
+    # "lift it" with the object in hand raises the hand; with an empty hand, naming an object picks it up
+    (("lift",), ((verb(_procs("pick_up")),), (verb(_procs("move_abs_dir")), option("direction", "up", W.weak)))),
     (("place", "set", "lay", "drop", "deposit", "stack", "place down", "set down", "lay down"), ((verb(PLACE),),)),
     (("put",), ((verb(PLACE),), (verb(MOVE, W.weak),))),
     (("put down",), ((verb(PLACE), option("destination", "table", W.weak)),)),
@@ -80,8 +84,11 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     (("execute", "run", "perform", "replay", "play", "do it", "go ahead", "start", "test", "execute action", "run action"), ((verb(_procs("execute")),),)),
     (("undo", "undo that", "undo it", "take that back", "take it back", "revert", "revert that", "go back a step",
       "undo the last step", "scratch that"), ((verb(_procs("undo")),),)),
-    (("repeat", "again", "do it again", "do that again", "once more", "one more time", "same again", "repeat that"),
-     ((verb(_procs("repeat")),),)),
+    (("repeat", "do it again", "do that again", "once more", "one more time", "same again", "repeat that",
+      "same thing again", "do the same", "do the same again"), ((verb(_procs("repeat")),),)),
+    (("again",), ((verb(_procs("repeat"), W.option),),)),  # alone it repeats; with another verb it is an adverb
+    (("go back to", "return to", "back to"), ((verb(_procs("switch_action")),), (verb(MOVE),))),
+    (("look at the table", "look at the table again", "look again", "have a look"), ((verb(_procs("record")),),)),
     (("stop", "halt", "freeze", "abort", "cancel", "pause", "stop executing", "stop it", "stop moving"), ((verb(_procs("stop")),),)),
     # arms
     (("right hand", "right arm", "right gripper", "your right"), ((option("arm", "right", W.arm),),)),
@@ -126,6 +133,19 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     (("smallest", "small", "little", "tiny", "smaller", "littlest"), ((Meaning("label", "smallest", W.adjective),),)),
     (("middle", "center", "centre", "central", "in the middle", "in between"), ((Meaning("label", "middle", W.adjective),),)),
     (("object", "thing", "item", "one", "objects", "things"), ((Meaning("generic", "*", W.generic_noun),),)),
+    # relational referring expressions: resolved against the scene before the bag of words (relational.py)
+    (("closest to", "nearest to"), ((Meaning("relate", "closest", 0.0),),)),
+    (("farthest from", "furthest from"), ((Meaning("relate", "farthest", 0.0),),)),
+    (("between", "in between"), ((Meaning("relate", "between", 0.0),),)),
+    (("other", "another", "the other"), ((Meaning("relate", "other", 0.0),),)),
+    (("from the left", "from left", "from the left side"), ((Meaning("order", "left", 0.0),),)),
+    (("from the right", "from right", "from the right side"), ((Meaning("order", "right", 0.0),),)),
+    (("from the front", "from me", "from you", "from the robot"), ((Meaning("order", "front", 0.0),),)),
+    (("from the back", "from the far end", "from the rear"), ((Meaning("order", "back", 0.0),),)),
+    *(((word,), ((Meaning("ordinal", n, 0.0),),)) for n, words in enumerate(
+        (("first", "1st"), ("second", "2nd"), ("third", "3rd"), ("fourth", "4th"), ("fifth", "5th")), 1)
+      for word in words),
+    (("last",), ((Meaning("ordinal", -1, 0.0),),)),
     (("it", "that", "this", "there", "same", "the same one", "same one", "same object", "that one", "this one", "them"), ((Meaning("anaphor", "*", W.anaphor),),)),
 ]
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from services.nlu.commands import NUMBER, Command
 from services.nlu.refexp import Scene
-from shared.contract import PROCEDURES, arm_words
+from shared.contract import BOTH, PROCEDURES, arm_words, distance_words
 from shared.contract import value_words as option_words
 
 SLOT_QUESTIONS = {
@@ -26,7 +26,10 @@ def command_text(command: Command, scene: Scene, phrases: dict[str, str] | None 
     arm = command.arg("arm")
     said_arm = phrases.get("arm", "")
     names_limb = arm is not None and arm in said_arm and any(w in said_arm for w in ("hand", "arm", "gripper"))
-    hand = f"your {said_arm}" if names_limb else (f"your {arm_words(arm)}" if arm else "")
+    hand = f"your {said_arm}" if names_limb else (f"your {arm_words(arm)}" if arm and arm != BOTH else
+                                                  arm_words(arm) if arm else "")
+    distance = command.arg("distance")
+    far = distance_words(distance) if distance is not None else ""
     obj = _object_words(command, scene)
 
     def option(slot: str) -> str:
@@ -39,10 +42,10 @@ def command_text(command: Command, scene: Scene, phrases: dict[str, str] | None 
     p = command.procedure
     if p in ("move_abs_dest", "move_abs_dir"):
         slot = "destination" if p == "move_abs_dest" else "direction"
-        words = [verb, hand, option(slot)]
+        words = [verb, hand, option(slot), far]
     elif p in ("move_rel_dest", "move_rel_dir"):
         slot = "relation" if p == "move_rel_dest" else "direction"
-        words = [verb, hand, option(slot), obj]
+        words = [verb, hand, far, option(slot), obj]
     elif p in ("pick_up", "point_to"):
         words = [verb, obj, "with", hand]
     elif p == "place_abs":
@@ -56,7 +59,7 @@ def command_text(command: Command, scene: Scene, phrases: dict[str, str] | None 
     elif p in ("open", "close"):
         words = [verb, hand]
     elif p == "record":
-        words = [verb, "the objects on the table"]
+        words = [verb] if "table" in verb else [verb, "the objects on the table"]
     elif p == "create_action":
         words = [verb, "a new action"]
     elif p == "switch_action":

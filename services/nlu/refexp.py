@@ -20,7 +20,7 @@ from itertools import combinations
 
 import numpy as np
 
-from services.nlu.lexicon import Meaning
+from services.nlu.lexicon import OBJECT_SLOTS, Meaning
 from services.nlu.tokens import Term
 from services.nlu.weights import LANGUAGE, MARGINS
 from services.nlu.world import World
@@ -140,6 +140,8 @@ class Scene:
                 vector[:] = LANGUAGE.generic_noun
             else:
                 vector[last_object] = meaning.weight
+        elif meaning.slot == "refer":
+            vector[list(meaning.value)] = meaning.weight
         elif meaning.slot == "label":
             members = list(self.group(context, meaning.value))
             vector[members] = meaning.weight
@@ -193,7 +195,7 @@ class Scene:
 
 def _object_meanings(term: Term) -> list[Meaning]:
     return [m for reading in term.readings for m in reading
-            if m.slot in ("color", "type", "label", "generic", "anaphor")]
+            if m.slot in OBJECT_SLOTS]
 
 
 def _priority(label: str) -> int:

@@ -13,14 +13,14 @@ import logging
 import threading
 from typing import Any
 
-from shared.bus import Bus
-from shared.service import run_service, wait_until_stopped
 from services.nlu.context import Dialogue
-from services.nlu.infer import Clarify, CommandResult, Model, Result
-from services.nlu.nbest import NOT_MADE_OUT, most_plausible
+from services.nlu.infer import Answer, Clarify, Model, Result
 from services.nlu.lexicon import vocabulary
+from services.nlu.nbest import NOT_MADE_OUT, most_plausible
 from services.nlu.templates import sentence_templates
 from services.nlu.world import COLORS, TYPES, WorldError, parse_world
+from shared.bus import Bus
+from shared.service import run_service, wait_until_stopped
 
 log = logging.getLogger("hfpbd.nlu")
 
@@ -125,7 +125,9 @@ class NluService:
         self.results.put({**result.to_json(), "utterance": text})
         if isinstance(result, Clarify):
             self.bus.publish(self.bus.keys.say, {"text": result.question, "kind": "clarify", "candidates": result.labels})
-        log.info("%r -> %s", text, result.command.as_dict() if isinstance(result, CommandResult) else result.question)
+        elif isinstance(result, Answer):
+            self.bus.publish(self.bus.keys.say, {"text": result.text, "kind": "info"})
+        log.info("%r -> %s", text, result.to_json())
 
     def _say_error(self, text: str) -> None:
         self.bus.publish(self.bus.keys.say, {"text": text, "kind": "error"})

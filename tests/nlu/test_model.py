@@ -204,7 +204,7 @@ def test_execute_while_executing_means_stop_is_preferred() -> None:
 
 @pytest.mark.parametrize("text, last_arm, params, phrase", [
     ("pick up the cup", "right", ["object"], "Which object do you mean: the rightmost cup or the leftmost cup?"),
-    ("point to the red cup", None, ["arm"], "Which hand do you mean: the right hand or the left hand?"),
+    ("point to the box", None, ["arm"], "Which hand do you mean: the right hand or the left hand?"),
     ("switch action", None, ["target"], "Which action do you mean: the next action or the previous action?"),
     ("point to the cup", None, ["arm", "object"],
      "Which hand do you mean: the right hand or the left hand? And which object: the rightmost cup or the leftmost cup?"),
