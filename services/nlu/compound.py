@@ -26,11 +26,14 @@ if TYPE_CHECKING:
 _ALWAYS = re.compile(r"\s*(?:,\s*)?(?:\band then\b|\bthen\b|\bafter that\b|\bafterwards\b|\bnext,|;"
                      r"|(?<=[a-z])\.(?=\s|$))\s*")
 _AND = re.compile(r"\s*(?:,\s*and\b|\band\b|,)\s*")
+_JOINS = re.compile(r"\b(?:and|then|after|afterwards|next)\b|[,;.]")
 MAX_STEPS = 6  # more than this in one breath is almost surely pasted text
 
 
 def split(text: str) -> list[str]:
     """The parts of ``text`` that are commands of their own (one part when it is a single command)."""
+    if not _JOINS.search(text):
+        return [text]
     parts: list[str] = []
     for chunk in _ALWAYS.split(text):
         pieces = [p for p in _AND.split(chunk) if p.strip()]

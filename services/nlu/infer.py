@@ -22,7 +22,7 @@ from services.nlu.results import Answer, Clarify, CommandResult, Result
 from services.nlu.tokens import Term, Utterance, read
 from services.nlu.weights import DECISION, LANGUAGE
 from services.nlu.world import World
-from shared.contract import ARMS, BOTH, BOTH_ARM_PROCEDURES, DISTANCE_PROCEDURES
+from shared.contract import ARMS, BOTH, BOTH_ARM_PROCEDURES, DISTANCE_PROCEDURES, PLACES
 from shared.contract import PROCEDURES as PROCEDURES_CONTRACT
 
 __all__ = ["Answer", "Clarify", "CommandResult", "Model", "Result"]
@@ -125,8 +125,8 @@ class Model:
     def _decide(self, scores: np.ndarray, considered: np.ndarray, match: Match, history: History) -> Result:
         local = scores[considered]
         best_score = float(local.max())
-        order = considered[np.argsort(-local, kind="stable")]
-        tied = [int(i) for i in order if scores[i] >= best_score - DECISION.tie]
+        near = considered[local >= best_score - DECISION.tie]
+        tied = [int(i) for i in near[np.argsort(-scores[near], kind="stable")]]
         confidence = 1.0 / float(np.exp(local - best_score).sum())
         if len(tied) == 1:
             return self._command(tied[0], confidence, best_score, match, history)
@@ -143,11 +143,19 @@ class Model:
         labels = [command_text(c, self.scene) for c in candidates]
         procedure = candidates[0].procedure
         params = [p for p in PROCEDURES[procedure] if len({c.arg(p) for c in candidates}) > 1]
+        if params == ["arm"] and procedure in PLACES:  # an empty hand's place: the hand that picks up decides
+            situated = self._situated(candidates[0], {}, confidence, best_score, match, history)
+            if isinstance(situated, CommandResult) and situated.command.procedure == "pick_up":
+                return situated
         return Clarify(params, parameter_question(params, candidates, self.scene), candidates, labels, best_score)
 
     def _command(self, position: int, confidence: float, score: float, match: Match, history: History) -> Result:
         command = self._filled(self.index.commands[position], match)
-        phrases = self.index.explain(position, match)
+        return self._situated(command, self.index.explain(position, match), confidence, score, match, history)
+
+    def _situated(self, command: Command, phrases: dict[str, str], confidence: float, score: float, match: Match,
+                  history: History) -> Result:
+        """The command as the hands' state allows it (see ``hands``), with its sentence."""
         try:
             commands = hands.situate(self, command, match, history, "arm" in phrases)
         except hands.Refusal as refusal:

@@ -42,8 +42,16 @@ _POLITE = re.compile(r"^(?:(?:hey|ok|okay|so|well|and|robot|please|now|tell me|c
                      r"do you know),? )+")
 
 
+# the first words a question can start with (after "please", "tell me", ...): a cheap test before the patterns
+_OPENERS = frozenset("help what where is are do can have how which list describe tell show could so ok okay hey "
+                     "well and robot please now".split())
+
+
 def answer(model: Model, text: str, history: History) -> Answer | None:
     """The answer when ``text`` is a question; None when it is not one."""
+    first = text.lstrip().split(" ", 1)[0].lower().strip("?!.,")
+    if first not in _OPENERS and not first.startswith(("what'", "where'")):
+        return None
     lowered = " ".join(re.sub(r"[?!.,]+", " ", text.lower()).split())
     lowered = _POLITE.sub("", lowered)
     for topic, pattern in _PATTERNS:

@@ -62,6 +62,8 @@ class Scene:
         last = world.robot.last_object
         self.last_object = world.index_of(last) if last is not None else None
         self._groups: dict[tuple[frozenset[int], str], frozenset[int]] = {}
+        self._matching: dict[tuple[frozenset[str], frozenset[str]], frozenset[int]] = {}
+        self._descriptions: dict[int, Expression] = {}
 
     # -- labels ------------------------------------------------------------
     def group(self, context: frozenset[int], label: str) -> frozenset[int]:
@@ -96,6 +98,13 @@ class Scene:
     # -- categories --------------------------------------------------------
     def matching(self, colors: set[str], types: set[str]) -> frozenset[int]:
         """Objects whose colour and type agree with every colour and type word given."""
+        key = (frozenset(colors), frozenset(types))
+        cached = self._matching.get(key)
+        if cached is None:
+            cached = self._matching[key] = self._match(colors, types)
+        return cached
+
+    def _match(self, colors: set[str], types: set[str]) -> frozenset[int]:
         mask = np.ones(self.n, dtype=bool)
         for color in colors:
             mask &= self.colors == color
@@ -158,7 +167,13 @@ class Scene:
 
     # -- description -------------------------------------------------------
     def describe(self, index: int) -> Expression:
-        """The shortest expression that singles out object ``index`` (location first)."""
+        """The shortest expression that singles out object ``index`` (location first); computed once per world."""
+        cached = self._descriptions.get(index)
+        if cached is None:
+            cached = self._descriptions[index] = self._describe(index)
+        return cached
+
+    def _describe(self, index: int) -> Expression:
         obj = self.world.objects[index]
         noun = obj.type if obj.type != "unknown" else "object"
         types = {obj.type} if obj.type != "unknown" else set()

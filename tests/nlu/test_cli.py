@@ -88,10 +88,14 @@ def test_missing_batch_file(world_file: Path, tmp_path: Path) -> None:
 
 
 def test_benchmark_prints_its_table() -> None:
-    done = subprocess.run([HFPBD, "bench", "nlu", "--rounds", "20", "--sizes", "1", "4"],
-                          capture_output=True, text=True, timeout=120, cwd=ROOT)
+    done = subprocess.run([HFPBD, "bench", "nlu", "--rounds", "20", "--sizes", "1", "4", "--batch-lines", "100"],
+                          capture_output=True, text=True, timeout=240, cwd=ROOT)
     assert done.returncode == 0, done.stderr
     rows = [fields for fields in (line.split() for line in done.stdout.splitlines())
             if len(fields) >= 6 and fields[0].isdigit()]
     assert [row[0] for row in rows] == ["1", "4"]
     assert "parse p99 target" in done.stdout and ("PASS" in done.stdout or "MISS" in done.stdout)
+    accuracy = {line.split()[0]: line.split()[3] for line in done.stdout.splitlines() if line.endswith("%")
+                or "(>= 97%)" in line}
+    assert {"paper", "held", "relational", "compound", "distance", "questions", "typos", "all"} <= set(accuracy)
+    assert [line.split()[1] for line in done.stdout.splitlines() if line.startswith("  batch,")] == ["4", "16", "64"]
