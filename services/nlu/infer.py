@@ -175,7 +175,8 @@ class Model:
 
     def ground(self, text: str) -> dict[str, float]:
         """P(object | referring phrase) over the world's objects (paper Fig. 3)."""
-        probabilities = self.scene.ground(read(text).terms)
+        terms = relational.resolve(self.scene, read(text).terms, self.scene.last_object, phrase=True)
+        probabilities = self.scene.ground(terms)
         return {obj.id: round(float(p), 4) for obj, p in zip(self.world.objects, probabilities)}
 
     def describe(self) -> dict[str, str]:

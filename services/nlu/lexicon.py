@@ -45,6 +45,8 @@ def option(slot: str, value: Any, weight: float = W.option) -> Meaning:
     return Meaning(slot, value, weight)
 
 
+ORDINALS = ("first", "second", "third", "fourth", "fifth")
+
 # (phrases, readings); phrases are lower-case, single-spaced, already stemmed
 _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     # verbs of motion
@@ -142,9 +144,7 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     (("from the right", "from right", "from the right side"), ((Meaning("order", "right", 0.0),),)),
     (("from the front", "from me", "from you", "from the robot"), ((Meaning("order", "front", 0.0),),)),
     (("from the back", "from the far end", "from the rear"), ((Meaning("order", "back", 0.0),),)),
-    *(((word,), ((Meaning("ordinal", n, 0.0),),)) for n, words in enumerate(
-        (("first", "1st"), ("second", "2nd"), ("third", "3rd"), ("fourth", "4th"), ("fifth", "5th")), 1)
-      for word in words),
+    *(((word,), ((Meaning("ordinal", n, 0.0),),)) for n, word in enumerate(ORDINALS, 1)),
     (("last",), ((Meaning("ordinal", -1, 0.0),),)),
     (("it", "that", "this", "there", "same", "the same one", "same one", "same object", "that one", "this one", "them"), ((Meaning("anaphor", "*", W.anaphor),),)),
 ]

@@ -56,6 +56,7 @@ class Scene:
         pos = np.array([o.position for o in world.objects], dtype=float).reshape(self.n, 3)
         size = np.array([o.size for o in world.objects], dtype=float).reshape(self.n, 3)
         self.features = {"x": pos[:, 0], "y": pos[:, 1], "height": size[:, 2], "volume": size.prod(axis=1)}
+        self.xy = pos[:, :2]
         self.colors = np.array([o.color for o in world.objects], dtype=object)
         self.types = np.array([o.type for o in world.objects], dtype=object)
         self.everyone = frozenset(range(self.n))
@@ -64,6 +65,7 @@ class Scene:
         self._groups: dict[tuple[frozenset[int], str], frozenset[int]] = {}
         self._matching: dict[tuple[frozenset[str], frozenset[str]], frozenset[int]] = {}
         self._descriptions: dict[int, Expression] = {}
+        self._plain: dict[int, Expression] = {}
 
     # -- labels ------------------------------------------------------------
     def group(self, context: frozenset[int], label: str) -> frozenset[int]:
@@ -170,7 +172,20 @@ class Scene:
         """The shortest expression that singles out object ``index`` (location first); computed once per world."""
         cached = self._descriptions.get(index)
         if cached is None:
-            cached = self._descriptions[index] = self._describe(index)
+            cached = self.plain(index)
+            if not cached.unique:
+                from services.nlu import relational  # it resolves phrases against this module's scenes
+
+                text = relational.describe(self, index)
+                cached = Expression(text, True) if text is not None else cached
+            self._descriptions[index] = cached
+        return cached
+
+    def plain(self, index: int) -> Expression:
+        """The expression from colour, type and salient labels alone (no relation to another object)."""
+        cached = self._plain.get(index)
+        if cached is None:
+            cached = self._plain[index] = self._describe(index)
         return cached
 
     def _describe(self, index: int) -> Expression:

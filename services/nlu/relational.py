@@ -25,17 +25,21 @@ from shared.contract import RELATIONS
 
 MARGIN_M = 0.03  # how much nearer (or further along) the winner must be than the runner-up
 _OBJECT_WORDS = frozenset(OBJECT_SLOTS - {"anaphor", "refer"})
+_SIDES = {"left_of": (1, 1), "right_of": (1, -1), "in_front_of": (0, -1), "behind": (0, 1)}  # xy axis, sign
 _ORDER_AXES = {"left": ("y", -1), "right": ("y", +1), "front": ("x", +1), "back": ("x", -1)}  # sort key sign
 
 
 def resolve(scene: Scene, terms: tuple[Term, ...], referent: int | None,
-            within: frozenset[int] | None = None) -> tuple[Term, ...]:
-    """``terms`` with each relational referring expression replaced by one term naming what it means."""
+            within: frozenset[int] | None = None, phrase: bool = False) -> tuple[Term, ...]:
+    """``terms`` with each relational referring expression replaced by one term naming what it means.
+
+    ``phrase``: the terms are a referring phrase alone (``ground``), so no relation is a command's.
+    """
     if scene.n == 0 or not any(_relating(t) or _value(t, "ordinal") or _value(t, "relate") for t in terms):
         return terms
     out = list(terms)
     out = _ordinals_and_others(scene, out, referent)
-    command_relation_free = _takes_relation(out)
+    command_relation_free = not phrase and _takes_relation(out)
     i = 0
     while i < len(out):
         relation = _relation_of(out[i])
@@ -67,6 +71,28 @@ def resolve(scene: Scene, terms: tuple[Term, ...], referent: int | None,
         out[start:extra_end] = [Term(words, ((Meaning("refer", chosen, weight),),), out[start].start)]
         i = start + 1
     return tuple(out)
+
+
+_DESCRIBED = {"next_to": "next to", "left_of": "to the left of", "right_of": "to the right of",
+              "in_front_of": "in front of", "behind": "behind"}
+
+
+def describe(scene: Scene, index: int) -> str | None:
+    """The shortest "the <type> <relation> <landmark>" that means only object ``index`` (None when none does)."""
+    kind = scene.types[index]
+    noun = kind if kind != "unknown" else "object"
+    group = frozenset(j for j in range(scene.n) if scene.types[j] == kind)
+    found: list[str] = []
+    for landmark in range(scene.n):
+        if landmark in group:
+            continue
+        mark = scene.plain(landmark)
+        if not mark.unique:
+            continue
+        for relation, words in _DESCRIBED.items():
+            if _related(scene, group, frozenset({landmark}), relation) == {index}:
+                found.append(f"the {noun} {words} {mark.text}")
+    return min(found, key=lambda text: len(text.split()), default=None)
 
 
 def _ordinals_and_others(scene: Scene, terms: list[Term], referent: int | None) -> list[Term]:
@@ -113,35 +139,32 @@ def _nth(scene: Scene, group: frozenset[int], ordinal: int, order: str) -> froze
 
 
 def _related(scene: Scene, candidates: frozenset[int], landmarks: frozenset[int], relation: str) -> frozenset[int]:
-    """The candidate(s) that stand in ``relation`` to the landmarks, best first by the margin."""
+    """The candidate(s) that stand in ``relation`` to the landmarks: the best, with any within the margin of it."""
     if not candidates or not landmarks:
         return frozenset()
-    xy = np.stack([scene.features["x"], scene.features["y"]], axis=1)
-    marks = xy[sorted(landmarks)]
-    scores: dict[int, float] = {}
-    for c in candidates:
-        offsets = xy[c] - marks
-        distance = float(np.min(np.linalg.norm(offsets, axis=1)))
-        nearest = offsets[int(np.argmin(np.linalg.norm(offsets, axis=1)))]
-        if relation in ("next_to", "near", "closest", "above", "on_top_of"):
-            scores[c] = -distance
-        elif relation == "farthest":
-            scores[c] = distance
-        elif relation == "between":
-            if len(marks) < 2:
-                return frozenset()
-            scores[c] = -_segment_distance(xy[c], marks[0], marks[1])
-        else:
-            axis, sign = {"left_of": (1, 1), "right_of": (1, -1), "in_front_of": (0, -1), "behind": (0, 1)}[relation]
-            if sign * nearest[axis] <= 0.02:
-                continue  # on the wrong side
-            scores[c] = -distance
-    if not scores:
+    members = np.fromiter(sorted(candidates), dtype=int)
+    marks = np.fromiter(sorted(landmarks), dtype=int)
+    offsets = scene.xy[members][:, None, :] - scene.xy[marks][None, :, :]
+    distances = np.linalg.norm(offsets, axis=2)
+    nearest = distances.argmin(axis=1)
+    rows = np.arange(len(members))
+    distance = distances[rows, nearest]
+    if relation in ("next_to", "near", "closest", "above", "on_top_of"):
+        scores = -distance
+    elif relation == "farthest":
+        scores = distance
+    elif relation == "between":
+        if len(marks) < 2:
+            return frozenset()
+        a, b = scene.xy[marks[0]], scene.xy[marks[1]]
+        scores = -np.array([_segment_distance(scene.xy[m], a, b) for m in members])
+    else:
+        axis, sign = _SIDES[relation]
+        beside = sign * offsets[rows, nearest, axis] > 0.02  # on the named side of its nearest landmark
+        scores = np.where(beside, -distance, -np.inf)
+    if not np.isfinite(scores).any():
         return frozenset()
-    ranked = sorted(scores, key=scores.__getitem__, reverse=True)
-    if len(ranked) > 1 and scores[ranked[0]] - scores[ranked[1]] < MARGIN_M:
-        return frozenset(j for j in ranked if scores[ranked[0]] - scores[j] < MARGIN_M)
-    return frozenset({ranked[0]})
+    return frozenset(int(m) for m in members[scores >= scores.max() - MARGIN_M])
 
 
 def _segment_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:

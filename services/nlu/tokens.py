@@ -17,7 +17,8 @@ from functools import lru_cache
 from rapidfuzz import process
 from rapidfuzz.distance import DamerauLevenshtein
 
-from services.nlu.lexicon import FILLERS, MAX_PHRASE_WORDS, NUMBER_WORDS, PHRASES, WORDS, Reading, number_reading
+from services.nlu.lexicon import (FILLERS, MAX_PHRASE_WORDS, NUMBER_WORDS, ORDINALS, PHRASES, WORDS, Reading,
+                                  number_reading)
 from services.nlu.weights import DECISION
 
 _TOKEN = re.compile(r"[a-z0-9]+")
@@ -27,6 +28,8 @@ _SUFFIXES = (("ies", "y"), ("es", ""), ("s", ""), ("ed", ""), ("ed", "e"), ("d",
              ("er", ""), ("est", ""))
 # verbs whose particle may come after the object ("pick it up", "put the cup down")
 _SPLIT_PARTICLES = {"pick": "up", "put": "down", "set": "down", "lay": "down"}
+_DIGIT_ORDINALS = {f"{i}{suffix}": word for i, (suffix, word) in
+                   enumerate(zip(("st", "nd", "rd", "th", "th"), ORDINALS), 1)}  # "2nd" -> "second"
 _ARM_WORDS = frozenset({"hand", "arm", "gripper", "claw"})
 
 
@@ -89,6 +92,7 @@ def read(text: str) -> Utterance:
 @lru_cache(maxsize=4096)
 def canonical(token: str) -> str | None:
     """The known word ``token`` stands for (itself, its stem, or a typo's fix), else None."""
+    token = _DIGIT_ORDINALS.get(token, token)
     if token in _KNOWN or token.isdigit():
         return token
     for suffix, replacement in _SUFFIXES:
