@@ -132,3 +132,24 @@ def test_queryables(live: Network) -> None:
         live.hub.request(keys.nlu_query("parse"), {"text": "up", "world": {"objects": 5}})
     with pytest.raises(RemoteError, match="needs 'text'"):
         live.hub.request(keys.nlu_query("ground"), {})
+
+
+def test_a_question_is_answered_on_the_result_and_said_as_info(live: Network) -> None:
+    results = collect(live, live.hub.keys.nlu_result)
+    spoken = collect(live, live.hub.keys.say)
+    time.sleep(0.3)
+    say(live, text="what do you see?")
+    answer = next_result(results)
+    assert answer["kind"] == "answer" and answer["topic"] == "scene" and answer["utterance"] == "what do you see?"
+    said = spoken.get(timeout=10)
+    assert said["kind"] == "info" and said["text"] == answer["text"] and "I see 4 objects" in said["text"]
+
+
+def test_a_compound_is_one_result_with_then(live: Network) -> None:
+    results = collect(live, live.hub.keys.nlu_result)
+    time.sleep(0.3)
+    say(live, text="pick up the red cup and put it on the plate")
+    result = next_result(results)
+    assert (result["procedure"], result["args"]) == ("pick_up", {"arm": "right", "object": "obj0"})
+    assert result["then"] == [{"procedure": "place_rel", "args": {"arm": "right", "relation": "on_top_of",
+                                                                  "object": "obj3"}}]
