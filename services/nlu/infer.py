@@ -156,6 +156,10 @@ class Model:
     def _situated(self, command: Command, phrases: dict[str, str], confidence: float, score: float, match: Match,
                   history: History) -> Result:
         """The command as the hands' state allows it (see ``hands``), with its sentence."""
+        if command.procedure == "execute" and match.has_number:  # "play action 2": that action, then run it
+            switch = self._filled(Command("switch_action", (("target", NUMBER),)), match)
+            text = f"{command_text(switch, self.scene)}, then {command_text(command, self.scene, phrases)}"
+            return CommandResult(switch, confidence, text, {}, score, (command,))
         try:
             commands = hands.situate(self, command, match, history, "arm" in phrases)
         except hands.Refusal as refusal:

@@ -50,14 +50,15 @@ ORDINALS = ("first", "second", "third", "fourth", "fifth")
 # (phrases, readings); phrases are lower-case, single-spaced, already stemmed
 _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     # verbs of motion
-    (("move", "go", "bring", "shift", "position", "put your hand", "put your arm"), ((verb(MOVE),),)),
+    (("move", "go", "bring", "shift", "position", "carry", "put your hand", "put your arm"), ((verb(MOVE),),)),
     (("raise", "lift up"), ((verb(MOVE), option("direction", "up")),)),
     (("lower",), ((verb(MOVE), option("direction", "down")),)),
     (("approach",), ((verb(MOVE), option("direction", "towards")),)),
     (("retreat", "back off", "back away"), ((verb(MOVE), option("direction", "away_from")),)),
     (("tuck", "put away"), ((verb(MOVE), option("destination", "side")),)),
     # pick and place
-    (("pick up", "pick", "pickup", "grab", "take", "grasp", "get", "collect", "seize"), ((verb(_procs("pick_up")),),)),
+    (("pick up", "pick", "pickup", "grab", "take", "grasp", "get", "collect", "seize", "hold", "take hold of",
+      "grab hold of"), ((verb(_procs("pick_up")),),)),
     # "lift it" with the object in hand raises the hand; with an empty hand, naming an object picks it up
     (("lift",), ((verb(_procs("pick_up")),), (verb(_procs("move_abs_dir")), option("direction", "up", W.weak)))),
     (("place", "set", "lay", "drop", "deposit", "stack", "place down", "set down", "lay down"), ((verb(PLACE),),)),
@@ -75,6 +76,7 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     (("close", "shut", "grip", "clench", "squeeze", "close up"), ((verb(_procs("close")),),)),
     # the system itself
     (("record", "scan", "rescan", "look around", "detect", "refresh", "update", "record objects", "scan the table"), ((verb(_procs("record")),),)),
+    (("start recording", "start recording a new action", "start programming"), ((verb(_procs("create_action")),),)),
     (("create", "new", "make", "begin", "create action", "new action", "create new action", "make new action", "start new action", "start a new action"), ((verb(_procs("create_action")),),)),
     (("switch", "switch to", "change to", "go to action", "switch action", "change action"), ((verb(_procs("switch_action")),),)),
     (("action", "program"), ((verb(_procs("create_action", "switch_action", "execute"), W.weak),),)),
@@ -84,6 +86,8 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     (("previous action", "the previous action", "last action", "the last action", "prior action"),
      ((verb(_procs("switch_action")), option("target", "previous")),)),
     (("execute", "run", "perform", "replay", "play", "do it", "go ahead", "start", "test", "execute action", "run action"), ((verb(_procs("execute")),),)),
+    (("undo the last move", "undo the move", "undo that move", "undo last", "undo the last one"),
+     ((verb(_procs("undo")),),)),
     (("undo", "undo that", "undo it", "take that back", "take it back", "revert", "revert that", "go back a step",
       "undo the last step", "scratch that"), ((verb(_procs("undo")),),)),
     (("repeat", "do it again", "do that again", "once more", "one more time", "same again", "repeat that",
@@ -127,6 +131,13 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     # object words
     (("leftmost", "left most", "furthest left", "farthest left"), ((Meaning("label", "leftmost", W.adjective),),)),
     (("rightmost", "right most", "furthest right", "farthest right"), ((Meaning("label", "rightmost", W.adjective),),)),
+    # where an object stands, said as a place: "the cup on the left" (an object's label, or weakly the direction)
+    (("on the left", "on your left", "at the left", "on the left side", "on the left hand side"),
+     ((Meaning("label", "leftmost", W.adjective),), (option("direction", "left", W.weak),))),
+    (("on the right", "on your right", "at the right", "on the right side", "on the right hand side"),
+     ((Meaning("label", "rightmost", W.adjective),), (option("direction", "right", W.weak),))),
+    (("in the back", "at the back", "in the rear", "at the far end"), ((Meaning("label", "farthest", W.adjective),),)),
+    (("in front", "at the front", "up front"), ((Meaning("label", "nearest", W.adjective),),)),
     (("nearest", "closest", "near most", "front", "nearer"), ((Meaning("label", "nearest", W.adjective),),)),
     (("farthest", "furthest", "far", "farthest away", "furthest away", "far away", "rear"), ((Meaning("label", "farthest", W.adjective),),)),
     (("tallest", "tall", "highest", "high", "taller"), ((Meaning("label", "tallest", W.adjective),),)),

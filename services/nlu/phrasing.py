@@ -61,11 +61,13 @@ def command_text(command: Command, scene: Scene, phrases: dict[str, str] | None 
     elif p == "record":
         words = [verb] if "table" in verb else [verb, "the objects on the table"]
     elif p == "create_action":
-        words = [verb, "a new action"]
+        words = [verb] if "action" in verb else [verb, "a new action"]
     elif p == "switch_action":
+        if phrases.get("target") == phrases.get("verb"):  # "the next action" said it all
+            verb = PROCEDURES[p].verb
         words = [verb.removesuffix(" action"), option_words(command.arg("target"))]
     elif p == "execute":
-        words = [verb, "the current action"]
+        words = [verb] if "action" in verb else [verb, "the current action"]
     else:
         words = [verb]
     return " ".join(w for w in words if w)

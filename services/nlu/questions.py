@@ -33,7 +33,7 @@ _PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple((topic, re.compile(pa
                 r"(?:the )?current action|show (?:me )?(?:the )?actions)"),
     ("object", r"^(?:where(?:'s| is| are)|is there|are there|do you see|can you see|have you seen|where did|where)"
                r"\b(?P<phrase>.*)"),
-    ("scene", r"^(?:what (?:do|can) you (?:see|notice)|what(?:'s| is| are) (?:on|in front of you|there|around|in view)"
+    ("scene", r"^(?:what (?:do |can )?you (?:see|notice)|which (?:objects|things)|what(?:'s| is| are) (?:on|in front of you|there|around|in view)"
               r"|what (?:objects|things)|describe (?:the |what)|list (?:the |all )?(?:objects|things)"
               r"|how many (?:objects|things)"
               r"|tell me what you see|what is on the table|what have you (?:got|found) on the table)"),
@@ -43,8 +43,9 @@ _POLITE = re.compile(r"^(?:(?:hey|ok|okay|so|well|and|robot|please|now|tell me|c
 
 
 # the first words a question can start with (after "please", "tell me", ...): a cheap test before the patterns
-_OPENERS = frozenset("help what where is are do can have how which list describe tell show could so ok okay hey "
-                     "well and robot please now".split())
+_OPENERS = frozenset("help what whats where wheres is are do can have how which list describe tell show could so ok "
+                     "okay hey well and robot please now".split())
+_CONTRACTED = re.compile(r"\b(what|where)(?:'s|s)\b")
 
 
 def answer(model: Model, text: str, history: History) -> Answer | None:
@@ -53,7 +54,7 @@ def answer(model: Model, text: str, history: History) -> Answer | None:
     if first not in _OPENERS and not first.startswith(("what'", "where'")):
         return None
     lowered = " ".join(re.sub(r"[?!.,]+", " ", text.lower()).split())
-    lowered = _POLITE.sub("", lowered)
+    lowered = _CONTRACTED.sub(lambda found: found[1] + " is", _POLITE.sub("", lowered))
     for topic, pattern in _PATTERNS:
         found = pattern.search(lowered)
         if found is None:

@@ -30,6 +30,8 @@ _SUFFIXES = (("ies", "y"), ("es", ""), ("s", ""), ("ed", ""), ("ed", "e"), ("d",
 _SPLIT_PARTICLES = {"pick": "up", "put": "down", "set": "down", "lay": "down"}
 _DIGIT_ORDINALS = {f"{i}{suffix}": word for i, (suffix, word) in
                    enumerate(zip(("st", "nd", "rd", "th", "th"), ORDINALS), 1)}  # "2nd" -> "second"
+# "the cup that is next to the box": the relative clause's words say nothing the phrase does not
+_CLAUSE = re.compile(r"\b(?:that|which|who)(?: is|'s| are| s)\b")
 _ARM_WORDS = frozenset({"hand", "arm", "gripper", "claw"})
 
 
@@ -60,7 +62,7 @@ class Utterance:
 
 def read(text: str) -> Utterance:
     """Segment ``text`` into terms; unknown words are returned, not dropped silently."""
-    raw = _TOKEN.findall(text.lower().replace("_", " "))
+    raw = _TOKEN.findall(_CLAUSE.sub(" ", text.lower().replace("_", " ")))
     tokens: list[str] = []
     unknown: list[str] = []
     for token in raw:
