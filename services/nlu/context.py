@@ -12,6 +12,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 
+from services.nlu import questions
 from services.nlu.commands import ADMIN_PROCEDURES
 from services.nlu.infer import Answer, Clarify, CommandResult, Model, Result
 from services.nlu.prior import History
@@ -46,7 +47,9 @@ class Dialogue:
         """Interpret one utterance (or a numbered choice) in the current world."""
         if choice is not None:
             return self._choose(model, choice)
-        result = None
+        result: Result | None = questions.answer(model, text, self._history(model))
+        if result is not None:
+            return result  # a question, even one asked while a question is pending
         if self.pending is not None:
             settled = self._settle(model, text)
             if settled is not None:

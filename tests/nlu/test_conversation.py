@@ -205,6 +205,7 @@ def test_an_answer_leaves_a_pending_question_pending() -> None:
     dialogue = Dialogue()
     dialogue.understand(model, "pick up the cup")
     assert isinstance(dialogue.understand(model, "what do you see"), Answer)
+    assert isinstance(dialogue.understand(model, "where is the red cup?"), Answer)
     reply = dialogue.understand(model, "the blue one")
     assert isinstance(reply, CommandResult) and dict(reply.command.args) == {"arm": "right", "object": "obj1"}
 
