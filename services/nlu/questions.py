@@ -33,7 +33,8 @@ _PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple((topic, re.compile(pa
                 r"(?:the )?current action|show (?:me )?(?:the )?actions)"),
     ("object", r"^(?:where(?:'s| is| are)|is there|are there|do you see|can you see|have you seen|where did|where)"
                r"\b(?P<phrase>.*)"),
-    ("scene", r"^(?:what (?:do |can )?you (?:see|notice)|which (?:objects|things)|what(?:'s| is| are) (?:on|in front of you|there|around|in view)"
+    ("scene", r"^(?:what (?:do |can )?you (?:see|notice)|which (?:objects|things)"
+              r"|what(?:'s| is| are) (?:on|in front of you|there|around|in view)"
               r"|what (?:objects|things)|describe (?:the |what)|list (?:the |all )?(?:objects|things)"
               r"|how many (?:objects|things)"
               r"|tell me what you see|what is on the table|what have you (?:got|found) on the table)"),

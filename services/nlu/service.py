@@ -60,7 +60,8 @@ class LiveWorld:
             log.warning("ignoring executor/state: %s", exc)
             return
         with self.lock:
-            moved = (robot.get("last_arm"), robot.get("last_object")) != (self.robot.get("last_arm"), self.robot.get("last_object"))
+            moved = (robot.get("last_arm"), robot.get("last_object")) != (self.robot.get("last_arm"),
+                                                                          self.robot.get("last_object"))
             self.robot, self.reach = robot, reach
             if moved:
                 self.dialogue.observe_robot()  # the robot's own account of history is newer
@@ -124,7 +125,8 @@ class NluService:
     def _publish(self, result: Result, text: str) -> None:
         self.results.put({**result.to_json(), "utterance": text})
         if isinstance(result, Clarify):
-            self.bus.publish(self.bus.keys.say, {"text": result.question, "kind": "clarify", "candidates": result.labels})
+            self.bus.publish(self.bus.keys.say,
+                             {"text": result.question, "kind": "clarify", "candidates": result.labels})
         elif isinstance(result, Answer):
             self.bus.publish(self.bus.keys.say, {"text": result.text, "kind": "info"})
         log.info("%r -> %s", text, result.to_json())
@@ -167,7 +169,8 @@ def _body(bus: Bus, _args: argparse.Namespace, stop: threading.Event) -> None:
     service = NluService(bus)
     keys = bus.keys
     bus.subscribe(keys.objects, service.live.on_objects, schema="objects", latest_only=True, history=True)
-    bus.subscribe(keys.executor_state, service.live.on_executor, schema="executor_state", latest_only=True, history=True)
+    bus.subscribe(keys.executor_state, service.live.on_executor, schema="executor_state", latest_only=True,
+                  history=True)
     bus.subscribe(keys.utterance, service.on_utterance, schema="utterance")
     bus.serve(keys.nlu_query("parse"), service.serve_parse)
     bus.serve(keys.nlu_query("ground"), service.serve_ground)

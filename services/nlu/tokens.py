@@ -17,8 +17,16 @@ from functools import lru_cache
 from rapidfuzz import process
 from rapidfuzz.distance import DamerauLevenshtein
 
-from services.nlu.lexicon import (FILLERS, MAX_PHRASE_WORDS, NUMBER_WORDS, ORDINALS, PHRASES, WORDS, Reading,
-                                  number_reading)
+from services.nlu.lexicon import (
+    FILLERS,
+    MAX_PHRASE_WORDS,
+    NUMBER_WORDS,
+    ORDINALS,
+    PHRASES,
+    WORDS,
+    Reading,
+    number_reading,
+)
 from services.nlu.weights import DECISION
 
 _TOKEN = re.compile(r"[a-z0-9]+")

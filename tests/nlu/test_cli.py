@@ -51,7 +51,8 @@ def test_ground_and_describe(world_file: Path, tmp_path: Path) -> None:
     lines = hfpbd("ground", "--world", str(world_file), "--batch", str(batch)).stdout.splitlines()
     assert [max(m, key=m.get) for m in map(json.loads, lines)] == ["obj2", "obj1"]
     described = json.loads(hfpbd("describe", "--world", str(world_file)).stdout)
-    assert described == {"obj0": "the rightmost cup", "obj1": "the leftmost cup", "obj2": "the box", "obj3": "the plate"}
+    assert described == {"obj0": "the rightmost cup", "obj1": "the leftmost cup", "obj2": "the box",
+                         "obj3": "the plate"}
 
 
 @pytest.mark.parametrize("content, message", [

@@ -41,7 +41,8 @@ def live(network: Network, launcher: Launcher) -> Network:
     keys = network.hub.keys
     objects = network.hub.publisher(keys.objects, cached=True)
     executor = network.hub.publisher(keys.executor_state, cached=True)
-    objects.put({"stamp": time.time(), "objects": [{**o, "held_by": None, "confidence": 0.9} for o in scene["objects"]]})
+    objects.put({"stamp": time.time(),
+                 "objects": [{**o, "held_by": None, "confidence": 0.9} for o in scene["objects"]]})
     executor.put({"stamp": time.time(), "robot": {**scene["robot"], "action": 1, "actions": [0]},
                   "reach": {"obj1": {"right": {"pick_up": False}, "left": {"pick_up": True}}}})
     launcher.start("nlu")
@@ -78,7 +79,8 @@ def test_clarification_is_said_and_a_choice_answers_it(live: Network) -> None:
     assert len(line["candidates"]) == len(question["candidates"]) == 2
     say(live, text="", choice=0)
     chosen = next_result(results)
-    assert chosen["kind"] == "command" and {"procedure": chosen["procedure"], "args": chosen["args"]} == question["candidates"][0]
+    assert chosen["kind"] == "command" and {"procedure": chosen["procedure"],
+                                            "args": chosen["args"]} == question["candidates"][0]
 
 
 def test_nbest_picks_the_plausible_hypothesis(live: Network) -> None:
