@@ -13,6 +13,9 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from rapidfuzz import process
+from rapidfuzz.distance import DamerauLevenshtein
+
 from shared.contract import DISTANCE
 
 _SMALL = ("zero one two three four five six seven eight nine ten eleven twelve thirteen fourteen fifteen sixteen "
@@ -24,6 +27,8 @@ _WORD_NUMBER = (r"(?:(?:" + "|".join(_TENS) + r")(?:[ -](?:" + "|".join(_SMALL[1
 _NUMBER = rf"(?P<number>\d+(?:[.,]\d+)?|\.\d+|{_WORD_NUMBER})(?: and a half)?"
 _UNIT = (r"(?P<unit>millimet(?:er|re)s?|mms?|centimet(?:er|re)s?|cms?|centis?|met(?:er|re)s?|m|inch(?:es)?|\"|ft"
          r"|foot|feet)")
+_UNIT_WORDS = ("millimetres", "millimeters", "centimetres", "centimeters", "metres", "meters", "inches")
+_UNIT_TYPO = re.compile(r"(?P<lead>\d ?)(?P<word>(?!(?:millimet|centimet|met)(?:er|re)s\b|inches\b)[a-z]{6,})\b")
 _MEASURED = re.compile(rf"\b(?:by |about |around |roughly )?{_NUMBER} ?{_UNIT}(?![a-z])")
 _QUALITATIVE = {
     DISTANCE.a_little_m: re.compile(r"\b(?:just )?(?:a (?:little|tiny|wee) bit|a little|a bit|a tad|a touch|"
@@ -54,7 +59,7 @@ class Modifiers:
 
 def extract(text: str) -> Modifiers:
     """Take the distance and "both hands" words out of ``text`` (lower-cased)."""
-    lowered = " ".join(text.lower().split())
+    lowered = _UNIT_TYPO.sub(_unit_fixed, " ".join(text.lower().split()))
     both = False
     for pattern in (_TWO_ARMS, _BOTH):
         found = pattern.search(lowered)
@@ -80,6 +85,12 @@ def extract(text: str) -> Modifiers:
         problem = (f"I can move between {DISTANCE.min_m * 100:g} and {DISTANCE.max_m * 100:g} cm in one step; "
                    f"{said} is too {'far' if distance > DISTANCE.max_m else 'small'}.")
     return Modifiers(lowered, distance, said, both, problem, _BARE_NUMBER.search(lowered) is not None)
+
+
+def _unit_fixed(found: re.Match[str]) -> str:
+    """"5 centimetrs" -> "5 centimetres": a misspelt unit right after a number (two edits at most)."""
+    match = process.extractOne(found["word"], _UNIT_WORDS, scorer=DamerauLevenshtein.distance, score_cutoff=2)
+    return f"{found['lead']}{match[0] if match is not None else found['word']}"
 
 
 def _cut(text: str, found: re.Match[str]) -> str:

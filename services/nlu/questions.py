@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 from services.nlu.lexicon import NUMBER_WORDS
 from services.nlu.results import Answer
-from services.nlu.tokens import read
+from services.nlu.tokens import canonical, read
 from shared.contract import ARMS
 
 if TYPE_CHECKING:
@@ -56,15 +56,24 @@ def answer(model: Model, text: str, history: History) -> Answer | None:
         return None
     lowered = " ".join(re.sub(r"[?!.,]+", " ", text.lower()).split())
     lowered = _CONTRACTED.sub(lambda found: found[1] + " is", _POLITE.sub("", lowered))
+    found_any = _match(lowered)
+    if found_any is None:  # "what do you sea": the same question with its typos corrected
+        found_any = _match(" ".join(word if word in _OPENERS else canonical(word) or word for word in lowered.split()))
+    if found_any is None:
+        return None
+    topic, found = found_any
+    if topic == "object":
+        return Answer(topic, _where(model, found["phrase"]))
+    if topic == "actions":
+        return Answer(topic, _actions(model, found.groupdict().get("number")))
+    return Answer(topic, {"help": _help, "holding": _holding, "scene": _scene}[topic](model))
+
+
+def _match(lowered: str) -> tuple[str, re.Match[str]] | None:
     for topic, pattern in _PATTERNS:
         found = pattern.search(lowered)
-        if found is None:
-            continue
-        if topic == "object":
-            return Answer(topic, _where(model, found["phrase"]))
-        if topic == "actions":
-            return Answer(topic, _actions(model, found.groupdict().get("number")))
-        return Answer(topic, {"help": _help, "holding": _holding, "scene": _scene}[topic](model))
+        if found is not None:
+            return topic, found
     return None
 
 

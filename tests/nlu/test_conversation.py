@@ -99,7 +99,7 @@ def test_a_compound_step_not_understood_is_asked_about_by_name() -> None:
 
 @pytest.mark.parametrize("text, distance", [
     ("move up 5 centimeters", 0.05), ("move up five cm", 0.05), ("move up 20 mm", 0.02), ("move up two inches", 0.0508),
-    ("move up 0.1 metres", 0.1), ("move up a little", 0.03), ("move up a lot", 0.2),
+    ("move up 0.1 metres", 0.1), ("move up a little", 0.03), ("move up a lot", 0.2), ("move up 5 centimetrs", 0.05),
 ])
 def test_distances_in_digits_words_and_units(text: str, distance: float) -> None:
     [(procedure, args)] = steps(text)
@@ -144,6 +144,7 @@ def test_undo_and_repeat() -> None:
     ("what are you holding", "holding", "My right hand is holding the rightmost cup (red) and my left hand is empty."),
     ("what is in action 2", "actions", "Action 2 has 4 steps."),
     ("what can I say", "help", "pick up the red cup"),
+    ("what do you sea", "scene", "I see 4 objects"),
 ])
 def test_questions_are_answered_from_the_world(text: str, topic: str, says: str) -> None:
     scene = holding(action=1, actions=[2, 4])
