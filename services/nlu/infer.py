@@ -112,7 +112,7 @@ class Model:
         """What "it" means: the object in a hand (the last used hand's first), else the last object referred to."""
         held = {obj.held_by: i for i, obj in enumerate(self.world.objects) if obj.held_by is not None}
         if held:
-            return held.get(history.last_arm, next(iter(held.values())))
+            return held[history.last_arm] if history.last_arm in held else next(iter(held.values()))
         return self.world.index_of(history.last_object) if history.last_object in self.world.ids else None
 
     def _allowed(self, among: list[Command] | None) -> np.ndarray | None:

@@ -138,7 +138,8 @@ class Index:
         obj = self.object[command_index]
         theme_end = next((i for i, term in enumerate(match.terms) if _is_relational(term)), len(match.terms))
         for index, term in enumerate(match.terms):
-            best_score, best_slots = 0.0, ()
+            best_score = 0.0
+            best_slots: tuple[str, ...] = ()
             theme = index < theme_end
             for reading in term.readings:
                 if reading[0].slot in OBJECT_SLOTS:

@@ -213,7 +213,7 @@ class Scene:
         if context == {index}:
             return [()]
         fitting = [label for label in (*LABELS, "middle") if index in self.group(context, label)]
-        singles = [(label,) for label in fitting if self.group(context, label) == {index}]
+        singles: list[tuple[str, ...]] = [(label,) for label in fitting if self.group(context, label) == {index}]
         if singles:
             return singles
         return [pair for pair in combinations(fitting, 2)

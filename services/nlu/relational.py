@@ -14,6 +14,7 @@ move or place verb the first relation is the command's, and only a later
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -231,7 +232,7 @@ def _takes_relation(terms: list[Term]) -> bool:
     return not verbs or any(v & (MOVE | PLACE) for v in verbs)
 
 
-def _value(term: Term, slot: str) -> object | None:
+def _value(term: Term, slot: str) -> Any:
     for reading in term.readings:
         for m in reading:
             if m.slot == slot:
