@@ -40,6 +40,7 @@ class Model:
         self.index = Index(world, self.scene)
         self.situation = situation_scores(world, self.index.commands)
         self.sides = side_scores(world, self.index.commands)
+        self._history_parts: dict[History, np.ndarray] = {}
 
     @property
     def default_history(self) -> History:
@@ -82,8 +83,12 @@ class Model:
         return result
 
     def history_part(self, history: History) -> np.ndarray:
-        """The per-utterance part of the prior: last arm (or the object's side), last object."""
-        return history_scores(self.index.arm, self.index.object, history, self.world, self.sides)
+        """The per-utterance part of the prior: last arm (or the object's side), last object (once per history)."""
+        part = self._history_parts.get(history)
+        if part is None:
+            part = self._history_parts[history] = history_scores(self.index.arm, self.index.object, history,
+                                                                 self.world, self.sides)
+        return part
 
     def _understand(self, text: str, history: History, among: list[Command] | None,
                     focus: list[str] | None) -> Result:

@@ -16,23 +16,21 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from services.nlu.commands import NUMBER, PROCEDURES, Command, enumerate_commands
-from services.nlu.lexicon import OBJECT_SLOTS, PLACE, Meaning
+from services.nlu.lexicon import LANDMARK_PHRASES, OBJECT_SLOTS, PLACE, Meaning
 from services.nlu.refexp import Scene
 from services.nlu.tokens import Term
 from services.nlu.weights import LANGUAGE
 from services.nlu.world import ARMS, World
-from shared.contract import MOVES, PLACES, REL_DIRECTIONS, RELATIONS
+from shared.contract import MOVES, PLACES
 
 _ARG_SLOTS = ("destination", "relation", "direction", "target")
 CARRYING = MOVES | PLACES | {"rotate"}
 LANDMARKED = frozenset({"move_rel_dest", "move_rel_dir", "place_rel"})
-_LANDMARK_SLOTS = {"relation": set(RELATIONS), "direction": set(REL_DIRECTIONS)}
 
 
 def _is_relational(term: Term) -> bool:
     """A relation or object-relative direction: what follows it is a landmark."""
-    return any(m.value in _LANDMARK_SLOTS.get(m.slot, ()) and m.weight >= LANGUAGE.option
-               for reading in term.readings for m in reading)
+    return term.words in LANDMARK_PHRASES
 
 
 @dataclass

@@ -16,6 +16,7 @@ from typing import Any
 from services.nlu.weights import LANGUAGE as W
 from shared.contract import MOVES as MOVE
 from shared.contract import PLACES as PLACE
+from shared.contract import REL_DIRECTIONS, RELATIONS
 
 # slots whose meaning is a property of an object rather than a command argument
 OBJECT_SLOTS = frozenset({"color", "type", "label", "generic", "anaphor", "refer"})
@@ -218,6 +219,17 @@ def _build() -> dict[str, tuple[Reading, ...]]:
 
 
 PHRASES: dict[str, tuple[Reading, ...]] = _build()
+
+
+def _phrases_with(test: Any) -> frozenset[str]:
+    return frozenset(p for p, readings in PHRASES.items() if any(test(m) for r in readings for m in r))
+
+
+# phrases after which the object words name a landmark: a relation or an object-relative direction
+LANDMARK_PHRASES = _phrases_with(lambda m: m.weight >= W.option and (
+    (m.slot == "relation" and m.value in RELATIONS) or (m.slot == "direction" and m.value in REL_DIRECTIONS)))
+# phrases that may start or link a relational referring expression (``relational.py``)
+REFERRING_PHRASES = LANDMARK_PHRASES | _phrases_with(lambda m: m.slot in REFERRING_SLOTS)
 MAX_PHRASE_WORDS = max(len(p.split()) for p in PHRASES)
 WORDS: frozenset[str] = frozenset(w for p in PHRASES for w in p.split())
 

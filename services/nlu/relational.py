@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from services.nlu.lexicon import MOVE, OBJECT_SLOTS, PLACE, Meaning
+from services.nlu.lexicon import MOVE, OBJECT_SLOTS, PLACE, REFERRING_PHRASES, Meaning
 from services.nlu.refexp import Scene
 from services.nlu.tokens import Term
 from services.nlu.weights import LANGUAGE, MARGINS
@@ -36,7 +36,7 @@ def resolve(scene: Scene, terms: tuple[Term, ...], referent: int | None,
 
     ``phrase``: the terms are a referring phrase alone (``ground``), so no relation is a command's.
     """
-    if scene.n == 0 or not any(_relating(t) or _value(t, "ordinal") or _value(t, "relate") for t in terms):
+    if scene.n == 0 or not any(t.words in REFERRING_PHRASES for t in terms):
         return terms
     out = list(terms)
     out = _ordinals_and_others(scene, out, referent)
