@@ -43,6 +43,20 @@ def test_parse_batch_one_line_per_input(world_file: Path, tmp_path: Path) -> Non
     assert results[1]["params"] == ["object"] and results[2]["params"] == []
 
 
+def test_batch_carries_then_answers_and_refusals(world_file: Path, tmp_path: Path) -> None:
+    batch = tmp_path / "lines.txt"
+    lines = ["put the red cup on the plate", "what do you see", "move up 5 cm", "move up 50 cm", "x" * 10000]
+    batch.write_text("\n".join(lines) + "\n")
+    done = hfpbd("parse", "--world", str(world_file), "--batch", str(batch))
+    assert done.returncode == 0, done.stderr
+    placed, seen, moved, too_far, pasted = (json.loads(line) for line in done.stdout.splitlines())
+    assert placed["procedure"] == "pick_up" and placed["then"][0]["procedure"] == "place_rel"
+    assert seen["kind"] == "answer" and seen["topic"] == "scene"
+    assert moved["args"]["distance"] == 0.05
+    assert too_far["kind"] == "clarify" and too_far["params"] == ["distance"]
+    assert pasted["kind"] == "clarify" and "too long" in pasted["question"]
+
+
 def test_ground_and_describe(world_file: Path, tmp_path: Path) -> None:
     grounded = json.loads(hfpbd("ground", "--world", str(world_file), "the red cup").stdout)
     assert max(grounded, key=grounded.get) == "obj0" and sum(grounded.values()) == pytest.approx(1, abs=1e-3)
