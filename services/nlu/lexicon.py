@@ -109,7 +109,8 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     (("again",), ((verb(_procs("repeat"), W.option),),)),  # alone it repeats; with another verb it is an adverb
     (("go back to", "return to", "back to"), ((verb(_procs("switch_action")),), (verb(MOVE),))),
     (("look at the table", "look at the table again", "look again", "have a look"), ((verb(_procs("record")),),)),
-    (("stop", "halt", "freeze", "abort", "cancel", "pause", "stop executing", "stop it", "stop moving"),
+    (("stop", "halt", "freeze", "abort", "cancel", "pause", "stop executing", "stop it", "stop moving", "hold on",
+      "hang on", "wait"),
      ((verb(_procs("stop")),),)),
     # arms
     (("right hand", "right arm", "right gripper", "your right"), ((option("arm", "right", W.arm),),)),
@@ -163,8 +164,10 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
      ((Meaning("label", "rightmost", W.adjective),), (option("direction", "right", W.weak),))),
     (("in the back", "at the back", "in the rear", "at the far end"), _label("farthest")),
     (("in front", "at the front", "up front"), _label("nearest")),
-    (("nearest", "closest", "near most", "front", "nearer"), _label("nearest")),
-    (("farthest", "furthest", "far", "farthest away", "furthest away", "far away", "rear"), _label("farthest")),
+    (("nearest", "closest", "near most", "front", "nearer", "closest to me", "closest to you", "nearest to me",
+      "nearest to you", "nearest me", "nearest you"), _label("nearest")),
+    (("farthest", "furthest", "far", "farthest away", "furthest away", "far away", "rear", "farthest from me",
+      "furthest from me", "farthest from you", "furthest from you"), _label("farthest")),
     (("tallest", "tall", "highest", "high", "taller"), _label("tallest")),
     (("shortest", "short", "lowest", "low", "shorter", "flattest", "flat"), _label("shortest")),
     (("biggest", "big", "largest", "large", "bigger", "larger", "huge"), _label("biggest")),

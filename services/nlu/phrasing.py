@@ -23,6 +23,7 @@ def command_text(command: Command, scene: Scene, phrases: dict[str, str] | None 
     """The sentence for ``command``, in the user's words where they gave them."""
     phrases = phrases or {}
     verb = phrases.get("verb", PROCEDURES[command.procedure].verb)
+    verb = verb.split(" your ")[0]  # "put your hand": the hand is said after the verb
     arm = command.arg("arm")
     said_arm = phrases.get("arm", "")
     names_limb = arm is not None and arm in said_arm and any(w in said_arm for w in ("hand", "arm", "gripper"))

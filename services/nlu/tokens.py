@@ -31,7 +31,8 @@ from services.nlu.weights import DECISION
 
 _TOKEN = re.compile(r"[a-z0-9]+")
 _KNOWN = WORDS | FILLERS | frozenset(NUMBER_WORDS)
-_CHOICES = sorted(_KNOWN)
+# a typo is never corrected into a number word: "give" must not become "five" (and switch to action 5)
+_CHOICES = sorted(_KNOWN - frozenset(NUMBER_WORDS))
 _SUFFIXES = (("ies", "y"), ("es", ""), ("s", ""), ("ed", ""), ("ed", "e"), ("d", ""), ("ing", ""), ("ing", "e"),
              ("er", ""), ("est", ""))
 # verbs whose particle may come after the object ("pick it up", "put the cup down")
