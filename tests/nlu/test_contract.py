@@ -6,6 +6,7 @@ from services.executor.reach import REACH_KEYS as PUBLISHED
 from services.nlu.commands import PROCEDURES as ENUMERATED
 from services.nlu.infer import Model
 from services.nlu.prior import READ_KEYS
+from services.nlu.templates import sentence_templates
 from services.nlu.world import parse_world
 from shared import contract
 from tests.nlu.scenes import table_scene
@@ -39,3 +40,9 @@ def test_the_default_words_are_the_ones_the_nlu_says() -> None:
     for name, procedure in contract.PROCEDURES.items():
         command = next(c for c in model.index.commands if c.procedure == name)
         assert model.describe_command(command).startswith(procedure.verb)
+
+
+def test_every_procedure_has_sentence_shapes_for_the_speech_grammar() -> None:
+    templates = sentence_templates()
+    assert set(templates["procedures"]) == set(contract.PROCEDURES)  # type: ignore[arg-type]
+    assert all(templates["verbs"][name] for name in contract.PROCEDURES)  # type: ignore[index]
