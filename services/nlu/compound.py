@@ -19,6 +19,7 @@ from services.nlu.prior import History
 from services.nlu.results import Clarify, CommandResult, Result
 from services.nlu.weights import LANGUAGE
 from services.nlu.world import RobotState, World
+from shared.contract import ARMS, BOTH
 
 if TYPE_CHECKING:
     from services.nlu.infer import Model
@@ -85,7 +86,7 @@ def run(model: Model, parts: list[str], history: History) -> Result:
         world = current.world
         for command in result.commands:
             world = after(world, command)
-            history = History(command.arg("arm") if command.arg("arm") in ("right", "left") else history.last_arm,
+            history = History(command.arg("arm") if command.arg("arm") in ARMS else history.last_arm,
                               command.arg("object") or history.last_object)
         current = type(model)(world)
     return CommandResult(commands[0], confidence, ", then ".join(texts), {}, score, tuple(commands[1:]))
@@ -97,7 +98,7 @@ def after(world: World, command: Command) -> World:
     robot = world.robot
     grippers = dict(robot.grippers)
     objects = world.objects
-    arms = ("right", "left") if arm == "both" else (arm,)
+    arms = ARMS if arm == BOTH else (arm,)
     if command.procedure == "pick_up":
         grippers[arm] = "holding"
         objects = tuple(replace(o, held_by=arm) if o.id == object_id else o for o in objects)
@@ -108,7 +109,7 @@ def after(world: World, command: Command) -> World:
     elif command.procedure == "close":
         for hand in arms:
             grippers[hand] = "holding" if any(o.held_by == hand for o in objects) else "closed"
-    last_arm = arm if arm in ("right", "left") else robot.last_arm
+    last_arm = arm if arm in ARMS else robot.last_arm
     last_object = object_id or robot.last_object
     return World(objects, RobotState(**{**robot.__dict__, "grippers": grippers, "last_arm": last_arm,
                                         "last_object": last_object}))

@@ -22,6 +22,7 @@ import numpy as np
 from services.nlu.commands import Command
 from services.nlu.language import Match
 from services.nlu.prior import History
+from shared.contract import ARMS
 
 if TYPE_CHECKING:
     from services.nlu.infer import Model
@@ -79,7 +80,7 @@ def _best_arm(model: Model, obj: int, history: History, fallback: str) -> str:
     """The arm the prior prefers for picking ``obj`` up (``fallback`` when both are equal)."""
     scores: dict[str, float] = {}
     object_id = model.world.ids[obj]
-    for arm in ("right", "left"):
+    for arm in ARMS:
         position = model.index.position.get(Command("pick_up", (("arm", arm), ("object", object_id))))
         if position is None:
             return fallback

@@ -39,8 +39,7 @@ _QUALITATIVE = {
 _UNIT_ONLY = re.compile(r"\b(?:some |several |a few |few |many )?(?:millimet(?:er|re)s?|centimet(?:er|re)s?|"
                         r"inch(?:es)?|met(?:er|re)s?)\b")
 _BARE_NUMBER = re.compile(r"(?<!action )(?<!number )\b(?:\d+(?:\.\d+)?)\b")
-_BOTH = re.compile(r"\b(?:with )?(?:both|both of|all two)(?: (?:your|my|the))? (?:hands|arms|grippers|claws)\b"
-                   r"|\bboth (?:hands|arms|grippers)\b|\bboth\b")
+_BOTH = re.compile(r"\b(?:with )?both(?: of)?(?: (?:your|my|the))? (?:hands|arms|grippers|claws)\b|\bboth\b")
 _TWO_ARMS = re.compile(r"\b(?:with )?(?:your |the |my )?(?P<a>right|left)(?: (?:hand|arm|gripper))? (?:and|&) "
                        r"(?:your |the |my )?(?P<b>right|left) (?:hands?|arms?|grippers?)\b")
 

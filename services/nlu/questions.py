@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 from services.nlu.lexicon import NUMBER_WORDS
 from services.nlu.results import Answer
 from services.nlu.tokens import canonical, read
+from services.nlu.weights import MARGINS
 from shared.contract import ARMS
 
 if TYPE_CHECKING:
@@ -88,7 +89,8 @@ def _where_is(model: Model, index: int) -> str:
     if obj.held_by is not None:
         return f"in my {obj.held_by} hand"
     x, y, _ = obj.position
-    side = "on my right" if y < -0.07 else "on my left" if y > 0.07 else "straight ahead"
+    margin = MARGINS.location_m
+    side = "on my right" if y < -margin else "on my left" if y > margin else "straight ahead"
     return f"{side}, {x * 100:.0f} cm in front of me"
 
 

@@ -22,7 +22,7 @@ from services.nlu.lexicon import MOVE, OBJECT_SLOTS, PLACE, REFERRING_PHRASES, M
 from services.nlu.refexp import Scene
 from services.nlu.tokens import Term
 from services.nlu.weights import LANGUAGE, MARGINS
-from shared.contract import RELATIONS
+from shared.contract import RELATIONS, VALUE_WORDS
 
 MARGIN_M = 0.03  # how much nearer (or further along) the winner must be than the runner-up
 _OBJECT_WORDS = frozenset(OBJECT_SLOTS - {"anaphor", "refer"})
@@ -74,8 +74,8 @@ def resolve(scene: Scene, terms: tuple[Term, ...], referent: int | None,
     return tuple(out)
 
 
-_DESCRIBED = {"next_to": "next to", "left_of": "to the left of", "right_of": "to the right of",
-              "in_front_of": "in front of", "behind": "behind"}
+_DESCRIBED = {relation: VALUE_WORDS[relation]
+              for relation in ("next_to", "left_of", "right_of", "in_front_of", "behind")}
 
 
 def describe(scene: Scene, index: int) -> str | None:
