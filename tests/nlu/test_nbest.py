@@ -72,3 +72,10 @@ def test_malformed_entries_are_skipped(model: Model) -> None:
     choice = most_plausible(model, None, nbest)
     assert choice is not None and choice.reading.text == "point at the plate" and choice.share == 1.0
     assert most_plausible(model, None, [{"text": "stop", "score": 0}]) is None
+
+
+def test_a_compound_is_not_grouped_with_its_first_step(model: Model) -> None:
+    choice = pick(model, ("pick up the red cup", 0.4), ("pick up the red cup and lift it", 0.35),
+                  ("pick up the red cup then lift it", 0.25))
+    assert isinstance(choice.reading.result, CommandResult) and len(choice.reading.result.commands) == 2
+    assert choice.share == pytest.approx(0.6)
