@@ -74,6 +74,12 @@ class Model:
         if said.problem is not None:
             return Clarify(["distance"], said.problem)
         result = self._understand(said.text, history, among, focus)
+        first = result.command if isinstance(result, CommandResult) else \
+            result.candidates[0] if isinstance(result, Clarify) and result.candidates else None
+        if said.two_arms and first is not None and first.arg("arm") is not None:
+            options = [first.with_arg("arm", arm) for arm in ARMS]
+            return Clarify(["arm"], "You named both hands. Which hand do you mean: the right hand or the left hand?",
+                           options, [command_text(c, self.scene) for c in options], result.score)
         if said.both and isinstance(result, Clarify) and result.candidates:
             one_handed = _one_handed(result.candidates[0], self.scene, result.score)
             if one_handed is not None and len({c.procedure for c in result.candidates}) == 1:

@@ -43,6 +43,8 @@ _BOTH = re.compile(r"\b(?:with )?both(?: of)?(?: (?:your|my|the))? (?:hands|arms
 _TWO_ARMS = re.compile(r"\b(?:with )?(?:your |the |my )?(?P<a>right|left)(?: (?:hand|arm|gripper))? (?:and|&) "
                        r"(?:your |the |my )?(?P<b>right|left) (?:hands?|arms?|grippers?)\b")
 
+_ARM_NAMED = re.compile(r"\b(right|left) (?:hand|arm|gripper|claw)s?\b")
+
 
 @dataclass(frozen=True)
 class Modifiers:
@@ -54,6 +56,7 @@ class Modifiers:
     both: bool = False                  # "both hands", "right and left hand"
     problem: str | None = None          # a distance that cannot be used, said as the robot would
     bare_number: bool = False           # a number with no unit ("move up 5")
+    two_arms: bool = False              # each hand named apart ("move your right hand up with the left hand")
 
 
 def extract(text: str) -> Modifiers:
@@ -83,7 +86,8 @@ def extract(text: str) -> Modifiers:
     elif distance is not None and not DISTANCE.allows(round(distance, 4)):
         problem = (f"I can move between {DISTANCE.min_m * 100:g} and {DISTANCE.max_m * 100:g} cm in one step; "
                    f"{said} is too {'far' if distance > DISTANCE.max_m else 'small'}.")
-    return Modifiers(lowered, distance, said, both, problem, _BARE_NUMBER.search(lowered) is not None)
+    named = {found[1] for found in _ARM_NAMED.finditer(lowered)}
+    return Modifiers(lowered, distance, said, both, problem, _BARE_NUMBER.search(lowered) is not None, len(named) > 1)
 
 
 def _unit_fixed(found: re.Match[str]) -> str:

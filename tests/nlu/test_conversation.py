@@ -131,6 +131,14 @@ def test_both_hands_only_where_both_may_act() -> None:
         assert [c["args"]["arm"] for c in result["candidates"]] == ["right", "left"]
 
 
+@pytest.mark.parametrize("text", ["move your right hand up with the left hand",
+                                  "pick up the red cup with your right hand and the blue cup with your left hand"])
+def test_each_hand_named_apart_is_asked_about(text: str) -> None:
+    result = understood(text)
+    assert result["kind"] == "clarify" and result["params"] == ["arm"] and "both hands" in result["question"]
+    assert [c["args"]["arm"] for c in result["candidates"]] == ["right", "left"]
+
+
 def test_undo_and_repeat() -> None:
     assert steps("undo that") == [("undo", {})]
     assert steps("again") == [("repeat", {})]
