@@ -63,8 +63,8 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     (("retreat", "back off", "back away"), ((verb(MOVE), option("direction", "away_from")),)),
     (("tuck", "put away"), ((verb(MOVE), option("destination", "side")),)),
     # pick and place
-    (("pick up", "pick", "pickup", "grab", "take", "grasp", "get", "collect", "seize", "hold", "take hold of",
-      "grab hold of"), ((verb(_procs("pick_up")),),)),
+    (("pick up", "pick", "pickup", "grab", "take", "grasp", "get", "collect", "seize", "hold", "take hold of"),
+     ((verb(_procs("pick_up")),),)),
     # "lift it" with the object in hand raises the hand; with an empty hand, naming an object picks it up
     (("lift",), ((verb(_procs("pick_up")),), (verb(_procs("move_abs_dir")), option("direction", "up", W.weak)))),
     (("place", "set", "lay", "drop", "deposit", "stack", "place down", "set down", "lay down"), ((verb(PLACE),),)),
