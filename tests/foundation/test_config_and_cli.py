@@ -21,7 +21,7 @@ def _parse(*argv: str) -> argparse.Namespace:
 def test_flags_reach_the_zenoh_config() -> None:
     options = options_from_args(_parse("--mode", "client", "-e", "tcp/10.0.0.2:7447", "-e", "tcp/10.0.0.3:7447",
                                        "--listen", "tcp/0.0.0.0:7448", "--no-multicast-scouting", "-n", "robot1",
-                                       "--cfg", "transport/shared_memory/enabled:false"))
+                                       "--cfg", "transport/shared_memory/enabled:false", "--insecure"))
     assert options.namespace == "robot1"
     config = zenoh_config(options)
     assert json.loads(config.get_json("mode")) == "client"
