@@ -103,6 +103,8 @@ class Bus:
     def __init__(self, options: SessionOptions) -> None:
         self.options = options
         self.keys = Keys(options.namespace)
+        for warning in options.warnings:
+            log.warning(warning)
         self.session = zenoh.open(zenoh_config(options))
         self.rejected: Counter[str] = Counter()
         self._declared: list[Any] = []

@@ -88,14 +88,18 @@ class SessionOptions:
         return argv
 
 
-def add_security_arguments(parser: argparse.ArgumentParser, default_identity: str = "robot") -> None:
-    """``--secure DIR``, ``--identity`` and ``--insecure`` (defaults from ``HFPBD_SECURE`` and ``HFPBD_IDENTITY``)."""
+def add_security_arguments(parser: argparse.ArgumentParser, default_identity: str | None = "robot") -> None:
+    """``--secure DIR``, ``--identity`` and ``--insecure`` (defaults from ``HFPBD_SECURE`` and ``HFPBD_IDENTITY``).
+
+    ``default_identity=None`` leaves ``--identity`` out, for ``hfpbd up``, which is always the robot.
+    """
     group = parser.add_argument_group("security")
     group.add_argument("--secure", default=os.environ.get(ENV_PREFIX + "SECURE") or None, metavar="DIR",
                        help="mutual TLS on tls/ endpoints with the certificates in DIR (made by 'hfpbd secure init')")
-    group.add_argument("--identity", choices=IDENTITIES,
-                       default=os.environ.get(ENV_PREFIX + "IDENTITY", default_identity),
-                       help="which certificate of DIR this session presents (default: %(default)s)")
+    if default_identity is not None:
+        group.add_argument("--identity", choices=IDENTITIES,
+                           default=os.environ.get(ENV_PREFIX + "IDENTITY", default_identity),
+                           help="which certificate of DIR this session presents (default: %(default)s)")
     group.add_argument("--insecure", action="store_true",
                        help="allow a listener beyond loopback without authentication (warns on every start)")
 
@@ -189,12 +193,15 @@ def _default_listen(options: SessionOptions, mode: str) -> list[str]:
 def loopback_options(namespace: str, port: int, *, listen: bool) -> SessionOptions:
     """Options for a session on loopback with multicast off: tests and ``hfpbd up``.
 
-    The hub session listens on ``tcp/127.0.0.1:<port>``; every other session
-    connects to it and Zenoh's gossip introduces the peers to each other.
+    The hub session listens on ``tcp/127.0.0.1:<port>`` as a Zenoh router, as
+    ``hfpbd up`` does: it knows every session's liveliness tokens, so a
+    service starting can ask it whether it is already running. Every other
+    session connects to it and Zenoh's gossip introduces the peers to each other.
     """
     endpoint = f"tcp/127.0.0.1:{port}"
     return SessionOptions(
         namespace=namespace,
+        mode="router" if listen else "peer",
         listen=(endpoint,) if listen else (),
         connect=() if listen else (endpoint,),
         multicast_scouting=False,
