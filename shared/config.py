@@ -171,7 +171,8 @@ def zenoh_config(options: SessionOptions) -> zenoh.Config:
         config.insert_json5("listen/endpoints", json.dumps(list(options.listen or _default_listen(options, mode))))
     if options.secure is not None:
         config.insert_json5("transport/link/tls", json.dumps(tls_settings(options.secure, options.identity)))
-        if any(not is_loopback(endpoint) for endpoint in options.listen):
+        if mode == "router" or any(not is_loopback(endpoint) for endpoint in options.listen):
+            # where remote identities connect: the only place Zenoh's access control can see them
             config.insert_json5("access_control", json.dumps(access_control(options.namespace)))
     if not options.multicast_scouting:
         config.insert_json5("scouting/multicast/enabled", "false")
