@@ -23,6 +23,7 @@ import signal
 import subprocess
 import sys
 import threading
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,6 +34,7 @@ from hfpbd.spawn import ROOT, ServiceProcess, spawn
 from shared.bus import Bus
 from shared.config import DEFAULT_NAMESPACE, SessionOptions, add_security_arguments
 from shared.logs import setup_logging
+from shared.service import LOOK_S
 from shared.security import SecurityError, endpoint_host, is_loopback
 
 log = logging.getLogger("hfpbd.up")
@@ -177,11 +179,14 @@ class Supervisor:
 
 def _already_up(args: argparse.Namespace, error: Exception) -> str:
     """Why the router could not listen: a robot already up there, or something else on the port."""
+    alive: list[str] = []
     try:
         with Bus(client_options(args, "robot")) as probe:
-            alive = sorted(probe.alive_services(timeout=1.0))
+            deadline = time.monotonic() + LOOK_S  # tokens reach a new session a moment after it connects
+            while not alive and time.monotonic() < deadline:
+                alive = sorted(probe.alive_services(timeout=0.3))
     except zenoh.ZError:  # nothing answers there: the port is held by something else
-        alive = []
+        pass
     if alive:
         return (f"hfpbd up: a robot is already up on namespace {args.namespace!r} at {args.listen} "
                 f"({', '.join(alive)} alive); not starting a second one")

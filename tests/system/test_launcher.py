@@ -69,3 +69,75 @@ def test_unknown_service_is_refused(tmp_path: Path) -> None:
     result = subprocess.run([sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", "nlu,teleporter"],
                             cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert result.returncode != 0 and "unknown service(s) teleporter" in result.stderr
+
+
+def _start_up(namespace: str, port: int, log_dir: Path, *extra: str) -> subprocess.Popen:
+    return subprocess.Popen(
+        [sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", "nlu", "--namespace", namespace,
+         "--listen", f"tcp/127.0.0.1:{port}", "--log-dir", str(log_dir), *extra],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+
+
+def _listeners(root: psutil.Process) -> list[tuple[str, int]]:
+    """Every TCP listening address of ``root`` and its descendants."""
+    found = []
+    for process in [root, *root.children(recursive=True)]:
+        try:
+            connections = process.net_connections(kind="inet")
+        except psutil.NoSuchProcess:
+            continue
+        found += [(c.laddr.ip, c.laddr.port) for c in connections if c.status == psutil.CONN_LISTEN]
+    return found
+
+
+def test_robot_and_services_listen_on_loopback_only(robot) -> None:
+    popen, bus = robot
+    assert _wait(lambda: "nlu" in bus.alive_services(), 60), "the NLU never came up"
+    listeners = _listeners(psutil.Process(popen.pid))
+    assert len(listeners) >= 2, listeners  # the router and the NLU's own peer listener
+    assert all(ip in ("127.0.0.1", "::1") for ip, _ in listeners), listeners
+
+
+def test_a_second_robot_on_the_namespace_refuses_to_start(robot, tmp_path: Path) -> None:
+    popen, bus = robot
+    assert _wait(lambda: "nlu" in bus.alive_services(), 60)
+    namespace = bus.keys.namespace
+    port = int(bus.options.connect[0].rsplit(":", 1)[1])
+    children = psutil.Process(popen.pid).children()
+    second = _start_up(namespace, port, tmp_path / "second")
+    out, _ = second.communicate(timeout=60)
+    assert second.returncode == 1
+    assert f"a robot is already up on namespace {namespace!r}" in out and "Traceback" not in out
+    assert popen.poll() is None and psutil.Process(popen.pid).children() == children
+    assert _wait(lambda: "nlu" in bus.alive_services(), 5)
+
+
+def test_a_second_service_on_the_namespace_refuses_to_start(robot, tmp_path: Path) -> None:
+    popen, bus = robot
+    assert _wait(lambda: "nlu" in bus.alive_services(), 60)
+    result = subprocess.run([sys.executable, "-m", "services.nlu", *bus.options.to_argv()], cwd=ROOT,
+                            capture_output=True, text=True, timeout=90, check=False)
+    assert result.returncode == 1
+    assert f"nlu is already running on namespace {bus.keys.namespace!r}" in result.stderr
+    assert "Traceback" not in result.stderr
+    assert "nlu" in bus.alive_services()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGHUP])
+def test_services_end_with_the_launcher_however_it_ends(robot, sig: int) -> None:
+    popen, bus = robot
+    assert _wait(lambda: "nlu" in bus.alive_services(), 60)
+    children = psutil.Process(popen.pid).children(recursive=True)
+    assert children
+    popen.send_signal(sig)
+    popen.wait(30)
+    assert _wait(lambda: not any(c.is_running() and c.status() != psutil.STATUS_ZOMBIE for c in children), 20), \
+        [c.cmdline() for c in children if c.is_running()]
+
+
+def test_a_listener_beyond_loopback_needs_secure_or_insecure(tmp_path: Path) -> None:
+    result = subprocess.run([sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", "nlu",
+                             "--listen", "tcp/0.0.0.0:7447"], cwd=ROOT, capture_output=True, text=True,
+                            timeout=60, check=False)
+    assert result.returncode == 2
+    assert "--secure DIR" in result.stderr and "--insecure" in result.stderr and "Traceback" not in result.stderr
