@@ -34,8 +34,8 @@ from hfpbd.spawn import ROOT, ServiceProcess, spawn
 from shared.bus import Bus
 from shared.config import DEFAULT_NAMESPACE, SessionOptions, add_security_arguments
 from shared.logs import setup_logging
-from shared.service import LOOK_S
 from shared.security import SecurityError, endpoint_host, is_loopback
+from shared.service import LOOK_S
 
 log = logging.getLogger("hfpbd.up")
 
