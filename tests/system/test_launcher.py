@@ -12,6 +12,7 @@ from pathlib import Path
 
 import psutil
 import pytest
+import zenoh
 
 from shared.bus import Bus
 from shared.config import free_port, loopback_options
@@ -141,3 +142,60 @@ def test_a_listener_beyond_loopback_needs_secure_or_insecure(tmp_path: Path) -> 
                             timeout=60, check=False)
     assert result.returncode == 2
     assert "--secure DIR" in result.stderr and "--insecure" in result.stderr and "Traceback" not in result.stderr
+
+
+def test_secure_robot_serves_its_operator_over_mutual_tls(tmp_path: Path) -> None:
+    from hfpbd.secure import init
+    from shared.bus import BusTimeout
+    from shared.config import SessionOptions
+
+    pki = tmp_path / "pki"
+    init(pki, host="robot-host")
+    namespace, port = "sec" + uuid.uuid4().hex[:8], free_port()
+    popen = subprocess.Popen(
+        [sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", "nlu", "--namespace", namespace,
+         "--listen", f"tls/127.0.0.1:{port}", "--secure", str(pki), "--log-dir", str(tmp_path / "logs")],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+
+    def remote(identity: str) -> Bus:
+        """A laptop's client session, once the robot listens (a client cannot open before that)."""
+        options = SessionOptions(namespace=namespace, connect=(f"tls/localhost:{port}",), multicast_scouting=False,
+                                 secure=str(pki), identity=identity)
+        deadline = time.monotonic() + 30
+        while True:
+            try:
+                return Bus(options)
+            except zenoh.ZError:
+                if time.monotonic() > deadline:
+                    raise
+                time.sleep(0.3)
+
+    try:
+        with remote("operator") as operator:
+            assert _wait(lambda: "nlu" in operator.alive_services(), 60), "the NLU never came up"
+            reply = operator.request(operator.keys.nlu_query("parse"), {"text": "open your left hand"}, timeout=10)
+            assert reply["kind"] == "command" and reply["procedure"] == "open"
+        with remote("observer") as observer, pytest.raises(BusTimeout):
+            observer.request(observer.keys.nlu_query("parse"), {"text": "open your left hand"}, timeout=2)
+    finally:
+        popen.send_signal(signal.SIGINT)
+        out, _ = popen.communicate(timeout=30)
+    assert popen.returncode == 0, out
+
+
+def test_insecure_listener_warns_and_the_services_stay_on_loopback(tmp_path: Path) -> None:
+    namespace, port = "ins" + uuid.uuid4().hex[:8], free_port()
+    popen = subprocess.Popen(
+        [sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", "nlu", "--listen", f"tcp/0.0.0.0:{port}",
+         "--insecure", "--namespace", namespace, "--log-dir", str(tmp_path)],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        with Bus(loopback_options(namespace, port, listen=False)) as bus:
+            assert _wait(lambda: "nlu" in bus.alive_services(), 60), "the NLU never came up"
+        nlu = psutil.Process(popen.pid).children()[0]
+        assert {ip for ip, _ in _listeners(nlu)} <= {"127.0.0.1", "::1"}
+        assert ("0.0.0.0", port) in _listeners(psutil.Process(popen.pid))
+    finally:
+        popen.send_signal(signal.SIGINT)
+        out, _ = popen.communicate(timeout=30)
+    assert f"--insecure: listening on tcp/0.0.0.0:{port} with no authentication" in out
