@@ -171,8 +171,7 @@ def zenoh_config(options: SessionOptions) -> zenoh.Config:
         config.insert_json5("listen/endpoints", json.dumps(list(options.listen or _default_listen(options, mode))))
     if options.secure is not None:
         config.insert_json5("transport/link/tls", json.dumps(tls_settings(options.secure, options.identity)))
-        if mode == "router" or any(not is_loopback(endpoint) for endpoint in options.listen):
-            # where remote identities connect: the only place Zenoh's access control can see them
+        if enforces_access_control(options):
             config.insert_json5("access_control", json.dumps(access_control(options.namespace)))
     if not options.multicast_scouting:
         config.insert_json5("scouting/multicast/enabled", "false")
@@ -182,6 +181,16 @@ def zenoh_config(options: SessionOptions) -> zenoh.Config:
     for key, value in options.overrides:
         config.insert_json5(key, value)
     return config
+
+
+def enforces_access_control(options: SessionOptions) -> bool:
+    """Whether the session enforces the roles: secure, and a router or listening beyond loopback.
+
+    That is where remote identities connect, the only place Zenoh's access
+    control can see what they send.
+    """
+    listens_out = any(not is_loopback(endpoint) for endpoint in options.listen)
+    return options.secure is not None and (options.effective_mode == "router" or listens_out)
 
 
 def _default_listen(options: SessionOptions, mode: str) -> list[str]:

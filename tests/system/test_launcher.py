@@ -175,12 +175,18 @@ def test_secure_robot_serves_its_operator_over_mutual_tls(tmp_path: Path) -> Non
             assert _wait(lambda: "nlu" in operator.alive_services(), 60), "the NLU never came up"
             reply = operator.request(operator.keys.nlu_query("parse"), {"text": "open your left hand"}, timeout=10)
             assert reply["kind"] == "command" and reply["procedure"] == "open"
+            operator.publish(operator.keys.objects, {"stamp": 1.0, "objects": []})
+            with pytest.raises(BusTimeout):
+                operator.request(operator.keys.sim_control("scene"), {"name": "forged"}, timeout=1)
         with remote("observer") as observer, pytest.raises(BusTimeout):
             observer.request(observer.keys.nlu_query("parse"), {"text": "open your left hand"}, timeout=2)
     finally:
         popen.send_signal(signal.SIGINT)
         out, _ = popen.communicate(timeout=30)
     assert popen.returncode == 0, out
+    assert f"refused operator: put on pbd/{namespace}/perception/objects" in out, out
+    assert f"refused operator: query on pbd/{namespace}/sim/control/scene" in out
+    assert "is authorized" not in out and "TRACE" not in out  # Zenoh's own trace lines stay out
 
 
 def test_insecure_listener_warns_and_the_services_stay_on_loopback(tmp_path: Path) -> None:
