@@ -10,7 +10,6 @@ import pytest
 import zenoh
 
 from shared.bus import BusTimeout
-from shared.codec import encode
 from shared.config import SessionOptions, zenoh_config
 from tests.security.conftest import RobotHost, collect, eventually
 
@@ -64,24 +63,9 @@ def test_unauthenticated_clients_get_nothing(robot_host: RobotHost, foreign_pki,
 
     change = {"plain-tcp": _plain_tcp, "tls-without-certificate": _no_certificate,
               "certificate-from-another-ca": foreign}[how]
-    heard = collect(robot_host.service, robot_host.key("dialog/utterance"))
-    state = robot_host.service.publisher(robot_host.key("executor/state"))
-    try:
-        session = zenoh.open(_bad_client(robot_host, lambda config: change(config, robot_host)))
-    except zenoh.ZError as exc:  # refused at the handshake: the expected outcome
-        assert "Unable to connect" in str(exc)
-        return
-    try:  # if a session opened at all, it must be cut off from the robot
-        seen: list = []
-        session.declare_subscriber(robot_host.key("**"), seen.append)
-        for _ in range(10):
-            session.put(robot_host.key("dialog/utterance"), encode(UTTERANCE))
-            state.put({"stamp": 1.0, "robot": {}})
-            time.sleep(0.1)
-        assert heard.empty() and not seen
-        assert not list(session.get(robot_host.key("nlu/**"), timeout=1))
-    finally:
-        session.close()
+    # refused by the robot's listener at the handshake: a client session cannot even open
+    with pytest.raises(zenoh.ZError, match="Unable to connect"):
+        zenoh.open(_bad_client(robot_host, lambda config: change(config, robot_host)))
 
 
 def test_operator_commands_and_receives(robot_host: RobotHost) -> None:
