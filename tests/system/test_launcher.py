@@ -113,8 +113,8 @@ def test_a_second_robot_on_the_namespace_refuses_to_start(robot, tmp_path: Path)
     assert _wait(lambda: "nlu" in bus.alive_services(), 5)
 
 
-def test_a_second_service_on_the_namespace_refuses_to_start(robot, tmp_path: Path) -> None:
-    popen, bus = robot
+def test_a_second_service_on_the_namespace_refuses_to_start(robot) -> None:
+    _, bus = robot
     assert _wait(lambda: "nlu" in bus.alive_services(), 60)
     result = subprocess.run([sys.executable, "-m", "services.nlu", *bus.options.to_argv()], cwd=ROOT,
                             capture_output=True, text=True, timeout=90, check=False)
@@ -205,3 +205,44 @@ def test_insecure_listener_warns_and_the_services_stay_on_loopback(tmp_path: Pat
         popen.send_signal(signal.SIGINT)
         out, _ = popen.communicate(timeout=30)
     assert f"--insecure: listening on tcp/0.0.0.0:{port} with no authentication" in out
+
+
+def test_each_service_killed_mid_run_is_restarted_and_keeps_the_current_action(tmp_path: Path) -> None:
+    import os
+
+    namespace, port = "kill" + uuid.uuid4().hex[:8], free_port()
+    services = ("nlu", "perception", "executor")
+    popen = subprocess.Popen(
+        [sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", ",".join(services), "--namespace",
+         namespace, "--listen", f"tcp/127.0.0.1:{port}", "--log-dir", str(tmp_path / "logs")],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        env={**os.environ, "HFPBD_DATA_DIR": str(tmp_path / "data")})
+    bus = Bus(loopback_options(namespace, port, listen=False))
+    said: queue.Queue = queue.Queue()
+    bus.subscribe(bus.keys.say, said.put, schema="say")
+    actions = bus.keys.executor_control("actions")
+    try:
+        assert _wait(lambda: set(services) <= bus.alive_services(), 90), bus.alive_services()
+        reply = bus.request(bus.keys.executor_control("command"), {"procedure": "create_action", "args": {}})
+        assert reply["ok"], reply
+        assert _wait(lambda: bus.request(actions, {"op": "list"})["current"] == 1, 10)
+        for name in services:
+            child = next(c for c in psutil.Process(popen.pid).children() if f"services.{name}" in c.cmdline())
+            child.kill()
+            deadline = time.monotonic() + 20
+            text = ""
+            while f"{name} service stopped" not in text and time.monotonic() < deadline:
+                text = said.get(timeout=max(0.1, deadline - time.monotonic()))["text"]
+            assert f"The {name} service stopped" in text and "restarting it" in text
+            assert _wait(lambda name=name, old=child.pid: name in bus.alive_services() and old not in
+                         [c.pid for c in psutil.Process(popen.pid).children()], 60), f"{name} did not come back"
+        assert _wait(lambda: set(services) <= bus.alive_services(), 30)
+        listed = bus.request(actions, {"op": "list"}, timeout=10)
+        assert listed["current"] == 1 and len(listed["actions"]) == 1, listed
+        assert bus.request(bus.keys.nlu_query("parse"), {"text": "open your left hand"}, timeout=10)["kind"] == \
+            "command"
+        assert (tmp_path / "data" / namespace / "actions.json").is_file()
+    finally:
+        bus.close()
+        popen.send_signal(signal.SIGINT)
+        popen.communicate(timeout=60)
