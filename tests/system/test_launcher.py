@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import queue
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -80,14 +81,15 @@ def _start_up(namespace: str, port: int, log_dir: Path, *extra: str) -> subproce
 
 
 def _listeners(root: psutil.Process) -> list[tuple[str, int]]:
-    """Every TCP listening address of ``root`` and its descendants."""
+    """Every TCP listening and UDP bound address of ``root`` and its descendants (multicast scouting included)."""
     found = []
     for process in [root, *root.children(recursive=True)]:
         try:
             connections = process.net_connections(kind="inet")
         except psutil.NoSuchProcess:
             continue
-        found += [(c.laddr.ip, c.laddr.port) for c in connections if c.status == psutil.CONN_LISTEN]
+        found += [(c.laddr.ip, c.laddr.port) for c in connections
+                  if c.status == psutil.CONN_LISTEN or (c.type == socket.SOCK_DGRAM and not c.raddr)]
     return found
 
 
