@@ -66,7 +66,7 @@ class SessionOptions:
     @property
     def warnings(self) -> list[str]:
         """What to log every time a session opens with these options (``--insecure`` listeners)."""
-        return check_listen(self.listen, self.secure, self.insecure)
+        return check_listen(configured_listen(zenoh_config(self)), self.secure, self.insecure)
 
     def to_argv(self) -> list[str]:
         """Flags that reproduce these options in a child process."""
@@ -146,7 +146,7 @@ def options_from_args(args: argparse.Namespace) -> SessionOptions:
         overrides.append((key, value))
     if not args.namespace or "/" in args.namespace or any(c in args.namespace for c in "*$?#"):
         raise ValueError(f"--namespace must be one key chunk without '/', '*', '$', '?' or '#': {args.namespace!r}")
-    return SessionOptions(
+    options = SessionOptions(
         namespace=args.namespace,
         mode=args.mode,
         connect=tuple(args.connect) if args.connect else _env_list("CONNECT"),
@@ -158,6 +158,11 @@ def options_from_args(args: argparse.Namespace) -> SessionOptions:
         identity=args.identity,
         insecure=args.insecure,
     )
+    try:
+        zenoh_config(options)  # a bad --config file or --cfg item is named now, in one line
+    except zenoh.ZError as exc:
+        raise ValueError(f"zenoh configuration: {exc}") from exc
+    return options
 
 
 def zenoh_config(options: SessionOptions) -> zenoh.Config:
@@ -180,7 +185,15 @@ def zenoh_config(options: SessionOptions) -> zenoh.Config:
     config.insert_json5("timestamping/enabled", "true")
     for key, value in options.overrides:
         config.insert_json5(key, value)
+    # a --config file or a --cfg item may name listeners too: the same rule holds for them
+    check_listen(configured_listen(config), options.secure, options.insecure)
     return config
+
+
+def configured_listen(config: zenoh.Config) -> tuple[str, ...]:
+    """The listen endpoints a configuration names (none when it leaves Zenoh's per-mode defaults)."""
+    endpoints = json.loads(config.get_json("listen/endpoints"))
+    return tuple(endpoints) if isinstance(endpoints, list) else ()
 
 
 def enforces_access_control(options: SessionOptions) -> bool:

@@ -11,7 +11,7 @@ import pytest
 from cryptography import x509
 from cryptography.x509.oid import NameOID
 
-from shared.config import SessionOptions
+from shared.config import SessionOptions, zenoh_config
 from shared.security import SecurityError
 from tests.processes import ROOT
 
@@ -78,3 +78,13 @@ def test_loopback_tls_and_insecure_listeners_are_accepted(pki: Path) -> None:
     assert SessionOptions(listen=("tls/0.0.0.0:7447",), secure=str(pki)).warnings == []
     warning = SessionOptions(listen=("tcp/0.0.0.0:7447",), insecure=True).warnings
     assert len(warning) == 1 and "no authentication" in warning[0]
+
+
+def test_a_listener_named_by_cfg_or_a_config_file_obeys_the_same_rule(tmp_path: Path) -> None:
+    file = tmp_path / "zenoh.json5"
+    file.write_text('{listen: {endpoints: ["tcp/0.0.0.0:7447"]}}')
+    with pytest.raises(SecurityError, match="--secure DIR"):
+        zenoh_config(SessionOptions(config_file=str(file)))
+    with pytest.raises(SecurityError, match="--secure DIR"):
+        zenoh_config(SessionOptions(overrides=(("listen/endpoints", '["tcp/0.0.0.0:7447"]'),)))
+    assert SessionOptions(config_file=str(file), insecure=True).warnings
