@@ -35,7 +35,7 @@ from shared.bus import Bus
 from shared.config import DEFAULT_NAMESPACE, SessionOptions, add_security_arguments
 from shared.logs import setup_logging
 from shared.security import SecurityError, endpoint_host, is_loopback
-from shared.service import LOOK_S
+from shared.service import ALREADY_RUNNING, LOOK_S
 
 log = logging.getLogger("hfpbd.up")
 
@@ -160,6 +160,11 @@ class Supervisor:
         for child in self.children:
             code = child.exited()
             if code is None:
+                continue
+            if code == ALREADY_RUNNING:
+                self._say(bus, f"The {child.name} service did not start: another one is already running on "
+                               f"namespace {self.args.namespace!r}.", "error")
+                child.process = None
                 continue
             if self.args.no_restart or child.restarts >= MAX_RESTARTS:
                 self._say(bus, f"The {child.name} service stopped (exit code {code}) and will not be restarted; "

@@ -26,6 +26,8 @@ LOOK_S = 1.0
 # How long a token seen at start may take to vanish before it counts as a second instance:
 # a service restarted after a crash can start while its predecessor's token is still being withdrawn.
 TOKEN_GRACE_S = 2.0
+# The exit code of a service that found itself already running: a supervisor does not restart it.
+ALREADY_RUNNING = 3
 
 
 def already_alive(bus: Bus, name: str, look: float = LOOK_S, grace: float = TOKEN_GRACE_S) -> bool:
@@ -55,7 +57,7 @@ def run_service(
     """Parse ``argv``, open the bus and run ``body(bus, args, stop)`` until stopped.
 
     A service already alive on the namespace is not started twice: the line
-    names both and the exit code is 1. ``body`` declares its liveliness token (``bus.declare_alive(name)``) once it
+    names both and the exit code is :data:`ALREADY_RUNNING`. ``body`` declares its liveliness token (``bus.declare_alive(name)``) once it
     is ready to serve, then returns when ``stop`` is set. Returns the exit code.
     """
     parser = argparse.ArgumentParser(prog=f"hfpbd {name}", description=description)
@@ -82,7 +84,7 @@ def run_service(
             if already_alive(bus, name):
                 log.error("%s is already running on namespace %r; not starting a second one", name,
                           options.namespace)
-                return 1
+                return ALREADY_RUNNING
             log.info("%s up on namespace %r", name, options.namespace)
             body(bus, args, stop)
     except Exception:

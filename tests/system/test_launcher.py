@@ -120,7 +120,7 @@ def test_a_second_service_on_the_namespace_refuses_to_start(robot) -> None:
     assert _wait(lambda: "nlu" in bus.alive_services(), 60)
     result = subprocess.run([sys.executable, "-m", "services.nlu", *bus.options.to_argv()], cwd=ROOT,
                             capture_output=True, text=True, timeout=90, check=False)
-    assert result.returncode == 1
+    assert result.returncode == 3
     assert f"nlu is already running on namespace {bus.keys.namespace!r}" in result.stderr
     assert "Traceback" not in result.stderr
     assert "nlu" in bus.alive_services()
