@@ -105,13 +105,14 @@ def _service_list(raw: str) -> list[str]:
 
 
 def local_endpoint(listen: str) -> str:
-    """Where the services on this machine reach the router: the listen endpoint's port on loopback.
+    """Where the services on this machine reach the router: the listen endpoint's port on ``127.0.0.1``.
 
-    ``localhost`` for TLS (the robot's certificate names it), ``127.0.0.1`` otherwise.
+    An address rather than ``localhost``, which some systems resolve to ``::1``
+    first; the robot's certificate names ``127.0.0.1`` for TLS.
     """
     proto = endpoint_host(listen)[0]
     port = listen.split("#", 1)[0].rsplit(":", 1)[-1]
-    return f"{proto}/{'localhost' if proto == 'tls' else '127.0.0.1'}:{port}"
+    return f"{proto}/127.0.0.1:{port}"
 
 
 def hub_listen(listen: str) -> tuple[str, ...]:

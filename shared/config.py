@@ -210,7 +210,7 @@ def _default_listen(options: SessionOptions, mode: str) -> list[str]:
     """No listener for a client; a random loopback port for a peer (TLS when secure), never every interface."""
     if mode == "client":
         return []
-    return ["tls/localhost:0" if options.secure is not None else "tcp/127.0.0.1:0"]
+    return ["tls/127.0.0.1:0" if options.secure is not None else "tcp/127.0.0.1:0"]
 
 
 def loopback_options(namespace: str, port: int, *, listen: bool) -> SessionOptions:
