@@ -127,7 +127,8 @@ def add_session_arguments(parser: argparse.ArgumentParser, default_identity: str
     group.add_argument("--config", "-c", default=os.environ.get(ENV_PREFIX + "ZENOH_CONFIG"), metavar="FILE",
                        help="zenoh JSON5 configuration file (TLS, authentication, access control, ...)")
     group.add_argument("--cfg", action="append", default=[], metavar="KEY:VALUE",
-                       help="set one zenoh config key to a JSON5 value, e.g. --cfg 'transport/shared_memory/enabled:false'")
+                       help="set one zenoh config key to a JSON5 value, "
+                            "e.g. --cfg 'transport/shared_memory/enabled:false'")
     add_security_arguments(parser, default_identity)
 
 

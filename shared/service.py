@@ -57,8 +57,9 @@ def run_service(
     """Parse ``argv``, open the bus and run ``body(bus, args, stop)`` until stopped.
 
     A service already alive on the namespace is not started twice: the line
-    names both and the exit code is :data:`ALREADY_RUNNING`. ``body`` declares its liveliness token (``bus.declare_alive(name)``) once it
-    is ready to serve, then returns when ``stop`` is set. Returns the exit code.
+    names both and the exit code is :data:`ALREADY_RUNNING`. ``body``
+    declares its liveliness token (``bus.declare_alive(name)``) once it is
+    ready to serve, then returns when ``stop`` is set. Returns the exit code.
     """
     parser = argparse.ArgumentParser(prog=f"hfpbd {name}", description=description)
     add_session_arguments(parser)
