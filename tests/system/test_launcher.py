@@ -126,7 +126,7 @@ def test_a_second_service_on_the_namespace_refuses_to_start(robot) -> None:
     assert "nlu" in bus.alive_services()
 
 
-@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGHUP])
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGHUP, signal.SIGTERM])
 def test_services_end_with_the_launcher_however_it_ends(robot, sig: int) -> None:
     popen, bus = robot
     assert _wait(lambda: "nlu" in bus.alive_services(), 60)
