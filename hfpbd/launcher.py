@@ -33,6 +33,7 @@ from hfpbd.lifeline import command
 from hfpbd.spawn import ROOT, ServiceProcess, spawn
 from shared.bus import Bus
 from shared.config import DEFAULT_NAMESPACE, SessionOptions, add_security_arguments
+from shared.denials import unfiltered_stdout
 from shared.logs import setup_logging
 from shared.security import SecurityError, endpoint_host, is_loopback
 from shared.service import ALREADY_RUNNING, LOOK_S
@@ -201,7 +202,8 @@ def _already_up(args: argparse.Namespace, error: Exception) -> str:
 
 def _run_tui(args: argparse.Namespace) -> subprocess.Popen[bytes]:
     """The terminal UI in the foreground (this terminal), as the operator."""
-    return subprocess.Popen(command("tui", *client_options(args, "operator").to_argv()), cwd=ROOT)
+    return subprocess.Popen(command("tui", *client_options(args, "operator").to_argv()), cwd=ROOT,
+                            stdout=unfiltered_stdout())  # the terminal, not the access-denial filter
 
 
 def main(argv: list[str] | None = None) -> int:
