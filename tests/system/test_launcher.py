@@ -249,3 +249,16 @@ def test_each_service_killed_mid_run_is_restarted_and_keeps_the_current_action(t
         bus.close()
         popen.send_signal(signal.SIGINT)
         popen.communicate(timeout=60)
+
+
+@pytest.mark.parametrize("listen, router, services", [
+    ("tcp/127.0.0.1:7447", ("tcp/127.0.0.1:7447",), "tcp/127.0.0.1:7447"),
+    ("tls/0.0.0.0:7447", ("tls/0.0.0.0:7447",), "tls/127.0.0.1:7447"),
+    ("tls/[::]:7448", ("tls/[::]:7448",), "tls/127.0.0.1:7448"),
+    ("tls/192.168.1.20:7447", ("tls/192.168.1.20:7447", "tls/127.0.0.1:7447"), "tls/127.0.0.1:7447"),
+])
+def test_the_services_reach_the_router_on_loopback(listen: str, router: tuple[str, ...], services: str) -> None:
+    from hfpbd.launcher import hub_listen, local_endpoint
+
+    assert hub_listen(listen) == router
+    assert local_endpoint(listen) == services
