@@ -1,7 +1,8 @@
-"""``hfpbd up``: supervision restarts a crashed service; stopping leaves no orphans."""
+"""``hfpbd up``: supervision, loopback by default, mutual TLS with roles, one robot per namespace, no orphans."""
 
 from __future__ import annotations
 
+import os
 import queue
 import signal
 import socket
@@ -15,8 +16,10 @@ import psutil
 import pytest
 import zenoh
 
-from shared.bus import Bus
-from shared.config import free_port, loopback_options
+from hfpbd.launcher import hub_listen, local_endpoint
+from hfpbd.secure import init
+from shared.bus import Bus, BusTimeout
+from shared.config import SessionOptions, free_port, loopback_options
 from tests.processes import ROOT
 
 
@@ -147,10 +150,6 @@ def test_a_listener_beyond_loopback_needs_secure_or_insecure(tmp_path: Path) -> 
 
 
 def test_secure_robot_serves_its_operator_over_mutual_tls(tmp_path: Path) -> None:
-    from hfpbd.secure import init
-    from shared.bus import BusTimeout
-    from shared.config import SessionOptions
-
     pki = tmp_path / "pki"
     init(pki, host="robot-host")
     namespace, port = "sec" + uuid.uuid4().hex[:8], free_port()
@@ -211,8 +210,6 @@ def test_insecure_listener_warns_and_the_services_stay_on_loopback(tmp_path: Pat
 
 
 def test_each_service_killed_mid_run_is_restarted_and_keeps_the_current_action(tmp_path: Path) -> None:
-    import os
-
     namespace, port = "kill" + uuid.uuid4().hex[:8], free_port()
     services = ("nlu", "perception", "executor")
     popen = subprocess.Popen(
@@ -258,7 +255,5 @@ def test_each_service_killed_mid_run_is_restarted_and_keeps_the_current_action(t
     ("tls/192.168.1.20:7447", ("tls/192.168.1.20:7447", "tls/127.0.0.1:7447"), "tls/127.0.0.1:7447"),
 ])
 def test_the_services_reach_the_router_on_loopback(listen: str, router: tuple[str, ...], services: str) -> None:
-    from hfpbd.launcher import hub_listen, local_endpoint
-
     assert hub_listen(listen) == router
     assert local_endpoint(listen) == services
