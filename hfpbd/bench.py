@@ -14,6 +14,7 @@ BENCHMARKS: dict[str, str] = {
     "executor": "hfpbd.bench_executor",
     "tasks": "hfpbd.tasks.bench",
     "speech": "services.speech.bench",
+    "fuzz": "hfpbd.fuzz",
 }
 
 

@@ -2,11 +2,16 @@
 
 Why a supervisor: a person at the terminal should get one command that
 brings the robot up, keeps it up (a crashed service is reported and
-restarted) and takes everything down with Ctrl-C, leaving no orphan
-processes. Services run as separate processes exactly as they would across
-machines; this process listens on one endpoint (default ``tcp/0.0.0.0:7447``)
-so that a terminal UI elsewhere can ``--connect`` to the robot, and every
-service connects to it with multicast scouting off.
+restarted) and takes everything down however it ends — Ctrl-C, SIGTERM,
+SIGHUP when its terminal closes, or SIGKILL (each child asked the kernel to
+end it with its parent, see :mod:`hfpbd.lifeline`). Services run as separate
+processes exactly as they would across machines.
+
+This process is the robot host's Zenoh router: it listens on loopback by
+default (``tcp/127.0.0.1:7447``), or where ``--listen`` says with
+``--secure DIR`` (mutual TLS, the access-control roles enforced here) or
+``--insecure``. Every service connects to it over loopback with multicast
+scouting off; remote laptops connect to it in client mode.
 """
 
 from __future__ import annotations
@@ -18,18 +23,27 @@ import signal
 import subprocess
 import sys
 import threading
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from hfpbd.spawn import ServiceProcess, spawn
+import zenoh
+
+from hfpbd.lifeline import command
+from hfpbd.spawn import ROOT, ServiceProcess, spawn
 from shared.bus import Bus
-from shared.config import SessionOptions
+from shared.config import DEFAULT_NAMESPACE, SessionOptions, add_security_arguments
+from shared.denials import unfiltered_stdout
 from shared.logs import setup_logging
+from shared.security import SecurityError, endpoint_host, is_loopback
+from shared.service import ALREADY_RUNNING, LOOK_S
 
 log = logging.getLogger("hfpbd.up")
 
 BACKGROUND_SERVICES = ("sim", "perception", "nlu", "executor")
 MAX_RESTARTS = 5
+DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
+_WILDCARDS = ("0.0.0.0", "::")
 
 
 @dataclass
@@ -60,17 +74,26 @@ def _default_log_dir() -> Path:
 
 
 def _parse(argv: list[str] | None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(prog="hfpbd up", description="Start every service on this machine and supervise them.")
+    parser = argparse.ArgumentParser(prog="hfpbd up",
+                                     description="Start every service on this machine and supervise them.")
     parser.add_argument("--headless", action="store_true", help="no terminal UI: run the services until Ctrl-C")
-    parser.add_argument("--listen", default="tcp/0.0.0.0:7447", metavar="ENDPOINT",
-                        help="where remote clients (a TUI on a laptop) connect (default: %(default)s)")
-    parser.add_argument("--namespace", "-n", default=os.environ.get("HFPBD_NAMESPACE", "default"))
+    parser.add_argument("--listen", default=DEFAULT_LISTEN, metavar="ENDPOINT",
+                        help="where remote clients (a TUI on a laptop) connect: beyond loopback, tls/… with "
+                             "--secure, or --insecure (default: %(default)s)")
+    parser.add_argument("--namespace", "-n", default=os.environ.get("HFPBD_NAMESPACE", DEFAULT_NAMESPACE))
     parser.add_argument("--scene", help="scene for the simulator (default: its default scene)")
     parser.add_argument("--log-dir", type=Path, default=None, help="service logs (default: <data dir>/logs)")
     parser.add_argument("--no-restart", action="store_true", help="report a crashed service but do not restart it")
     parser.add_argument("--services", default=",".join(BACKGROUND_SERVICES),
                         help="comma-separated services to run here, when others run elsewhere (default: %(default)s)")
-    return parser.parse_args(argv)
+    add_security_arguments(parser, default_identity=None)
+    args = parser.parse_args(argv)
+    args.service_names = _service_list(args.services)
+    try:
+        args.hub = hub_options(args)
+    except (SecurityError, ValueError) as exc:
+        parser.error(str(exc))
+    return args
 
 
 def _service_list(raw: str) -> list[str]:
@@ -82,25 +105,47 @@ def _service_list(raw: str) -> list[str]:
     return names
 
 
-def _local_endpoint(listen: str) -> str:
-    """The loopback form of the listen endpoint, for the services on this machine."""
-    proto, _, address = listen.partition("/")
-    port = address.rsplit(":", 1)[-1]
+def local_endpoint(listen: str) -> str:
+    """Where the services on this machine reach the router: the listen endpoint's port on ``127.0.0.1``.
+
+    An address rather than ``localhost``, which some systems resolve to ``::1``
+    first; the robot's certificate names ``127.0.0.1`` for TLS.
+    """
+    proto = endpoint_host(listen)[0]
+    port = listen.split("#", 1)[0].rsplit(":", 1)[-1]
     return f"{proto}/127.0.0.1:{port}"
+
+
+def hub_listen(listen: str) -> tuple[str, ...]:
+    """The router's listeners: ``listen``, plus loopback when ``listen`` is one other address only."""
+    if is_loopback(listen) or endpoint_host(listen)[1] in _WILDCARDS:
+        return (listen,)
+    proto, port = endpoint_host(listen)[0], listen.split("#", 1)[0].rsplit(":", 1)[-1]
+    return (listen, f"{proto}/127.0.0.1:{port}")
+
+
+def hub_options(args: argparse.Namespace) -> SessionOptions:
+    """The robot host's router session: the access control applies wherever it listens beyond loopback."""
+    return SessionOptions(namespace=args.namespace, mode="router", listen=hub_listen(args.listen),
+                          multicast_scouting=False, secure=args.secure, identity="robot", insecure=args.insecure)
+
+
+def client_options(args: argparse.Namespace, identity: str) -> SessionOptions:
+    return SessionOptions(namespace=args.namespace, connect=(local_endpoint(args.listen),), multicast_scouting=False,
+                          secure=args.secure, identity=identity)
 
 
 class Supervisor:
     def __init__(self, args: argparse.Namespace) -> None:
         self.args = args
         self.log_dir = args.log_dir or _default_log_dir()
-        self.client_argv = SessionOptions(namespace=args.namespace, connect=(_local_endpoint(args.listen),),
-                                          multicast_scouting=False).to_argv()
+        self.service_argv = client_options(args, "robot").to_argv()
         self.children = [Supervised(name, self._argv(name), self.log_dir / f"{name}.log")
-                         for name in _service_list(args.services)]
+                         for name in args.service_names]
         self.stop = threading.Event()
 
     def _argv(self, name: str) -> list[str]:
-        argv = ["-m", f"services.{name}", *self.client_argv]
+        argv = ["-m", f"services.{name}", *self.service_argv]
         if name == "sim" and self.args.scene:
             argv += ["--scene", self.args.scene]
         return argv
@@ -112,22 +157,26 @@ class Supervisor:
             log.info(text)
         bus.publish(bus.keys.say, {"text": text, "kind": kind})
 
-    def watch(self, bus: Bus) -> None:
-        """Restart crashed services until asked to stop."""
-        while not self.stop.wait(0.5):
-            for child in self.children:
-                code = child.exited()
-                if code is None:
-                    continue
-                if self.args.no_restart or child.restarts >= MAX_RESTARTS:
-                    self._say(bus, f"The {child.name} service stopped (exit code {code}) and will not be restarted; "
-                                   f"see {child.log_path}.", "error")
-                    child.process = None
-                    continue
-                child.restarts += 1
-                self._say(bus, f"The {child.name} service stopped (exit code {code}); restarting it "
-                               f"({child.restarts}/{MAX_RESTARTS}).", "error")
-                child.start()
+    def check(self, bus: Bus) -> None:
+        """Restart the services that stopped (called from the main thread: children die with their starter)."""
+        for child in self.children:
+            code = child.exited()
+            if code is None:
+                continue
+            if code == ALREADY_RUNNING:
+                self._say(bus, f"The {child.name} service did not start: another one is already running on "
+                               f"namespace {self.args.namespace!r}.", "error")
+                child.process = None
+                continue
+            if self.args.no_restart or child.restarts >= MAX_RESTARTS:
+                self._say(bus, f"The {child.name} service stopped (exit code {code}) and will not be restarted; "
+                               f"see {child.log_path}.", "error")
+                child.process = None
+                continue
+            child.restarts += 1
+            self._say(bus, f"The {child.name} service stopped (exit code {code}); restarting it "
+                           f"({child.restarts}/{MAX_RESTARTS}).", "error")
+            child.start()
 
     def shutdown(self) -> None:
         self.stop.set()
@@ -135,31 +184,63 @@ class Supervisor:
             child.terminate(grace=8)
 
 
+def _already_up(args: argparse.Namespace, error: Exception) -> str:
+    """Why the router could not listen: a robot already up there, or something else on the port."""
+    alive: list[str] = []
+    try:
+        with Bus(client_options(args, "robot")) as probe:
+            deadline = time.monotonic() + LOOK_S  # tokens reach a new session a moment after it connects
+            while not alive and time.monotonic() < deadline:
+                alive = sorted(probe.alive_services(timeout=0.3))
+    except zenoh.ZError:  # nothing answers there: the port is held by something else
+        pass
+    if alive:
+        return (f"hfpbd up: a robot is already up on namespace {args.namespace!r} at {args.listen} "
+                f"({', '.join(alive)} alive); not starting a second one")
+    return f"hfpbd up: cannot listen on {args.listen}: {error}"
+
+
+def _run_tui(args: argparse.Namespace) -> subprocess.Popen[bytes]:
+    """The terminal UI in the foreground (this terminal), as the operator."""
+    return subprocess.Popen(command("tui", *client_options(args, "operator").to_argv()), cwd=ROOT,
+                            stdout=unfiltered_stdout())  # the terminal, not the access-denial filter
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parse(argv)
     setup_logging("up")
     supervisor = Supervisor(args)
-    hub = SessionOptions(namespace=args.namespace, listen=(args.listen,), multicast_scouting=False)
-    signal.signal(signal.SIGTERM, lambda *_: supervisor.stop.set())
+
+    def on_signal(signum: int, _frame: object) -> None:
+        log.info("received %s, stopping every service", signal.Signals(signum).name)
+        supervisor.stop.set()
+
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, on_signal)
     try:
-        with Bus(hub) as bus:
+        bus = Bus(args.hub)
+    except zenoh.ZError as exc:
+        print(_already_up(args, exc), file=sys.stderr)
+        return 1
+    tui: subprocess.Popen[bytes] | None = None
+    try:
+        with bus:
             for child in supervisor.children:
                 child.start()
-            log.info("services starting; logs in %s", supervisor.log_dir)
-            watcher = threading.Thread(target=supervisor.watch, args=(bus,), daemon=True)
-            watcher.start()
-            if args.headless:
-                while not supervisor.stop.wait(0.5):
-                    pass
-            else:
-                tui = subprocess.run([sys.executable, "-m", "tui", *supervisor.client_argv])
-                log.info("terminal UI exited (code %s)", tui.returncode)
+            log.info("services starting; router on %s; logs in %s", ", ".join(args.hub.listen), supervisor.log_dir)
+            if not args.headless:
+                tui = _run_tui(args)
+            while not supervisor.stop.wait(0.5):
+                if tui is not None and tui.poll() is not None:
+                    log.info("terminal UI exited (code %s)", tui.returncode)
+                    break
+                supervisor.check(bus)
             supervisor.shutdown()
-            watcher.join(2)
-    except KeyboardInterrupt:
-        log.info("Ctrl-C: stopping every service")
     finally:
         supervisor.shutdown()
+        if tui is not None and tui.poll() is None:
+            tui.terminate()
+            tui.wait(10)
     return 0
 
 

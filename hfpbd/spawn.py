@@ -3,7 +3,9 @@
 Why one: the launcher, the benchmarks and the tests all start services as
 ``python -m services.<name>`` with their output in a log file, each in its
 own process group so that stopping it also stops whatever it spawned. Three
-hand-rolled copies of that drifted; this module is the only one.
+hand-rolled copies of that drifted; this module is the only one. Every
+child ends with the process that started it, even one killed with SIGKILL
+(:mod:`hfpbd.lifeline`).
 """
 
 from __future__ import annotations
@@ -11,7 +13,6 @@ from __future__ import annotations
 import os
 import signal
 import subprocess
-import sys
 import threading
 import time
 from collections.abc import Mapping, Sequence
@@ -21,6 +22,7 @@ from typing import IO
 
 import psutil
 
+from hfpbd.lifeline import command
 from shared.bus import Bus
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -83,13 +85,16 @@ class ServiceProcess:
 
 def spawn(name: str, argv: Sequence[str], log_path: Path, *, env: Mapping[str, str] | None = None,
           append: bool = False) -> ServiceProcess:
-    """Start ``argv`` in a new process group with stdout and stderr in ``log_path``.
+    """Start ``argv`` in a new process group with stdout and stderr in ``log_path``, ending with this process.
 
-    ``argv`` after the interpreter: e.g. ``["-m", "services.sim", "--namespace", "x"]``.
+    ``argv`` after the interpreter: e.g. ``["-m", "services.sim", "--namespace", "x"]``. Call it from
+    the main thread (or one that outlives the child): the child ends when its starting thread does.
     """
+    if argv[:1] != ["-m"] or len(argv) < 2:
+        raise ValueError(f"spawn runs python -m MODULE …, not {list(argv)!r}")
     log_path.parent.mkdir(parents=True, exist_ok=True)
     log_file = open(log_path, "a" if append else "w")
-    popen = subprocess.Popen([sys.executable, *argv], cwd=ROOT, stdout=log_file, stderr=subprocess.STDOUT,
+    popen = subprocess.Popen(command(*argv[1:]), cwd=ROOT, stdout=log_file, stderr=subprocess.STDOUT,
                              stdin=subprocess.DEVNULL, env={**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})},
                              start_new_session=True)
     return ServiceProcess(name, popen, log_path, log_file)

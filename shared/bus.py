@@ -21,7 +21,8 @@ import zenoh
 import zenoh.ext as zext
 
 from shared.codec import MessageError, decode, encode
-from shared.config import SessionOptions, zenoh_config
+from shared.config import SessionOptions, enforces_access_control, zenoh_config
+from shared.denials import log_access_denials
 from shared.keys import Keys
 from shared.messages import validate
 
@@ -103,6 +104,10 @@ class Bus:
     def __init__(self, options: SessionOptions) -> None:
         self.options = options
         self.keys = Keys(options.namespace)
+        for warning in options.warnings:
+            log.warning(warning)
+        if enforces_access_control(options):
+            log_access_denials()
         self.session = zenoh.open(zenoh_config(options))
         self.rejected: Counter[str] = Counter()
         self._declared: list[Any] = []

@@ -11,6 +11,7 @@ import argparse
 import logging
 import signal
 import threading
+import time
 from collections.abc import Callable, Sequence
 
 from shared.bus import Bus
@@ -18,6 +19,32 @@ from shared.config import add_session_arguments, options_from_args
 from shared.logs import setup_logging
 
 ServiceBody = Callable[[Bus, argparse.Namespace, threading.Event], None]
+
+# A session's first moments: the tokens already declared elsewhere reach it only after the
+# declarations are exchanged (about 0.1 s on loopback), so the check keeps asking this long.
+LOOK_S = 1.0
+# How long a token seen at start may take to vanish before it counts as a second instance:
+# a service restarted after a crash can start while its predecessor's token is still being withdrawn.
+TOKEN_GRACE_S = 2.0
+# The exit code of a service that found itself already running: a supervisor does not restart it.
+ALREADY_RUNNING = 3
+
+
+def already_alive(bus: Bus, name: str, look: float = LOOK_S, grace: float = TOKEN_GRACE_S) -> bool:
+    """Whether ``name`` is alive on this namespace: its token seen within ``look`` s and still up ``grace`` s later."""
+    started = time.monotonic()
+    seen_since: float | None = None
+    while True:
+        now = time.monotonic()
+        if name in bus.alive_services(timeout=0.3):
+            seen_since = now if seen_since is None else seen_since
+            if now - seen_since >= grace:
+                return True
+        else:
+            seen_since = None
+            if now - started >= look:
+                return False
+        time.sleep(0.1)
 
 
 def run_service(
@@ -29,8 +56,10 @@ def run_service(
 ) -> int:
     """Parse ``argv``, open the bus and run ``body(bus, args, stop)`` until stopped.
 
-    ``body`` declares its liveliness token (``bus.declare_alive(name)``) once it
-    is ready to serve, then returns when ``stop`` is set. Returns the exit code.
+    A service already alive on the namespace is not started twice: the line
+    names both and the exit code is :data:`ALREADY_RUNNING`. ``body``
+    declares its liveliness token (``bus.declare_alive(name)``) once it is
+    ready to serve, then returns when ``stop`` is set. Returns the exit code.
     """
     parser = argparse.ArgumentParser(prog=f"hfpbd {name}", description=description)
     add_session_arguments(parser)
@@ -53,10 +82,14 @@ def run_service(
     signal.signal(signal.SIGTERM, on_signal)
     try:
         with Bus(options) as bus:
+            if already_alive(bus, name):
+                log.error("%s is already running on namespace %r; not starting a second one", name,
+                          options.namespace)
+                return ALREADY_RUNNING
             log.info("%s up on namespace %r", name, options.namespace)
             body(bus, args, stop)
-    except Exception as exc:
-        log.exception("%s failed: %s", name, exc)
+    except Exception:
+        log.exception("%s failed", name)
         return 1
     log.info("%s stopped", name)
     return 0

@@ -2,6 +2,7 @@
 
     hfpbd tui                                  # services on this machine (multicast)
     hfpbd tui --connect tcp/robot-host:7447    # a robot elsewhere
+    hfpbd tui --connect tls/robot-host:7447 --secure DIR   # the same, as the operator, over mutual TLS
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from shared.config import add_session_arguments, options_from_args
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="hfpbd tui", description="Program the robot by talking to it, in a terminal.")
-    add_session_arguments(parser)
+    add_session_arguments(parser, default_identity="operator")
     parser.add_argument("--probe-seconds", type=float, default=2.0, metavar="S",
                         help="how often to measure latency to the services; 0 turns it off (default: %(default)s)")
     parser.add_argument("--log-file", metavar="FILE",

@@ -9,13 +9,20 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from collections.abc import Sequence
 from datetime import datetime
 from typing import Any
 
 from services.executor.grounding import describe_kind
-from services.executor.store import ActionStore, StoreError, default_data_dir
+from services.executor.store import (
+    DEFAULT_NAMESPACE,
+    ActionStore,
+    StoreError,
+    default_data_dir,
+    namespace_dir,
+)
 
 
 def apply_action_op(store: ActionStore, request: dict[str, Any]) -> dict[str, Any]:
@@ -69,7 +76,9 @@ def main(argv: Sequence[str]) -> int:
     # --data-dir and --json are accepted before or after the operation word
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--data-dir", default=argparse.SUPPRESS,
-                        help=f"where actions are stored (default: {default_data_dir()})")
+                        help=f"where actions are stored, in DIR/<namespace>/ (default: {default_data_dir()})")
+    common.add_argument("--namespace", "-n", default=argparse.SUPPRESS,
+                        help="whose actions: the robot's namespace (default: $HFPBD_NAMESPACE or default)")
     common.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the reply as JSON")
     parser = argparse.ArgumentParser(prog="hfpbd executor actions", parents=[common],
                                      description="list, show, rename and delete programmed actions")
@@ -84,9 +93,10 @@ def main(argv: Sequence[str]) -> int:
     delete.add_argument("number", type=int)
     args = parser.parse_args(list(argv))
     data_dir, as_json = getattr(args, "data_dir", None), getattr(args, "json", False)
-    request = {k: v for k, v in vars(args).items() if k not in ("data_dir", "json")}
+    namespace = getattr(args, "namespace", None) or os.environ.get("HFPBD_NAMESPACE", DEFAULT_NAMESPACE)
+    request = {k: v for k, v in vars(args).items() if k not in ("data_dir", "json", "namespace")}
     try:
-        reply = apply_action_op(ActionStore(data_dir), request)
+        reply = apply_action_op(ActionStore(namespace_dir(data_dir, namespace)), request)
     except StoreError as exc:
         print(f"hfpbd executor actions: {exc}", file=sys.stderr)
         return 1

@@ -9,7 +9,7 @@ from collections.abc import Sequence
 
 from shared.bus import Bus
 from shared.service import run_service, wait_until_stopped
-from services.executor.store import ActionStore, StoreError, default_data_dir
+from services.executor.store import ActionStore, StoreError, default_data_dir, hold_store, namespace_dir
 
 DESCRIPTION = ("Carries out commands on the simulated PR2, publishes what is possible (reachability, "
                "gripper states), and records and replays programmed actions.")
@@ -18,15 +18,18 @@ DESCRIPTION = ("Carries out commands on the simulated PR2, publishes what is pos
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("executor")
     group.add_argument("--data-dir", default=None, metavar="DIR",
-                       help=f"where programmed actions are kept (default: $HFPBD_DATA_DIR or {default_data_dir()})")
+                       help="where programmed actions are kept, in DIR/<namespace>/ "
+                            f"(default: $HFPBD_DATA_DIR or {default_data_dir()})")
 
 
 def body(bus: Bus, args: argparse.Namespace, stop: threading.Event) -> None:
     from services.executor.executor import Executor  # heavy (planner models): only when serving
 
     try:
-        store = ActionStore(args.data_dir)
-    except StoreError as exc:
+        directory = namespace_dir(args.data_dir, bus.keys.namespace)
+        lock = hold_store(directory)
+        store = ActionStore(directory)
+    except (StoreError, OSError) as exc:
         raise SystemExit(f"hfpbd executor: {exc}") from exc
     executor = Executor(bus, store)
     executor.start()
@@ -35,6 +38,7 @@ def body(bus: Bus, args: argparse.Namespace, stop: threading.Event) -> None:
         wait_until_stopped(stop)
     finally:
         executor.close()
+        lock.close()
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -10,15 +10,18 @@ someone else changed it, so neither works on a stale copy.
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import tempfile
 import threading
 import time
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 FILE_NAME = "actions.json"
+LOCK_NAME = "executor.lock"
+DEFAULT_NAMESPACE = "default"
 FORMAT_VERSION = 1
 ENV_DATA_DIR = "HFPBD_DATA_DIR"
 
@@ -33,6 +36,43 @@ def default_data_dir() -> Path:
         return Path(env).expanduser()
     base = os.environ.get("XDG_DATA_HOME") or Path.home() / ".local" / "share"
     return Path(base) / "hfpbd"
+
+
+def namespace_dir(data_dir: Path | str | None, namespace: str) -> Path:
+    """``<data dir>/<namespace>``: each robot's actions apart from the others'.
+
+    The default namespace takes over the store earlier versions kept at the
+    top of the data directory (moved, once, so there is still one file).
+    """
+    base = Path(data_dir or default_data_dir())
+    directory = base / namespace
+    legacy = base / FILE_NAME
+    if namespace == DEFAULT_NAMESPACE and legacy.is_file() and not (directory / FILE_NAME).exists():
+        directory.mkdir(parents=True, exist_ok=True)
+        os.replace(legacy, directory / FILE_NAME)
+    return directory
+
+
+def hold_store(directory: Path) -> IO[str]:
+    """Lock ``directory``'s store for this executor for as long as the returned file stays open.
+
+    Two executors never write one file: the second is refused, naming the
+    holder's process id. The lock is the kernel's (``flock``), so it goes
+    with the process however that ends.
+    """
+    directory.mkdir(parents=True, exist_ok=True)
+    handle = open(directory / LOCK_NAME, "a+", encoding="utf-8")  # noqa: SIM115 — held open on purpose
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        handle.seek(0)
+        holder = handle.read().strip() or "another process"
+        handle.close()
+        raise StoreError(f"another executor (process {holder}) is using the actions in {directory}") from None
+    handle.truncate(0)
+    handle.write(str(os.getpid()))
+    handle.flush()
+    return handle
 
 
 def atomic_write_text(path: Path, text: str) -> None:

@@ -1,0 +1,75 @@
+"""Each namespace keeps its own actions, and two executors never write one file."""
+
+from __future__ import annotations
+
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from services.executor.store import (
+    FILE_NAME,
+    ActionStore,
+    StoreError,
+    hold_store,
+    namespace_dir,
+)
+from tests.processes import ROOT
+
+HOLDER = ("import sys; from pathlib import Path; from services.executor.store import hold_store; "
+          "h = hold_store(Path(sys.argv[1])); print('held', flush=True); sys.stdin.read()")
+
+
+def test_each_namespace_has_its_own_store(tmp_path: Path) -> None:
+    ActionStore(namespace_dir(tmp_path, "robot1")).create("stack")
+    assert ActionStore(namespace_dir(tmp_path, "robot2")).count() == 0
+    assert (tmp_path / "robot1" / FILE_NAME).is_file() and not (tmp_path / "robot2" / FILE_NAME).exists()
+
+
+def test_the_default_namespace_takes_over_the_old_top_level_store(tmp_path: Path) -> None:
+    ActionStore(tmp_path).create("from before")
+    store = ActionStore(namespace_dir(tmp_path, "default"))
+    assert store.summaries()[0]["name"] == "from before"
+    assert not (tmp_path / FILE_NAME).exists(), "one file only, not two copies"
+    assert ActionStore(namespace_dir(tmp_path, "other")).count() == 0
+
+
+def test_a_second_executor_on_one_store_is_refused_while_the_first_lives(tmp_path: Path) -> None:
+    holder = subprocess.Popen([sys.executable, "-c", HOLDER, str(tmp_path)], cwd=ROOT, stdin=subprocess.PIPE,
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        with pytest.raises(StoreError, match=f"another executor \\(process {holder.pid}\\)"):
+            hold_store(tmp_path)
+    finally:
+        holder.kill()
+        holder.wait(10)
+    hold_store(tmp_path).close()  # the lock went with the process, even killed
+
+
+WRITER = ("import sys; from services.executor.store import ActionStore; s = ActionStore(sys.argv[1]); "
+          "s.create('kept')\nprint('ready', flush=True)\nwhile True: s.append_step({'procedure': 'open', "
+          "'args': {'arm': 'right'}, 'words': 'open your right hand ' * 50})")
+
+
+def test_the_actions_file_survives_sigkill_during_writes(tmp_path: Path) -> None:
+    """A loop of kills at random moments of a writing process: the file always loads, nothing is lost."""
+    rng = random.Random(3)
+    steps = 0
+    for kill in range(12):
+        writer = subprocess.Popen([sys.executable, "-c", WRITER, str(tmp_path)], cwd=ROOT, stdout=subprocess.PIPE,
+                                  text=True)
+        assert writer.stdout.readline().strip() == "ready"
+        time.sleep(rng.uniform(0.0, 0.3))
+        writer.send_signal(signal.SIGKILL)
+        writer.wait(10)
+        store = ActionStore(tmp_path)  # raises StoreError on a torn file
+        counts = store.step_counts()
+        assert [a["name"] for a in store.summaries()] == ["kept"] * (kill + 1), "an action saved earlier was lost"
+        assert sum(counts) >= steps, "steps saved earlier were lost"
+        steps = sum(counts)
+    assert steps > 0
