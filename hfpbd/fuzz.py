@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 import msgpack
+import msgspec
 import zenoh
 
 from hfpbd.spawn import ServiceProcess
@@ -32,7 +33,7 @@ from hfpbd.tasks.stack import LocalStack
 from shared.bus import Bus
 from shared.codec import decode, encode
 from shared.config import free_port, loopback_options
-from shared.messages import SCHEMAS
+from shared.messages import TYPES
 
 # stream key (under pbd/<ns>/) -> the schema its readers hold it to
 STREAMS: dict[str, str] = {
@@ -57,15 +58,25 @@ PROBE_TEXT = "pick up the red cup"
 
 def _wrong(kind: Any) -> Any:
     """A value of another type than ``kind`` accepts."""
-    kinds = kind if isinstance(kind, tuple) else (kind,)
-    return "wrong" if str not in kinds else 12345
+    return 12345 if kind is str else "wrong"
+
+
+def _plausible(kind: Any) -> Any:
+    """A value of roughly the right shape for ``kind`` (itself not necessarily right)."""
+    if kind is str:
+        return "x"
+    origin = getattr(kind, "__origin__", kind)
+    if origin in (list, tuple):
+        return []
+    if origin is dict or isinstance(origin, type) and issubclass(origin, msgspec.Struct):
+        return {}
+    return 0.0
 
 
 def malformed(schema: str, rng: random.Random) -> bytes:
     """One payload that is not a valid ``schema`` message: each call picks one way to be wrong."""
-    fields = SCHEMAS[schema]
-    base = {name: ([] if kind is list else {} if kind is dict else 0.0 if kind != str else "x")
-            for name, kind in fields.items()}  # plausible values, themselves not necessarily right
+    fields = {info.name: info.type for info in msgspec.structs.fields(TYPES[schema]) if info.required}
+    base: dict[str, Any] = {name: _plausible(kind) for name, kind in fields.items()}
     ways: list[Callable[[], bytes]] = [
         lambda: rng.randbytes(rng.randrange(0, 64)),                       # not msgpack at all
         lambda: b"",
@@ -195,8 +206,12 @@ def run(bus: Bus, children: Sequence[ServiceProcess], count: int, seed: int = 0)
     rng = random.Random(seed)
     figures = Figures(count)
     made_up: list[dict[str, Any]] = []
-    bus.subscribe(bus.keys.objects, lambda message: message["objects"] and made_up.append(message),
-                  schema="objects")
+
+    def on_objects(message: dict[str, Any]) -> None:
+        if message["objects"]:
+            made_up.append(message)
+
+    bus.subscribe(bus.keys.objects, on_objects, schema="objects")
     before = _snapshot(bus)
     for suffix, schema in STREAMS.items():
         key = f"pbd/{bus.keys.namespace}/{suffix}"

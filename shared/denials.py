@@ -19,11 +19,10 @@ import sys
 import threading
 import time
 
-import zenoh
+from shared.logs import ACL_TARGET, init_zenoh_log
 
 log = logging.getLogger("hfpbd.access")
 
-ACL_TARGET = "zenoh::net::routing::interceptor::access_control"
 REPEAT_S = 10.0  # a repeated denial is counted, and reported again at most this often
 _PERMISSION = re.compile(r"(?P<zid>[0-9a-f]{8,}) (?:on (?P<subject>\S+) )?is (?P<verdict>un)?authorized to "
                          r"(?P<what>.+?) \((?P<flow>\w+)\) on (?P<key>\S+)")
@@ -113,4 +112,4 @@ def log_access_denials() -> None:
     os.close(write_fd)
     reporter = _Reporter()
     threading.Thread(target=_pump, args=(read_fd, original, reporter), name="access-denials", daemon=True).start()
-    zenoh.init_log_from_env_or(f"warn,{ACL_TARGET}=trace")
+    init_zenoh_log()
