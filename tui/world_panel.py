@@ -1,4 +1,4 @@
-"""The world panel: every perceived object in a table, and the table seen from above."""
+"""The world panel: every perceived object in a table, and the table seen from above or by the head camera."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ from textual.containers import Vertical
 from textual.widget import Widget
 from textual.widgets import DataTable
 
+from tui.camera_view import CameraView
 from tui.world import ARMS, WorldView, hex_color, object_rgb, reach_text, size_text
 
 _TYPE_GLYPHS = {"cup": "c", "box": "b", "plate": "p", "bowl": "o"}
@@ -146,11 +147,27 @@ class TableCanvas(Widget):
 
 
 class WorldPanel(Vertical):
-    """Objects table above the top-down picture."""
+    """Objects table above the top-down picture, or above the head camera's picture."""
+
+    def __init__(self, drawing: str = "auto", **kwargs: object) -> None:
+        """``drawing`` is how the camera picture is drawn (see ``tui.camera_view.DRAWINGS``)."""
+        super().__init__(**kwargs)  # type: ignore[arg-type]
+        self.drawing = drawing
 
     def compose(self) -> ComposeResult:
         yield ObjectTable(id="objects")
         yield TableCanvas(id="canvas")
+        yield CameraView(self.drawing, id="camera")
+
+    @property
+    def camera_shown(self) -> bool:
+        return bool(self.query_one(CameraView).display)
+
+    def show_camera(self, on: bool) -> None:
+        """Swap the top-down picture for the camera's (or back)."""
+        self.query_one(CameraView).display = on
+        self.query_one(TableCanvas).display = not on
+        self.screen.set_class(on, "-camera")   # a short screen gives the picture the robot and action panels' rows
 
     def show(self, world: WorldView) -> None:
         self.query_one(ObjectTable).show(world)

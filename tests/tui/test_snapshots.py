@@ -20,7 +20,8 @@ from tui.status_bar import StatusBar
 SIZE = (120, 40)
 
 
-def settled(app: PbdApp, hub: Bus, then: Callable[[Pilot], Awaitable[Any]] | None = None) -> Callable[[Pilot], Awaitable[None]]:
+def settled(app: PbdApp, hub: Bus,
+            then: Callable[[Pilot], Awaitable[Any]] | None = None) -> Callable[[Pilot], Awaitable[None]]:
     """Wait until the staged world is on screen, then run ``then``."""
 
     async def run_before(pilot: Pilot) -> None:
