@@ -57,12 +57,11 @@ class ActionsScreen(Screen[None]):
     BINDINGS = [
         Binding("q", "close", "Back"),
         Binding("r", "rename", "Rename"),
-        Binding("d", "delete_action", "Delete action"),
-        Binding("x", "delete_step", "Delete step"),
-        Binding("[", "move_step(-1)", "Step up"),
-        Binding("]", "move_step(1)", "Step down"),
-        Binding("e", "execute", "Execute from step"),
-        Binding("tab", "focus_next", "Actions/steps", show=False),
+        Binding("d", "delete_action", "Delete"),
+        Binding("x", "delete_step", "Del step"),
+        Binding("[", "move_step(-1)", "Step ↑"),
+        Binding("]", "move_step(1)", "Step ↓"),
+        Binding("e", "execute", "Run from step"),
     ]
 
     def __init__(self, bridge: Bridge, namespace: str) -> None:

@@ -1,10 +1,12 @@
 """The head camera on screen: the picture drawn by textual-image, labels laid over it as text.
 
 textual-image draws with a terminal graphics protocol (Sixel, Kitty's) where
-the terminal has one and with coloured half-blocks everywhere else. The
-labels are ordinary Textual widgets on a layer above the picture, so they
-stay sharp text however coarse the picture is; only the outlines and gripper
-marks are drawn into the image (``tui.camera``).
+the terminal has one and with coloured half-blocks everywhere else. Half-block
+pictures arrive already drawn (``tui.camera`` runs textual-image's renderer on
+a worker thread) and are only copied to the screen here. The labels are
+ordinary Textual widgets on a layer above the picture, so they stay sharp
+text however coarse the picture is; only the outlines and gripper marks are
+drawn into the image.
 """
 
 from __future__ import annotations
@@ -14,6 +16,8 @@ import sys
 from rich.text import Text
 from textual.app import ComposeResult
 from textual.containers import Container
+from textual.strip import Strip
+from textual.widget import Widget
 from textual.widgets import Static
 from textual_image import widget as image_widgets
 from textual_image._terminal import get_cell_size  # the cell size textual-image itself scales with
@@ -58,6 +62,21 @@ def cell_shape() -> tuple[int, int]:
     return (cell.width, cell.height)
 
 
+class DrawnPicture(Widget):
+    """Rows of a picture drawn elsewhere (``Picture.lines``), copied to the screen as they are."""
+
+    def __init__(self, **kwargs: object) -> None:
+        super().__init__(**kwargs)  # type: ignore[arg-type]
+        self.lines: list[Strip] = []
+
+    def show(self, lines: list[Strip]) -> None:
+        self.lines = lines
+        self.refresh()
+
+    def render_line(self, y: int) -> Strip:
+        return self.lines[y] if y < len(self.lines) else Strip.blank(self.size.width)
+
+
 class CameraView(Container):
     """The latest head-camera picture with object names and gripper letters over it."""
 
@@ -71,7 +90,8 @@ class CameraView(Container):
 
     def compose(self) -> ComposeResult:
         yield Static(WAITING, id="camera-waiting")
-        yield self.image_kind(id="camera-image")
+        drawn_here = issubclass(self.image_kind, image_widgets.HalfcellImage)
+        yield DrawnPicture(id="camera-image") if drawn_here else self.image_kind(id="camera-image")
 
     def on_mount(self) -> None:
         self.query_one("#camera-image").display = False
@@ -84,10 +104,13 @@ class CameraView(Container):
         """Put a composed picture on screen (UI thread; the picture is already at its final size)."""
         self.picture = picture
         self.query_one("#camera-waiting").display = False
-        image = self.query_one("#camera-image", self.image_kind)
+        image = self.query_one("#camera-image")
         image.styles.width = picture.columns
         image.styles.height = picture.rows
-        image.image = picture.image
+        if isinstance(image, DrawnPicture) and picture.lines is not None:
+            image.show(picture.lines)
+        else:  # a textual-image widget: the terminal's graphics protocol draws it
+            image.image = picture.image  # type: ignore[attr-defined]
         image.display = True
         while len(self._labels) < len(picture.labels):
             label = Static("", classes="camera-label")
