@@ -70,6 +70,7 @@ class ActionsScreen(Screen[None]):
         self.namespace = namespace
         self.actions: list[dict[str, Any]] = []
         self._armed: tuple[str, int, int] | None = None   # a delete waiting for its second key press
+        self._listed = False
 
     def compose(self) -> ComposeResult:
         yield Header()
@@ -247,8 +248,10 @@ class ActionsScreen(Screen[None]):
     def on_actions_replied(self, event: ActionsReplied) -> None:
         op, reply = event.request["op"], event.reply
         if op == "list":
+            first = not self._listed
+            self._listed = True
             self.show_list(list(reply.get("actions") or []))
-            if self.actions:
+            if first and self.actions:  # later lists follow a change, whose note stays
                 self.note(f"{len(self.actions)} action(s); the current one is marked ▶")
             return
         number = event.request.get("number")
