@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import functools
 import io
+import logging
 import time
 from collections.abc import Callable
 from dataclasses import replace
@@ -42,7 +43,10 @@ from tui.status_bar import CONSEQUENCES, StatusBar
 from tui.world import WorldView
 from tui.world_panel import TableCanvas, WorldPanel
 
+log = logging.getLogger("hfpbd.tui")
+
 RECONNECT_SECONDS = 3.0
+CAMERA_LOG_EVERY = 50   # pictures between two lines in the log about the camera's refresh rate
 NO_SPEECH = ("push-to-talk needs the speech service, which is not running (start it: hfpbd speech); "
              "typing works as always")
 T = TypeVar("T")
@@ -91,6 +95,7 @@ class PbdApp(App[None]):
         self.camera_drawing = camera_drawing
         self._cloud: dict[str, Any] | None = None   # newest camera frame not yet composed
         self._composing = False
+        self._pictures = 0
         self._actions_seen: tuple[Any, ...] = ()
         self.options = options
         self.bridge = Bridge(options, self)
@@ -234,7 +239,12 @@ class PbdApp(App[None]):
     @while_running
     def on_camera_pictured(self, event: events.CameraPictured) -> None:
         self._composing = False
-        self.main.query_one(CameraView).show(event.picture)
+        view = self.main.query_one(CameraView)
+        view.show(event.picture)
+        self._pictures += 1
+        if self._pictures % CAMERA_LOG_EVERY == 0:
+            rate, spent = view.rate()
+            log.info("camera: %.1f pictures/s, %.2f ms on the UI thread per picture", rate, spent)
         if self._cloud is not None and self.main.query_one(WorldPanel).camera_shown:
             self._composing = True
             self._compose_newest()

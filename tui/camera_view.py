@@ -12,6 +12,8 @@ drawn into the image.
 from __future__ import annotations
 
 import sys
+import time
+from collections import deque
 
 from rich.text import Text
 from textual.app import ComposeResult
@@ -22,7 +24,7 @@ from textual.widgets import Static
 from textual_image import widget as image_widgets
 from textual_image._terminal import get_cell_size  # the cell size textual-image itself scales with
 
-from tui.camera import Picture
+from tui.camera import Label, Picture
 
 # one class per choice of ``hfpbd tui --camera-drawing`` (tui.main.DRAWINGS names them without importing this)
 DRAWINGS: dict[str, type[image_widgets.Image]] = {
@@ -77,6 +79,14 @@ class DrawnPicture(Widget):
         return self.lines[y] if y < len(self.lines) else Strip.blank(self.size.width)
 
 
+class CameraLabel(Static):
+    """A name or gripper letter over the picture; remembers what it shows, to skip unchanged updates."""
+
+    def __init__(self, **kwargs: object) -> None:
+        super().__init__("", **kwargs)  # type: ignore[arg-type]
+        self.spec: Label | None = None
+
+
 class CameraView(Container):
     """The latest head-camera picture with object names and gripper letters over it."""
 
@@ -86,7 +96,8 @@ class CameraView(Container):
         self.cell = cell_shape()
         self.per_cell = pixels_per_cell(self.image_kind)
         self.picture: Picture | None = None
-        self._labels: list[Static] = []
+        self._labels: list[CameraLabel] = []
+        self.shown: deque[tuple[float, float]] = deque(maxlen=50)   # (when, UI seconds spent) per picture
 
     def compose(self) -> ComposeResult:
         yield Static(WAITING, id="camera-waiting")
@@ -100,8 +111,21 @@ class CameraView(Container):
         """Cells available for the picture (columns, rows)."""
         return max(1, self.content_size.width), max(1, self.content_size.height)
 
+    def rate(self) -> tuple[float, float]:
+        """Pictures per second over the recent ones, and the mean UI-thread milliseconds each took to show."""
+        if len(self.shown) < 2:
+            return 0.0, 0.0
+        span = self.shown[-1][0] - self.shown[0][0]
+        spent = sum(s for _, s in self.shown) / len(self.shown) * 1000
+        return (len(self.shown) - 1) / span if span > 0 else 0.0, spent
+
     def show(self, picture: Picture) -> None:
         """Put a composed picture on screen (UI thread; the picture is already at its final size)."""
+        start = time.perf_counter()
+        self._show(picture)
+        self.shown.append((time.monotonic(), time.perf_counter() - start))
+
+    def _show(self, picture: Picture) -> None:
         self.picture = picture
         self.query_one("#camera-waiting").display = False
         image = self.query_one("#camera-image")
@@ -113,10 +137,13 @@ class CameraView(Container):
             image.image = picture.image  # type: ignore[attr-defined]
         image.display = True
         while len(self._labels) < len(picture.labels):
-            label = Static("", classes="camera-label")
+            label = CameraLabel(classes="camera-label")
             self._labels.append(label)
             self.mount(label)
         for label, spec in zip(self._labels, picture.labels):
+            if label.spec == spec and label.display:
+                continue  # unchanged: updating it would lay the screen out again for nothing
+            label.spec = spec
             text = spec.text[:max(1, picture.columns - spec.column)]
             label.update(Text(text, style=spec.style))
             label.styles.offset = (min(spec.column, picture.columns - 1), min(spec.row, picture.rows - 1))
