@@ -157,6 +157,7 @@ class Bus:
         vanish silently.
         """
         congestion = zenoh.CongestionControl.BLOCK if large else zenoh.CongestionControl.DROP
+        raw: zenoh.Publisher | zext.AdvancedPublisher
         if cached:
             raw = zext.declare_advanced_publisher(
                 self.session, key, congestion_control=congestion,
@@ -194,6 +195,7 @@ class Bus:
             handler(message)
 
         channel = _channel(latest_only, capacity)
+        sub: zenoh.Subscriber[Any] | zext.AdvancedSubscriber[Any]
         if history:
             sub = zext.declare_advanced_subscriber(
                 self.session, key, channel,
@@ -242,10 +244,13 @@ class Bus:
         for reply in replies:
             if reply.ok is not None:
                 return decode(reply.ok.payload.to_bytes())
+            refusal = reply.err
+            if refusal is None:
+                continue
             try:
-                error = decode(reply.err.payload.to_bytes()).get("error", "unknown error")
+                error = decode(refusal.payload.to_bytes()).get("error", "unknown error")
             except MessageError:
-                error = reply.err.payload.to_string()
+                error = refusal.payload.to_string()
             raise RemoteError(str(error))
         raise BusTimeout(f"no reply on {key} within {timeout:g} s (is the service running?)")
 

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import subprocess
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -28,3 +30,15 @@ def launcher(network: Network, tmp_path: Path) -> Iterator[Launcher]:
         yield services
     finally:
         services.stop_all()
+
+
+@pytest.fixture(autouse=True)
+def _unit_tests_start_no_process(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A test marked ``unit`` that starts a process fails, so ``-m unit`` stays what it says."""
+    if request.node.get_closest_marker("unit") is None:
+        return
+
+    def refuse(*args: Any, **kwargs: Any) -> None:
+        raise AssertionError("a test marked unit started a process; drop the marker or the process")
+
+    monkeypatch.setattr(subprocess.Popen, "__init__", refuse)

@@ -8,22 +8,15 @@ teardown kills them and anything they spawned, even when the test failed.
 
 from __future__ import annotations
 
-import os
-import signal
-import subprocess
-import sys
-import threading
-import time
 import uuid
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
-import psutil
-
+from hfpbd.spawn import ROOT, AliveWatcher, ServiceProcess, spawn_service
 from shared.bus import Bus
 from shared.config import SessionOptions, free_port, loopback_options
 
-ROOT = Path(__file__).resolve().parents[1]
+__all__ = ["ROOT", "Launcher", "Network", "ServiceProcess", "free_port", "new_network"]
 
 
 @dataclass
@@ -46,46 +39,6 @@ class Network:
         return Bus(self.client_options)
 
 
-@dataclass
-class ServiceProcess:
-    name: str
-    popen: subprocess.Popen
-    log_path: Path
-    _log_file: object = field(repr=False, default=None)
-
-    def log(self) -> str:
-        return self.log_path.read_text(errors="replace") if self.log_path.exists() else ""
-
-    def kill(self, sig: int = signal.SIGKILL) -> None:
-        """Send ``sig`` to the whole process group (default: kill at once)."""
-        try:
-            os.killpg(self.popen.pid, sig)
-        except ProcessLookupError:
-            pass
-
-    def stop(self, timeout: float = 8.0) -> int | None:
-        """SIGTERM, then SIGKILL after ``timeout``; also reap stray descendants."""
-        try:
-            children = psutil.Process(self.popen.pid).children(recursive=True)
-        except psutil.NoSuchProcess:
-            children = []
-        if self.popen.poll() is None:
-            self.kill(signal.SIGTERM)
-            try:
-                self.popen.wait(timeout)
-            except subprocess.TimeoutExpired:
-                self.kill(signal.SIGKILL)
-                self.popen.wait(5)
-        for child in children:
-            try:
-                child.kill()
-            except psutil.NoSuchProcess:
-                pass
-        if self._log_file is not None:
-            self._log_file.close()
-        return self.popen.returncode
-
-
 class Launcher:
     """Starts services as ``python -m services.<name>`` on a test network."""
 
@@ -93,41 +46,20 @@ class Launcher:
         self.network = network
         self.log_dir = log_dir
         self.processes: list[ServiceProcess] = []
-        self._alive: set[str] = set()
-        self._changed = threading.Condition()
-        network.hub.watch_alive(self._on_alive)
-
-    def _on_alive(self, service: str, alive: bool) -> None:
-        with self._changed:
-            (self._alive.add if alive else self._alive.discard)(service)
-            self._changed.notify_all()
+        self.alive = AliveWatcher(network.hub)
 
     def wait_alive(self, service: str, alive: bool = True, timeout: float = 60.0) -> bool:
-        deadline = time.monotonic() + timeout
-        with self._changed:
-            while (service in self._alive) != alive:
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    return False
-                self._changed.wait(left)
-        return True
+        return self.alive.wait(service, alive, timeout)
 
     def start(self, service: str, *extra: str, module: str | None = None, wait: bool = True,
               timeout: float = 90.0, env: dict[str, str] | None = None) -> ServiceProcess:
         """Start a service and (by default) wait for its liveliness token."""
-        module = module or f"services.{service}"
         log_path = self.log_dir / f"{service}-{len(self.processes)}.log"
-        log_file = open(log_path, "w")
-        child_env = {**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})}
-        popen = subprocess.Popen(
-            [sys.executable, "-m", module, *self.network.client_argv(), *extra],
-            cwd=ROOT, stdout=log_file, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-            env=child_env, start_new_session=True)
-        proc = ServiceProcess(service, popen, log_path, log_file)
+        proc = spawn_service(service, self.network.client_argv(), log_path, *extra, module=module, env=env)
         self.processes.append(proc)
-        if wait and not self.wait_alive(service, timeout=timeout):
-            code = popen.poll()
-            raise RuntimeError(f"{service} did not come up within {timeout:g} s (exit code {code}):\n{proc.log()[-4000:]}")
+        if wait and not self.alive.wait(service, timeout=timeout, process=proc):
+            raise RuntimeError(f"{service} did not come up within {timeout:g} s (exit code {proc.exited()}):\n"
+                               f"{proc.log_tail(4000)}")
         return proc
 
     def stop_all(self) -> None:

@@ -6,6 +6,8 @@ import pytest
 
 from services.executor.grounding import descriptor, reground
 
+pytestmark = pytest.mark.unit
+
 
 def obj(oid: str, color: str, kind: str, size: tuple[float, float, float], pos: tuple[float, float, float] = (0.6, 0.0, 0.77)) -> dict:
     return {"id": oid, "color": color, "type": kind, "size": list(size), "position": list(pos)}

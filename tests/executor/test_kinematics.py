@@ -17,6 +17,8 @@ from services.executor.scene import Scene
 from services.executor.targets import Held
 from services.sim.layout import TABLE_TOP_Z, TORSO_HEIGHT, arm_pose, arm_pose_map
 
+pytestmark = pytest.mark.unit
+
 
 @pytest.fixture(scope="module")
 def arms() -> dict[str, ArmKinematics]:

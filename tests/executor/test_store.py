@@ -134,7 +134,7 @@ def test_command_line_list_show_rename_delete(tmp_path: Path, capsys: pytest.Cap
 
 def test_hfpbd_command_reaches_the_actions_tool(tmp_path: Path) -> None:
     ActionStore(tmp_path).create()
-    result = subprocess.run([sys.executable, "-m", "shared.cli", "executor", "actions", "list"], cwd=ROOT,
+    result = subprocess.run([sys.executable, "-m", "hfpbd.cli", "executor", "actions", "list"], cwd=ROOT,
                             capture_output=True, text=True, env={**os.environ, "HFPBD_DATA_DIR": str(tmp_path)}, timeout=60)
     assert result.returncode == 0, result.stderr
     assert "(unnamed)" in result.stdout

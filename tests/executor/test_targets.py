@@ -14,6 +14,8 @@ from services.executor.scene import Scene
 from services.executor.targets import Held
 from services.sim.layout import TABLE_TOP_Z, TORSO_HEIGHT, arm_pose_map
 
+pytestmark = pytest.mark.unit
+
 CUP = np.array([0.07, 0.07, 0.10])
 SIDE_GRASP = geo.make_pose([0.55, -0.10, 0.84], geo.facing([1.0, -0.2, 0.0]))  # level, pointing ahead and a little right
 

@@ -8,6 +8,8 @@ from services.executor import wording
 from services.executor.commands import CommandError, check
 from services.executor.referring import describe_objects
 
+pytestmark = pytest.mark.unit
+
 
 def refer(oid: str) -> str:
     return {"obj0": "the red cup", "obj1": "the blue box"}[oid]

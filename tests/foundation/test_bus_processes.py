@@ -82,7 +82,7 @@ def test_liveliness_appears_and_vanishes_when_killed(network: Network, launcher:
 
 def test_sigterm_exits_promptly_and_cleanly(launcher: Launcher, echo) -> None:
     started = time.monotonic()
-    code = echo.stop(timeout=10)
+    code = echo.stop(grace=10)
     assert code == 0, echo.log()
     assert time.monotonic() - started < 10
     assert "stopped" in echo.log()

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from shared.codec import SCHEMA_VERSION, MessageError, decode, encode
-from shared.messages import decode_as, validate
+from shared.messages import ExecutorState, decode_as, typed, validate
 
 
 @pytest.mark.parametrize("dtype", ["<f4", "<f8", "u1", "<u2", "<i4", ">f4", ">i8"])
@@ -37,11 +37,23 @@ def test_bad_payloads_raise_message_error(payload: bytes, reason: str) -> None:
 
 
 @pytest.mark.parametrize("schema, message, reason", [
-    ("say", {"text": "hi"}, "lacks field 'kind'"),
-    ("say", {"text": "hi", "kind": "shout"}, "say.kind must be one of"),
-    ("utterance", {"text": 5}, "must be str"),
-    ("objects", {"stamp": 1.0, "objects": [{"color": "red"}]}, "string id"),
-    ("cloud", {"stamp": True, "xyz": np.zeros(3), "rgb": np.zeros(3), "camera_pose": []}, "got bool"),
+    ("say", {"text": "hi"}, "missing required field `kind`"),
+    ("say", {"text": "hi", "kind": "shout"}, r"Invalid enum value 'shout' - at `\$.kind`"),
+    ("utterance", {"text": 5}, r"Expected `str`, got `int` - at `\$.text`"),
+    ("objects", {"stamp": 1.0, "objects": [{"color": "red"}]}, "missing required field `id`"),
+    ("cloud", {"stamp": True, "xyz": np.zeros(3), "rgb": np.zeros(3), "camera_pose": [0.0] * 7}, "got `bool`"),
+    ("cloud", {"stamp": 1.0, "xyz": [0.0], "rgb": np.zeros(3), "camera_pose": [0.0] * 7}, "xyz must be an array"),
+    # nested fields are checked too, and the problem is located
+    ("objects", {"stamp": 1.0, "objects": [{"id": "obj0", "position": [0.6, "left", 0.8], "size": [0.1] * 3}]},
+     r"at `\$.objects\[0\].position\[1\]`"),
+    ("objects", {"stamp": 1.0, "objects": [{"id": "obj0", "position": [0.6, 0.1], "size": [0.1] * 3}]},
+     "length 3"),
+    ("sim_state", {"stamp": 1.0, "joints": {"a": 0.1}, "ee": {}, "grippers": {"right": {"width": "wide"}}},
+     r"at `\$.grippers\[...\].width`"),
+    ("executor_state", {"stamp": 1.0, "robot": {"can_move": {"right": {"up": "yes"}}}},
+     r"got `str` - at `\$.robot.can_move\[...\]\[...\]`"),
+    ("truth", {"stamp": 1.0, "objects": [{"id": 3, "position": [0.0] * 3, "size": [0.0] * 3}]},
+     r"at `\$.objects\[0\].id`"),
 ])
 def test_schema_validation_names_the_problem(schema: str, message: dict, reason: str) -> None:
     with pytest.raises(MessageError, match=reason):
@@ -56,3 +68,12 @@ def test_decode_as_accepts_valid_message_with_extra_fields() -> None:
 def test_unencodable_value_is_refused() -> None:
     with pytest.raises(TypeError, match="cannot encode object"):
         encode({"x": object()})
+
+
+def test_typed_message_reads_as_attributes() -> None:
+    state = typed("executor_state", {"stamp": 1.0, "robot": {"grippers": {"right": "holding"}, "action": 2,
+                                                             "progress": {"step": 1, "of": 3}}})
+    assert isinstance(state, ExecutorState)
+    assert state.robot.grippers["right"] == "holding"
+    assert state.robot.progress is not None and state.robot.progress.of == 3
+    assert state.robot.holding == {}

@@ -53,7 +53,7 @@ def test_bad_flags_are_refused_with_reason(argv: tuple[str, ...], reason: str) -
 
 
 def _hfpbd(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "shared.cli", *args], capture_output=True, text=True, timeout=60)
+    return subprocess.run([sys.executable, "-m", "hfpbd.cli", *args], capture_output=True, text=True, timeout=60)
 
 
 def test_version_prints_and_succeeds() -> None:

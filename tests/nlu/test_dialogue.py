@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import pytest
+
 from services.nlu.context import Dialogue
 from services.nlu.infer import Clarify, CommandResult, Model
 from services.nlu.world import parse_world
 from tests.nlu.scenes import obj, table_scene, world
+
+pytestmark = pytest.mark.unit
 
 
 def tall_scene() -> Model:

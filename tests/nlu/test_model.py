@@ -11,6 +11,8 @@ from services.nlu.infer import Clarify, CommandResult, Model
 from services.nlu.world import parse_world
 from tests.nlu.scenes import obj, table_scene, world
 
+pytestmark = pytest.mark.unit
+
 
 def parse(text: str, scene: dict[str, Any] | None = None) -> CommandResult | Clarify:
     return Model(parse_world(scene or table_scene())).parse(text)

@@ -11,6 +11,8 @@ from services.nlu.nbest import NLU_WEIGHT, REJECT_BELOW, Choice, most_plausible
 from services.nlu.world import parse_world
 from tests.nlu.scenes import table_scene
 
+pytestmark = pytest.mark.unit
+
 
 @pytest.fixture(scope="module")
 def model() -> Model:

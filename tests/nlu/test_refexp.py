@@ -11,6 +11,8 @@ from services.nlu.tokens import read
 from services.nlu.world import parse_world
 from tests.nlu.scenes import obj, random_scene, table_scene, world
 
+pytestmark = pytest.mark.unit
+
 
 def describe(scene: dict) -> dict[str, str]:
     return Model(parse_world(scene)).describe()

@@ -9,6 +9,8 @@ from services.perception.cloud import CloudError
 from services.perception.pipeline import detect
 from services.perception.synthetic import COLOURS, Box, Camera, Cylinder, Scene, reaching_arm, render
 
+pytestmark = pytest.mark.unit
+
 SMALL = Camera(width=320, height=240)
 
 

@@ -12,6 +12,8 @@ from services.perception.robot_mask import hides, segments_from_states
 from services.perception.synthetic import Box, Camera, Cylinder, Scene, reaching_arm, render
 from services.perception.tracking import Tracker, TrackSettings
 
+pytestmark = pytest.mark.unit
+
 SMALL = Camera(width=320, height=240)
 TABLE = 0.75
 

@@ -11,6 +11,8 @@ from services.sim.layout import TORSO_HEIGHT, arm_pose
 from services.sim.robot.build_urdf import (ARMS, SRDF_PATH, URDF_PATH, arm_joint_names, finger_joint_names,
                                            model, tool_frame, urdf_text)
 
+pytestmark = pytest.mark.unit
+
 
 def test_urdf_file_is_what_the_generator_writes() -> None:
     assert URDF_PATH.read_text() == urdf_text(*model())

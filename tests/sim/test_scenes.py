@@ -13,6 +13,8 @@ from services.sim.layout import TABLE_TOP_Z
 from services.sim.scene_file import (COLOURS, SceneError, available_scenes, load_scene, parse_scene,
                                      randomized)
 
+pytestmark = pytest.mark.unit
+
 PAPER_SCENES = ["default", "task1_stack_cups", "task2_side_by_side", "task3_in_box", "task4_large_box",
                 "task5_plate_edge"]
 

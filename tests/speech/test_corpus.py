@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import pytest
+
 from services.speech.corpus import SPEEDS, VOICES, corpus, held_out
+
+pytestmark = pytest.mark.unit
 
 
 def test_held_out_set_says_the_benchmark_sentences_with_other_voices_and_speeds() -> None:

@@ -12,6 +12,8 @@ from services.speech.ngram import arpa, sample_sentences
 from services.speech.recogniser import Recogniser
 from services.speech.vocabulary import nlu_vocabulary
 
+pytestmark = pytest.mark.unit
+
 SCENE = SceneWords(frozenset({"red", "blue"}), frozenset({"cup"}), frozenset({"leftmost", "rightmost"}))
 TWO_CUPS = [
     {"id": "a", "color": "red", "type": "cup", "position": [0.55, 0.25, 0.77], "size": [0.07, 0.07, 0.1]},

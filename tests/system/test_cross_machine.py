@@ -18,9 +18,9 @@ import pytest
 
 from shared.bus import Bus
 from shared.config import SessionOptions, free_port
-from shared.tasks.runner import TaskRunner
-from shared.tasks.scripts import Expected, Utterance
-from shared.tasks.stack import LocalStack
+from hfpbd.tasks.runner import TaskRunner
+from hfpbd.tasks.scripts import Expected, Utterance
+from hfpbd.tasks.stack import LocalStack
 
 
 @pytest.fixture

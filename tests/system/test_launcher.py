@@ -32,7 +32,7 @@ def robot(tmp_path: Path):
     """``hfpbd up --headless`` with the NLU only, on a private port and namespace."""
     namespace, port = "up" + uuid.uuid4().hex[:8], free_port()
     popen = subprocess.Popen(
-        [sys.executable, "-m", "shared.launcher", "--headless", "--services", "nlu", "--namespace", namespace,
+        [sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", "nlu", "--namespace", namespace,
          "--listen", f"tcp/127.0.0.1:{port}", "--log-dir", str(tmp_path)],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     bus = Bus(loopback_options(namespace, port, listen=False))
@@ -66,6 +66,6 @@ def test_crashed_service_is_reported_and_restarted_and_stop_leaves_no_orphans(ro
 
 
 def test_unknown_service_is_refused(tmp_path: Path) -> None:
-    result = subprocess.run([sys.executable, "-m", "shared.launcher", "--headless", "--services", "nlu,teleporter"],
+    result = subprocess.run([sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", "nlu,teleporter"],
                             cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert result.returncode != 0 and "unknown service(s) teleporter" in result.stderr

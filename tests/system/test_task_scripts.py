@@ -7,12 +7,14 @@ from pathlib import Path
 
 import pytest
 
+from hfpbd.tasks import figures
+from hfpbd.tasks.judge import judge
+from hfpbd.tasks.rehearse import rehearse
+from hfpbd.tasks.scripts import STYLES, ScriptError, load_tasks, word_count
 from services.sim.layout import TABLE_TOP_Z
 from services.sim.scene_file import load_scene
-from shared.tasks import figures
-from shared.tasks.judge import judge
-from shared.tasks.rehearse import rehearse
-from shared.tasks.scripts import STYLES, ScriptError, load_tasks, word_count
+
+pytestmark = pytest.mark.unit
 
 BOOK = load_tasks()
 RUNS = [(task.id, style) for task in BOOK.tasks for style in STYLES]

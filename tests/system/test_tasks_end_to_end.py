@@ -17,9 +17,9 @@ import pytest
 
 from shared.bus import Bus
 from shared.config import free_port, loopback_options
-from shared.tasks.runner import TaskRunner
-from shared.tasks.scripts import STYLES, load_tasks
-from shared.tasks.stack import LocalStack
+from hfpbd.tasks.runner import TaskRunner
+from hfpbd.tasks.scripts import STYLES, load_tasks
+from hfpbd.tasks.stack import LocalStack
 
 BOOK = load_tasks()
 

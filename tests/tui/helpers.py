@@ -55,8 +55,8 @@ ROBOT = {
 SIM_STATE = {
     "sim_time": 1.0, "joints": {}, "moving": {"right": False, "left": False},
     "ee": {"right": [0.45, -0.3, 0.95, 1, 0, 0, 0], "left": [0.45, 0.3, 0.95, 1, 0, 0, 0]},
-    "grippers": {"right": {"width": 0.08, "holding": False, "contact": False},
-                 "left": {"width": 0.0, "holding": False, "contact": False}},
+    "grippers": {"right": {"width": 0.08, "holding": None, "contact": []},
+                 "left": {"width": 0.0, "holding": None, "contact": []}},
 }
 
 DESCRIPTIONS = {"obj0": "the red cup", "obj1": "the blue cup", "obj2": "the green box", "obj3": "the plate"}

@@ -7,6 +7,8 @@ import pytest
 from tui.command_input import VocabularySuggester
 from tui.world import object_rgb, reach_text, size_text
 
+pytestmark = pytest.mark.unit
+
 
 @pytest.mark.parametrize(("obj", "reach", "expected"), [
     ({}, {"right": {"pick_up": True}, "left": {"pick_up": True}}, "both"),

@@ -21,6 +21,7 @@ import threading
 from dataclasses import dataclass
 from pathlib import Path
 
+from hfpbd.spawn import ServiceProcess, spawn
 from shared.bus import Bus
 from shared.config import SessionOptions
 from shared.logs import setup_logging
@@ -38,34 +39,18 @@ class Supervised:
     name: str
     argv: list[str]
     log_path: Path
-    popen: subprocess.Popen | None = None
+    process: ServiceProcess | None = None
     restarts: int = 0
 
     def start(self) -> None:
-        self.log_path.parent.mkdir(parents=True, exist_ok=True)
-        with open(self.log_path, "a") as out:
-            self.popen = subprocess.Popen(self.argv, stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                                          start_new_session=True)
+        self.process = spawn(self.name, self.argv, self.log_path, append=True)
 
     def exited(self) -> int | None:
-        return None if self.popen is None else self.popen.poll()
+        return None if self.process is None else self.process.exited()
 
     def terminate(self, grace: float) -> None:
-        if self.popen is None or self.popen.poll() is not None:
-            return
-        _signal_group(self.popen.pid, signal.SIGTERM)
-        try:
-            self.popen.wait(grace)
-        except subprocess.TimeoutExpired:
-            _signal_group(self.popen.pid, signal.SIGKILL)
-            self.popen.wait(5)
-
-
-def _signal_group(pid: int, sig: int) -> None:
-    try:
-        os.killpg(pid, sig)
-    except ProcessLookupError:
-        pass
+        if self.process is not None:
+            self.process.stop(grace)
 
 
 def _default_log_dir() -> Path:
@@ -115,7 +100,7 @@ class Supervisor:
         self.stop = threading.Event()
 
     def _argv(self, name: str) -> list[str]:
-        argv = [sys.executable, "-m", f"services.{name}", *self.client_argv]
+        argv = ["-m", f"services.{name}", *self.client_argv]
         if name == "sim" and self.args.scene:
             argv += ["--scene", self.args.scene]
         return argv
@@ -137,7 +122,7 @@ class Supervisor:
                 if self.args.no_restart or child.restarts >= MAX_RESTARTS:
                     self._say(bus, f"The {child.name} service stopped (exit code {code}) and will not be restarted; "
                                    f"see {child.log_path}.", "error")
-                    child.popen = None
+                    child.process = None
                     continue
                 child.restarts += 1
                 self._say(bus, f"The {child.name} service stopped (exit code {code}); restarting it "

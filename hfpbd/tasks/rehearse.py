@@ -18,7 +18,7 @@ from services.nlu.context import Dialogue
 from services.nlu.infer import Clarify, Model
 from services.nlu.world import parse_world
 from services.sim.scene_file import load_scene
-from shared.tasks.scripts import Task, Utterance
+from hfpbd.tasks.scripts import Task, Utterance
 
 ADMIN = {"record", "create_action", "switch_action", "execute", "stop"}
 LIFT = 0.12          # a picked-up object rises about this much

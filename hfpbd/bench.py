@@ -7,12 +7,12 @@ import sys
 from collections.abc import Sequence
 
 BENCHMARKS: dict[str, str] = {
-    "bus": "shared.bench_bus",
+    "bus": "hfpbd.bench_bus",
     "nlu": "services.nlu.bench",
     "sim": "services.sim.bench",
     "perception": "services.perception.bench",
     "executor": "services.executor.bench",
-    "tasks": "shared.tasks.bench",
+    "tasks": "hfpbd.tasks.bench",
     "speech": "services.speech.bench",
 }
 

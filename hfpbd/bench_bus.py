@@ -25,7 +25,7 @@ import zenoh
 
 from shared.bus import Bus
 from shared.codec import decode, encode
-from shared.config import free_port, loopback_options, zenoh_config
+from shared.config import SessionOptions, free_port, loopback_options, zenoh_config
 from shared.stats import markdown_table, percentiles_ms
 
 PINGS = 2000
@@ -41,24 +41,33 @@ def _cloud(rng: np.random.Generator) -> dict:
 # -- the other process ------------------------------------------------------
 def _peer(namespace: str, port: int, impl: str) -> None:
     """Echo pings as pongs and, when asked, publish clouds as fast as they go."""
-    prefix = f"pbd/{namespace}/bench"
     options = loopback_options(namespace, port, listen=False)
-    rng = np.random.default_rng(0)
     if impl == "bus":
-        with Bus(options) as bus:
-            pong = bus.publisher(f"{prefix}/pong")
-            clouds = bus.publisher(bus.keys.cloud, large=True)
-            start = threading.Event()
-            bus.subscribe(f"{prefix}/ping", lambda m: pong.put({"i": m["i"]}))
-            bus.subscribe(f"{prefix}/go", lambda m: start.set())
-            bus.declare_alive("bench-peer")
-            start.wait()
-            message = _cloud(rng)
-            for i in range(CLOUDS):
-                message["stamp"] = float(i)
-                clouds.put(message)
-            time.sleep(5)
-        return
+        _bus_peer(options, namespace)
+    else:
+        _raw_peer(options, namespace)
+
+
+def _bus_peer(options: SessionOptions, namespace: str) -> None:
+    prefix = f"pbd/{namespace}/bench"
+    with Bus(options) as bus:
+        pong = bus.publisher(f"{prefix}/pong")
+        clouds = bus.publisher(bus.keys.cloud, large=True)
+        start = threading.Event()
+        bus.subscribe(f"{prefix}/ping", lambda m: pong.put({"i": m["i"]}))
+        bus.subscribe(f"{prefix}/go", lambda m: start.set())
+        bus.declare_alive("bench-peer")
+        start.wait()
+        message = _cloud(np.random.default_rng(0))
+        for i in range(CLOUDS):
+            message["stamp"] = float(i)
+            clouds.put(message)
+        time.sleep(5)
+
+
+def _raw_peer(options: SessionOptions, namespace: str) -> None:
+    prefix = f"pbd/{namespace}/bench"
+    rng = np.random.default_rng(0)
     with zenoh.open(zenoh_config(options)) as session:
         pong = session.declare_publisher(f"{prefix}/pong")
         clouds = session.declare_publisher(f"pbd/{namespace}/sim/cloud", congestion_control=zenoh.CongestionControl.BLOCK)
@@ -82,7 +91,7 @@ def _peer(namespace: str, port: int, impl: str) -> None:
 
 # -- the measuring process ----------------------------------------------------
 def _start_peer(namespace: str, port: int, impl: str) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "shared.bench_bus", "--peer", impl, "--namespace", namespace,
+    return subprocess.Popen([sys.executable, "-m", "hfpbd.bench_bus", "--peer", impl, "--namespace", namespace,
                              "--port", str(port)])
 
 
@@ -119,10 +128,17 @@ def _measure(impl: str) -> tuple[list[float], float]:
                 raw_ping = session.declare_publisher(f"{prefix}/ping")
                 raw_pongs = session.declare_subscriber(f"{prefix}/pong", zenoh.handlers.FifoChannel(4096))
                 raw_clouds = session.declare_subscriber(bus.keys.cloud, zenoh.handlers.FifoChannel(256))
-                threading.Thread(target=lambda: [pongs.put(decode(s.payload.to_bytes())) for s in raw_pongs],
-                                 daemon=True).start()
-                threading.Thread(target=lambda: [on_cloud(decode(s.payload.to_bytes())) for s in raw_clouds],
-                                 daemon=True).start()
+
+                def drain_pongs() -> None:
+                    for sample in raw_pongs:
+                        pongs.put(decode(sample.payload.to_bytes()))
+
+                def drain_clouds() -> None:
+                    for sample in raw_clouds:
+                        on_cloud(decode(sample.payload.to_bytes()))
+
+                threading.Thread(target=drain_pongs, daemon=True).start()
+                threading.Thread(target=drain_clouds, daemon=True).start()
                 send = lambda i: raw_ping.put(encode({"i": i}))  # noqa: E731
             for i in range(200):  # warm up routes and first-put costs
                 send(i)

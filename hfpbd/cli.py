@@ -19,8 +19,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "executor": ("services.executor.main", "runs procedures, records and replays actions"),
     "tui": ("tui.main", "terminal user interface for the programming dialog"),
     "speech": ("services.speech.main", "spoken commands in, spoken feedback out"),
-    "up": ("shared.launcher", "start every service on this machine and supervise them"),
-    "bench": ("shared.bench", "benchmarks: bus, nlu, sim, perception, executor, tasks, speech"),
+    "up": ("hfpbd.launcher", "start every service on this machine and supervise them"),
+    "bench": ("hfpbd.bench", "benchmarks: bus, nlu, sim, perception, executor, tasks, speech"),
 }
 
 

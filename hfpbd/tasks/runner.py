@@ -23,9 +23,9 @@ from typing import Any
 import numpy as np
 
 from shared.bus import Bus, BusTimeout, RemoteError
-from shared.tasks.judge import Verdict, judge
-from shared.tasks.observer import Observer, WaitTimeout
-from shared.tasks.scripts import Expected, Task, Utterance
+from hfpbd.tasks.judge import Verdict, judge
+from hfpbd.tasks.observer import Observer, WaitTimeout
+from hfpbd.tasks.scripts import Expected, Task, Utterance
 
 log = logging.getLogger("hfpbd.tasks")
 

@@ -109,11 +109,11 @@ class Observer:
         with self._changed:
             return [line for line in self.lines if line.at >= since]
 
-    def wait_for(self, condition: Callable[[], T], timeout: float, what: str) -> T:
+    def wait_for(self, condition: Callable[[], T | None], timeout: float, what: str) -> T:
         """Wait until ``condition()`` (called under the lock) is truthy; return its value."""
         deadline = time.monotonic() + timeout
         with self._changed:
-            while not (value := condition()):
+            while (value := condition()) is None or not value:
                 left = deadline - time.monotonic()
                 if left <= 0:
                     said = "; ".join(f"{l.kind}: {l.text}" for l in self.lines[-4:]) or "nothing"

@@ -22,10 +22,10 @@ from pathlib import Path
 
 from shared.bus import Bus
 from shared.config import add_session_arguments, free_port, loopback_options, options_from_args
-from shared.tasks import figures
-from shared.tasks.runner import RunError, TaskRunner
-from shared.tasks.scripts import STYLES, ScriptError, load_tasks
-from shared.tasks.stack import LocalStack
+from hfpbd.tasks import figures
+from hfpbd.tasks.runner import RunError, TaskRunner
+from hfpbd.tasks.scripts import STYLES, ScriptError, load_tasks
+from hfpbd.tasks.stack import LocalStack
 
 DESCRIPTION = ("Program the paper's five tasks in full and minimal language through the real services, "
                "judge them from ground truth, replay them on moved objects, and compare with the paper.")
