@@ -140,7 +140,7 @@ class CameraView(Container):
             label = CameraLabel(classes="camera-label")
             self._labels.append(label)
             self.mount(label)
-        for label, spec in zip(self._labels, picture.labels):
+        for label, spec in zip(self._labels[:len(picture.labels)], picture.labels, strict=True):
             if label.spec == spec and label.display:
                 continue  # unchanged: updating it would lay the screen out again for nothing
             label.spec = spec

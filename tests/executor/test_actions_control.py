@@ -9,6 +9,8 @@ import pytest
 from services.executor.actions_control import apply, step_words
 from services.executor.store import ActionStore, StoreError
 
+pytestmark = pytest.mark.unit
+
 LANDMARK = {"id": "obj0", "color": "red", "type": "cup", "size": [0.07, 0.07, 0.1], "position": [0.6, 0, 0.77]}
 SAID = ["move your right hand above the red cup", "open your right hand", "pick it up"]
 

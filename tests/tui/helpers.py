@@ -111,12 +111,12 @@ TAUGHT = [
 
 def teach(store: ActionStore) -> None:
     """Fill an empty store with ``TAUGHT`` (action 1 current)."""
-    for name, created, said in TAUGHT:
+    for name, _created, said in TAUGHT:
         store.create(name)
         for words in said:
             store.append_step({"procedure": "open", "args": {"arm": "right"}, "utterance": words})
     data = json.loads(store.path.read_text())
-    for action, (_name, created, _said) in zip(data["actions"], TAUGHT):
+    for action, (_name, created, _said) in zip(data["actions"], TAUGHT, strict=True):
         action["created"] = created
     data["current"] = 1
     atomic_write_text(store.path, json.dumps(data))

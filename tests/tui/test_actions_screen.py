@@ -126,6 +126,7 @@ async def test_without_an_executor_the_screen_says_so(tmp_path: Path) -> None:
         assert "list failed: the executor did not answer (is it running?)" in note(app)
 
 
+@pytest.mark.unit
 def test_creation_time_reads_as_local_date_and_minute(utc: None) -> None:
     assert created_text(1764590400.0) == "2025-12-01 12:00"
     assert created_text(None) == "—"

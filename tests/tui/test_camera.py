@@ -33,6 +33,7 @@ def _world(**changes: object) -> WorldView:
     return world
 
 
+@pytest.mark.unit
 def test_the_camera_model_is_recovered_from_the_frame_itself() -> None:
     camera = fit_pinhole(frame()["xyz"], frame()["camera_pose"])
     assert camera is not None
@@ -40,15 +41,17 @@ def test_the_camera_model_is_recovered_from_the_frame_itself() -> None:
     assert (camera.cx, camera.cy) == pytest.approx((WIDTH / 2, HEIGHT / 2), abs=0.05)
 
 
+@pytest.mark.unit
 def test_each_object_projects_onto_its_own_colour() -> None:
     cloud = frame()
     camera = fit_pinhole(cloud["xyz"], cloud["camera_pose"])
     uv, ahead = camera.project(np.array([o["position"] for o in OBJECTS]))
     assert ahead.all()
-    for obj, (u, v) in zip(OBJECTS, uv):
+    for obj, (u, v) in zip(OBJECTS, uv, strict=True):
         assert list(cloud["rgb"][int(v), int(u)]) == obj["rgb"], obj["id"]
 
 
+@pytest.mark.unit
 def test_objects_are_named_by_their_referring_expressions_never_by_id() -> None:
     picture = compose(frame(), _world(highlighted="obj0"), 60, 20, CELL, HALF_BLOCKS)
     names = [label.text for label in picture.labels]
@@ -57,11 +60,13 @@ def test_objects_are_named_by_their_referring_expressions_never_by_id() -> None:
     assert "ffd700" in next(label.style for label in picture.labels if label.text == "the red cup")
 
 
+@pytest.mark.unit
 def test_an_object_not_yet_described_reads_by_colour_and_type() -> None:
     picture = compose(frame(), _world(descriptions={}), 60, 20, CELL, HALF_BLOCKS)
     assert "a red cup" in [label.text for label in picture.labels]
 
 
+@pytest.mark.unit
 def test_the_outline_surrounds_the_object_in_the_scaled_picture() -> None:
     picture = compose(frame(), _world(highlighted="obj0"), 60, 20, CELL, HALF_BLOCKS)
     pixels = np.asarray(picture.image)
@@ -74,12 +79,14 @@ def test_the_outline_surrounds_the_object_in_the_scaled_picture() -> None:
     assert left and right, "no highlight outline on both sides of the red cup"
 
 
+@pytest.mark.unit
 def test_grippers_are_marked_where_the_tool_frames_are() -> None:
     picture = compose(frame(), _world(), 60, 20, CELL, HALF_BLOCKS)
     marks = {label.text: label.column for label in picture.labels if label.text in ("L", "R")}
     assert marks["L"] < picture.columns / 2 < marks["R"], "the robot's left hand must show on the picture's left"
 
 
+@pytest.mark.unit
 def test_a_frame_without_points_is_shown_without_marks() -> None:
     cloud = frame()
     cloud["xyz"] = np.full_like(cloud["xyz"], np.nan)
@@ -87,11 +94,13 @@ def test_a_frame_without_points_is_shown_without_marks() -> None:
     assert picture.labels == [] and picture.image.size == (picture.columns, 2 * picture.rows)
 
 
+@pytest.mark.unit
 @pytest.mark.parametrize("space, expected", [((60, 20), (53, 20)), ((30, 40), (30, 11)), ((200, 5), (13, 5))])
 def test_the_picture_keeps_its_shape_in_any_space(space: tuple[int, int], expected: tuple[int, int]) -> None:
     assert fit_cells(WIDTH, HEIGHT, *space, CELL) == expected
 
 
+@pytest.mark.unit
 def test_the_command_line_offers_every_drawing_method() -> None:
     assert set(tui_main.DRAWINGS) == set(DRAWINGS)
 
@@ -133,9 +142,11 @@ async def test_f2_shows_the_camera_and_keeps_up_without_slowing_typing() -> None
             finally:
                 streaming.set()
                 thread.join(timeout=5)
-            rate, _spent = view.rate()
+            rate, spent = view.rate()
             assert rate >= 2.0, f"{rate:.1f} pictures a second"
-            assert busy < 1.5 * quiet + 0.5, f"typing took {busy:.2f} s with the camera, {quiet:.2f} s without"
+            assert spent < 5.0, f"{spent:.1f} ms of the UI thread per picture"
+            # typing time is measured on a shared machine: the margin is for its load, not for the camera
+            assert busy < 2 * quiet + 1.0, f"typing took {busy:.2f} s with the camera, {quiet:.2f} s without"
             assert sorted(label.text for label in view.picture.labels) == sorted([*DESCRIPTIONS.values(), "L", "R"])
             await pilot.press("f2")
             assert not view.display and app.main.query_one("#canvas").display
