@@ -150,16 +150,20 @@ def _marked(cloud: dict[str, Any], world: WorldView, columns: int, rows: int, ce
     to_cell = np.array([columns / size[0], rows / size[1]])
     draw = ImageDraw.Draw(image)
     thickness = max(1, pixels_per_cell[1] // 2)
-    for object_id, obj in world.objects.items():
+    places = Placer(columns, rows)
+    # the object the user just named is labelled first, so it gets the place nearest its outline
+    for object_id, obj in sorted(world.objects.items(), key=lambda item: item[0] != world.highlighted):
         box = _outline(camera, obj, scale, size)
         if box is None:
             continue
         marked = object_id == world.highlighted
         draw.rectangle(box, outline=HIGHLIGHT if marked else OUTLINE, width=thickness)
-        column, row = (np.array(box[:2]) * to_cell).astype(int)
+        column, top, _right, bottom = (np.array(box, float) * np.tile(to_cell, 2)).astype(int)
         name = world.descriptions.get(object_id) or f"a {obj.get('color', '')} {obj.get('type', 'object')}"
         style = f"bold black on {hex_color(HIGHLIGHT)}" if marked else f"black on {hex_color(object_rgb(obj))}"
-        picture.labels.append(Label(int(column), max(0, int(row) - 1), name, style))
+        column, row = places.take(int(column), [int(top) - 1, int(bottom) + 1, int(top) - 2, int(bottom) + 2,
+                                                int(top), int(bottom)], len(name))
+        picture.labels.append(Label(column, row, name, style))
     for arm in ARMS:
         pose = world.ee.get(arm)
         if pose is None:
@@ -174,8 +178,27 @@ def _marked(cloud: dict[str, Any], world: WorldView, columns: int, rows: int, ce
         draw.ellipse([point[0] - radius, point[1] - radius, point[0] + radius, point[1] + radius],
                      outline=colour, width=thickness)
         column, row = (point * to_cell).astype(int)
-        picture.labels.append(Label(int(column) + 1, int(row), arm[0].upper(), f"bold white on {hex_color(colour)}"))
+        column, row = places.take(int(column) + 1, [int(row), int(row) - 1, int(row) + 1], 1)
+        picture.labels.append(Label(column, row, arm[0].upper(), f"bold white on {hex_color(colour)}"))
     return picture
+
+
+class Placer:
+    """Keeps labels from covering each other: each takes the first of its preferred rows where it fits."""
+
+    def __init__(self, columns: int, rows: int) -> None:
+        self.columns, self.rows = columns, rows
+        self.taken: dict[int, list[tuple[int, int]]] = {}
+
+    def take(self, column: int, rows: list[int], width: int) -> tuple[int, int]:
+        """(column, row) for a label ``width`` cells wide; the first preferred row if all are taken."""
+        column = max(0, min(column, self.columns - width))
+        span = (column, column + width)
+        inside = [r for r in rows if 0 <= r < self.rows] or [max(0, min(rows[0], self.rows - 1))]
+        free = [r for r in inside if all(span[1] <= a or b <= span[0] for a, b in self.taken.get(r, []))]
+        row = (free or inside)[0]
+        self.taken.setdefault(row, []).append(span)
+        return column, row
 
 
 def _outline(camera: Pinhole, obj: dict[str, Any], scale: np.ndarray,

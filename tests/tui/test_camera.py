@@ -80,6 +80,19 @@ def test_the_outline_surrounds_the_object_in_the_scaled_picture() -> None:
 
 
 @pytest.mark.unit
+def test_labels_of_objects_side_by_side_do_not_cover_each_other() -> None:
+    cups = [{**OBJECTS[0], "id": f"obj{i}", "position": [0.62, -0.15 + 0.08 * i, 0.80]} for i in range(3)]
+    world = _world(objects={c["id"]: c for c in cups}, descriptions={"obj0": "the rightmost cup",
+                                                                     "obj1": "the middle cup",
+                                                                     "obj2": "the leftmost cup"})
+    labels = compose(frame(cups), world, 60, 20, CELL, HALF_BLOCKS).labels
+    for i, one in enumerate(labels):
+        for other in labels[i + 1:]:
+            apart = one.column + len(one.text) <= other.column or other.column + len(other.text) <= one.column
+            assert one.row != other.row or apart, f"{one.text!r} covers {other.text!r}"
+
+
+@pytest.mark.unit
 def test_grippers_are_marked_where_the_tool_frames_are() -> None:
     picture = compose(frame(), _world(), 60, 20, CELL, HALF_BLOCKS)
     marks = {label.text: label.column for label in picture.labels if label.text in ("L", "R")}
