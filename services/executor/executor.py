@@ -266,7 +266,11 @@ class Executor:
     def _execute(self, action: int | None = None, start: int = 1) -> None:
         """Replay the current action (or ``action``, which becomes current) from step ``start``."""
         if action is not None:
-            self.store.switch(action)
+            try:
+                self.store.switch(action)
+            except StoreError as exc:  # deleted since the request was accepted
+                self.say(wording.sentence(str(exc)), "error")
+                return
         number = self.store.current
         if number == 0:
             self.say("There is no action to execute yet; teach me some steps first.", "error")
