@@ -250,6 +250,11 @@ class PbdApp(App[None]):
             self._compose_newest()
 
     @while_running
+    def on_camera_failed(self, event: events.CameraFailed) -> None:
+        self._composing = False
+        self.main.query_one(CameraView).fail(event.reason)
+
+    @while_running
     def on_overview_taken(self, event: events.OverviewTaken) -> None:
         self.push_screen(OverviewScreen(event.image, self.options.namespace, self.camera_drawing))
 
@@ -403,7 +408,12 @@ class PbdApp(App[None]):
         cloud, self._cloud = self._cloud, None
         if cloud is None:
             return
-        picture = compose_picture(cloud, replace(self.world), columns, rows, cell, per_cell)
+        try:
+            picture = compose_picture(cloud, replace(self.world), columns, rows, cell, per_cell)
+        except (ValueError, TypeError, IndexError, KeyError) as exc:  # a frame that passed the schema but not drawing
+            log.warning("camera frame not drawn: %s", exc)
+            self.post_message(events.CameraFailed(f"the last camera frame could not be drawn ({exc})"))
+            return
         self.post_message(events.CameraPictured(picture))
 
     @work(thread=True, exclusive=True, group="overview")
@@ -413,7 +423,12 @@ class PbdApp(App[None]):
         except (BusTimeout, RemoteError, ConnectionError) as exc:
             self.post_message(events.RequestFailed("the overview picture", _reason(exc, "simulator")))
             return
-        self.post_message(events.OverviewTaken(Image.open(io.BytesIO(png)).convert("RGB")))
+        try:
+            image = Image.open(io.BytesIO(png)).convert("RGB")
+        except OSError as exc:  # Pillow's error for bytes that are no picture
+            self.post_message(events.RequestFailed("the overview picture", f"the simulator sent no PNG ({exc})"))
+            return
+        self.post_message(events.OverviewTaken(image))
 
     @work(thread=True, exclusive=True, group="vocabulary")
     def load_vocabulary(self) -> None:

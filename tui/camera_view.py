@@ -111,6 +111,15 @@ class CameraView(Container):
         """Cells available for the picture (columns, rows)."""
         return max(1, self.content_size.width), max(1, self.content_size.height)
 
+    def fail(self, reason: str) -> None:
+        """Say why there is no new picture; the next good frame replaces the message."""
+        waiting = self.query_one("#camera-waiting", Static)
+        waiting.update(reason)
+        waiting.display = True
+        self.query_one("#camera-image").display = False
+        for label in self._labels:
+            label.display = False
+
     def rate(self) -> tuple[float, float]:
         """Pictures per second over the recent ones, and the mean UI-thread milliseconds each took to show."""
         if len(self.shown) < 2:
@@ -127,7 +136,7 @@ class CameraView(Container):
 
     def _show(self, picture: Picture) -> None:
         self.picture = picture
-        self.query_one("#camera-waiting").display = False
+        self.query_one("#camera-waiting", Static).display = False
         image = self.query_one("#camera-image")
         image.styles.width = picture.columns
         image.styles.height = picture.rows

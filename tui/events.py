@@ -141,6 +141,14 @@ class CameraPictured(Message):
         self.picture = picture
 
 
+class CameraFailed(Message):
+    """A camera frame could not be composed; ``reason`` says why (the view says it instead of a picture)."""
+
+    def __init__(self, reason: str) -> None:
+        super().__init__()
+        self.reason = reason
+
+
 class OverviewTaken(Message):
     """The simulator's overview picture of the whole robot, decoded."""
 

@@ -203,3 +203,29 @@ async def test_f3_without_a_simulator_says_why() -> None:
                         what="the reason")
             assert any("the simulator did not answer" in text for text in conversation.texts("error"))
         del world
+
+
+@pytest.mark.asyncio
+async def test_a_frame_that_cannot_be_drawn_is_said_and_the_next_one_shows() -> None:
+    with fixed_network("cambad") as (hub, options):
+        world = stage_world(hub)
+        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell")
+        async with app.run_test(size=(120, 40)) as pilot:
+            await settled(app, hub)(pilot)
+            await pilot.press("f2")
+            view = app.main.query_one(CameraView)
+            waiting = app.main.query_one("#camera-waiting")
+            bad = {**frame(), "rgb": np.zeros((HEIGHT, WIDTH), np.uint8)}  # grey, where colour is expected
+            for _ in range(50):
+                if "could not be drawn" in str(waiting.render()):
+                    break
+                hub.publish(hub.keys.cloud, bad)
+                await pilot.pause(0.1)
+            assert "could not be drawn" in str(waiting.render()) and app.is_running
+            for _ in range(50):
+                if view.picture is not None:
+                    break
+                hub.publish(hub.keys.cloud, frame())
+                await pilot.pause(0.1)
+            assert view.picture is not None and not waiting.display
+        del world
