@@ -94,6 +94,7 @@ class PbdApp(App[None]):
         super().__init__()
         self.camera_drawing = camera_drawing
         self._cloud: dict[str, Any] | None = None   # newest camera frame not yet composed
+        self._last_cloud: dict[str, Any] | None = None
         self._composing = False
         self._pictures = 0
         self._actions_seen: tuple[Any, ...] = ()
@@ -123,13 +124,12 @@ class PbdApp(App[None]):
 
     def on_mount(self) -> None:
         self.main.query_one("#conversation").border_title = "conversation"
-        self.main.query_one("#world").border_title = "world"
         self.main.query_one("#robot").border_title = "robot"
         self.main.query_one("#action").border_title = "action"
         self.main.query_one("#clarify").border_title = "the robot asks"
         self.main.query_one(CommandInput).focus()
         self.main.query_one(StatusBar).set_connection(False, f"connecting to {self._where()}…")
-        self.main.query_one(WorldPanel).show_camera(False)
+        self.main.query_one(WorldPanel).show_view("map")
         self._refresh_world()
         self.main.query_one(ActionPanel).show({})
         self.connect()
@@ -227,14 +227,14 @@ class PbdApp(App[None]):
     def on_cloud_seen(self, event: events.CloudSeen) -> None:
         if not self.main.query_one(WorldPanel).camera_shown:
             return
-        self._cloud = event.cloud
+        self._cloud = self._last_cloud = event.cloud
         if not self._composing:
             self._composing = True
             self._compose_newest()
 
     def _compose_newest(self) -> None:
         view = self.main.query_one(CameraView)
-        self.compose_camera(*view.space(), view.cell, view.per_cell)
+        self.compose_camera(*view.space(), view.cell, view.per_cell, self.main.query_one(WorldPanel).close_up)
 
     @while_running
     def on_camera_pictured(self, event: events.CameraPictured) -> None:
@@ -342,15 +342,17 @@ class PbdApp(App[None]):
         self._direct("switch_action", {"target": target}, f"[{'F7' if target == 'previous' else 'F8'}] {target} action")
 
     def action_camera(self) -> None:
-        """Swap the top-down map for the head camera's picture, and back."""
+        """Step from the top-down map to the head camera, its close-up, and back."""
         panel = self.main.query_one(WorldPanel)
-        on = not panel.camera_shown
-        panel.show_camera(on)
-        panel.border_title = "world · head camera" if on else "world"
-        if on and self.bridge.connected:
+        view = panel.next_view()
+        if view == "camera" and self.bridge.connected:
             self.bridge.watch_camera()
-        elif on:
+        elif view == "camera":
             self.main.query_one(Conversation).add("warning", "not connected yet: the camera shows once connected")
+        if view != "map" and self._last_cloud is not None and not self._composing:
+            self._cloud = self._last_cloud   # redraw the frame in hand at once, not at the next one
+            self._composing = True
+            self._compose_newest()
 
     def action_overview(self) -> None:
         if isinstance(self.screen, OverviewScreen):
@@ -403,13 +405,14 @@ class PbdApp(App[None]):
             self.post_message(events.RequestFailed("push-to-talk", _reason(exc, "speech service")))
 
     @work(thread=True, group="camera")
-    def compose_camera(self, columns: int, rows: int, cell: tuple[int, int], per_cell: tuple[int, int]) -> None:
+    def compose_camera(self, columns: int, rows: int, cell: tuple[int, int], per_cell: tuple[int, int],
+                       close_up: bool) -> None:
         """Compose the newest frame for the camera view (scaling and drawing stay off the UI thread)."""
         cloud, self._cloud = self._cloud, None
         if cloud is None:
             return
         try:
-            picture = compose_picture(cloud, replace(self.world), columns, rows, cell, per_cell)
+            picture = compose_picture(cloud, replace(self.world), columns, rows, cell, per_cell, close_up)
         except (ValueError, TypeError, IndexError, KeyError) as exc:  # a frame that passed the schema but not drawing
             log.warning("camera frame not drawn: %s", exc)
             self.post_message(events.CameraFailed(f"the last camera frame could not be drawn ({exc})"))

@@ -121,39 +121,44 @@ def fit_cells(width: int, height: int, columns: int, rows: int, cell: tuple[int,
 
 
 def compose(cloud: dict[str, Any], world: WorldView, columns: int, rows: int, cell: tuple[int, int],
-            pixels_per_cell: tuple[int, int]) -> Picture:
+            pixels_per_cell: tuple[int, int], close_up: bool = False) -> Picture:
     """The camera frame scaled to fit ``columns`` × ``rows`` cells, objects outlined, grippers marked.
 
     ``pixels_per_cell`` is how many image pixels one cell shows ((1, 2) for
     coloured half-blocks, which are then drawn here too; the cell's pixel
-    size for a graphics protocol, which the terminal draws).
+    size for a graphics protocol, which the terminal draws). ``close_up``
+    shows only the part of the frame around the perceived objects: in a
+    terminal-sized picture of the whole frame a cup is two cells wide.
     """
-    picture = _marked(cloud, world, columns, rows, cell, pixels_per_cell)
+    picture = _marked(cloud, world, columns, rows, cell, pixels_per_cell, close_up)
     if pixels_per_cell == (1, 2):
         picture.lines = half_block_lines(picture.image, picture.columns, picture.rows)
     return picture
 
 
 def _marked(cloud: dict[str, Any], world: WorldView, columns: int, rows: int, cell: tuple[int, int],
-            pixels_per_cell: tuple[int, int]) -> Picture:
+            pixels_per_cell: tuple[int, int], close_up: bool) -> Picture:
     """The scaled frame with outlines and gripper marks drawn in, and the labels to lay over it."""
     rgb = np.asarray(cloud["rgb"], dtype=np.uint8)
     height, width = rgb.shape[:2]
-    columns, rows = fit_cells(width, height, columns, rows, cell)
-    size = (columns * pixels_per_cell[0], rows * pixels_per_cell[1])
-    image = Image.fromarray(rgb, "RGB").resize(size, Image.Resampling.BILINEAR)
-    picture = Picture(image, columns, rows, stamp=float(cloud.get("stamp") or 0.0))
+    frame = Image.fromarray(rgb, "RGB")
     camera = fit_pinhole(np.asarray(cloud["xyz"]), list(cloud["camera_pose"]))
+    region = _region(camera, world, width, height) if close_up and camera is not None else (0, 0, width, height)
+    columns, rows = fit_cells(region[2] - region[0], region[3] - region[1], columns, rows, cell)
+    size = (columns * pixels_per_cell[0], rows * pixels_per_cell[1])
+    image = frame.resize(size, Image.Resampling.BILINEAR, box=region)
+    picture = Picture(image, columns, rows, stamp=float(cloud.get("stamp") or 0.0))
     if camera is None:
         return picture
-    scale = np.array([size[0] / width, size[1] / height])
+    offset = np.array(region[:2], float)
+    scale = np.array([size[0] / (region[2] - region[0]), size[1] / (region[3] - region[1])])
     to_cell = np.array([columns / size[0], rows / size[1]])
     draw = ImageDraw.Draw(image)
     thickness = max(1, pixels_per_cell[1] // 2)
     places = Placer(columns, rows)
     # the object the user just named is labelled first, so it gets the place nearest its outline
     for object_id, obj in sorted(world.objects.items(), key=lambda item: item[0] != world.highlighted):
-        box = _outline(camera, obj, scale, size)
+        box = _outline(camera, obj, offset, scale, size)
         if box is None:
             continue
         marked = object_id == world.highlighted
@@ -169,7 +174,7 @@ def _marked(cloud: dict[str, Any], world: WorldView, columns: int, rows: int, ce
         if pose is None:
             continue
         uv, ahead = camera.project(np.asarray([pose[:3]], float))
-        point = uv[0] * scale
+        point = (uv[0] - offset) * scale
         if not ahead[0] or not (0 <= point[0] < size[0] and 0 <= point[1] < size[1]):
             continue
         holding = bool((world.grippers.get(arm) or {}).get("holding"))
@@ -201,9 +206,8 @@ class Placer:
         return column, row
 
 
-def _outline(camera: Pinhole, obj: dict[str, Any], scale: np.ndarray,
-             size: tuple[int, int]) -> tuple[int, int, int, int] | None:
-    """The object's bounding box as a pixel rectangle of the scaled image, or None when it is out of view."""
+def _corners(camera: Pinhole, obj: dict[str, Any]) -> np.ndarray | None:
+    """Frame pixels (8, 2) of the corners of the object's bounding box, None when it is not in front."""
     position = obj.get("position")
     extent = obj.get("size")
     if not position or not extent:
@@ -212,9 +216,35 @@ def _outline(camera: Pinhole, obj: dict[str, Any], scale: np.ndarray,
     corners = np.asarray(position, float) + half * np.array([[sx, sy, sz] for sx in (-1, 1)
                                                              for sy in (-1, 1) for sz in (-1, 1)])
     uv, ahead = camera.project(corners)
-    if not ahead.all():
+    return uv if ahead.all() else None
+
+
+def _region(camera: Pinhole, world: WorldView, width: int, height: int) -> tuple[int, int, int, int]:
+    """The part of the frame (left, top, right, bottom) around every object seen, in the frame's shape.
+
+    The objects' extent plus as much again around it, at least a third of
+    the frame across; the whole frame when no object is in view.
+    """
+    seen = [uv for uv in (_corners(camera, obj) for obj in world.objects.values()) if uv is not None]
+    if not seen:
+        return 0, 0, width, height
+    points = np.clip(np.concatenate(seen), 0, [width, height])
+    centre = (points.min(axis=0) + points.max(axis=0)) / 2
+    span = np.ptp(points, axis=0)
+    across = min(width, max(2 * span[0], 2 * span[1] * width / height, width / 3))
+    half_w, half_h = across / 2, across / 2 * height / width
+    left = float(np.clip(centre[0] - half_w, 0, width - 2 * half_w))
+    top = float(np.clip(centre[1] - half_h, 0, height - 2 * half_h))
+    return int(left), int(top), int(round(left + 2 * half_w)), int(round(top + 2 * half_h))
+
+
+def _outline(camera: Pinhole, obj: dict[str, Any], offset: np.ndarray, scale: np.ndarray,
+             size: tuple[int, int]) -> tuple[int, int, int, int] | None:
+    """The object's bounding box as a pixel rectangle of the scaled image, or None when it is out of view."""
+    uv = _corners(camera, obj)
+    if uv is None:
         return None
-    uv = uv * scale
+    uv = (uv - offset) * scale
     left, top = np.clip(uv.min(axis=0), 0, [size[0] - 1, size[1] - 1])
     right, bottom = np.clip(uv.max(axis=0), 0, [size[0] - 1, size[1] - 1])
     if right - left < 1 or bottom - top < 1:

@@ -20,6 +20,7 @@ from tui.camera_view import DRAWINGS, CameraView
 from tui.conversation import Conversation
 from tui.overview_screen import OverviewScreen
 from tui.world import WorldView
+from tui.world_panel import WorldPanel
 
 CELL = (10, 20)
 HALF_BLOCKS = (1, 2)
@@ -93,6 +94,20 @@ def test_labels_of_objects_side_by_side_do_not_cover_each_other() -> None:
 
 
 @pytest.mark.unit
+def test_the_close_up_shows_the_objects_larger() -> None:
+    cup = {**OBJECTS[0], "position": [0.62, 0.0, 0.80]}
+    world = _world(objects={"obj0": cup})
+
+    def red_pixels(close_up: bool) -> int:
+        picture = compose(frame([cup]), world, 60, 20, CELL, HALF_BLOCKS, close_up=close_up)
+        assert abs(picture.columns - 53) <= 1 and picture.rows == 20  # the same space, the frame's shape kept
+        pixels = np.asarray(picture.image).astype(int)
+        return int((np.abs(pixels - cup["rgb"]).sum(axis=-1) < 60).sum())
+
+    assert red_pixels(True) >= 4 * red_pixels(False) > 0
+
+
+@pytest.mark.unit
 def test_grippers_are_marked_where_the_tool_frames_are() -> None:
     picture = compose(frame(), _world(), 60, 20, CELL, HALF_BLOCKS)
     marks = {label.text: label.column for label in picture.labels if label.text in ("L", "R")}
@@ -161,6 +176,8 @@ async def test_f2_shows_the_camera_and_keeps_up_without_slowing_typing() -> None
             # typing time is measured on a shared machine: the margin is for its load, not for the camera
             assert busy < 2 * quiet + 1.0, f"typing took {busy:.2f} s with the camera, {quiet:.2f} s without"
             assert sorted(label.text for label in view.picture.labels) == sorted([*DESCRIPTIONS.values(), "L", "R"])
+            await pilot.press("f2")
+            assert view.display and app.main.query_one(WorldPanel).close_up
             await pilot.press("f2")
             assert not view.display and app.main.query_one("#canvas").display
         del world
