@@ -165,6 +165,8 @@ class PbdApp(App[None]):
     @while_running
     def on_bus_connected(self, _event: events.BusConnected) -> None:
         self.main.query_one(StatusBar).set_connection(True, f"on {self._where()}")
+        if self.main.query_one(WorldPanel).camera_shown:  # the camera was asked for before the bus was up
+            self.bridge.watch_camera()
 
     @while_running
     def on_presence(self, event: events.Presence) -> None:
