@@ -9,6 +9,7 @@ import time
 import numpy as np
 import pytest
 from PIL import Image
+from textual_image import widget as image_widgets
 
 from tests.tui.camera_frame import FOCAL, HEIGHT, WIDTH, frame
 from tests.tui.helpers import DESCRIPTIONS, OBJECTS, SIM_STATE, fixed_network, stage_world, until
@@ -16,7 +17,7 @@ from tests.tui.test_snapshots import settled
 from tui import main as tui_main
 from tui.app import PbdApp
 from tui.camera import compose, fit_cells, fit_pinhole
-from tui.camera_view import DRAWINGS, CameraView
+from tui.camera_view import DRAWINGS, CameraView, image_class
 from tui.conversation import Conversation
 from tui.overview_screen import OverviewScreen
 from tui.world import WorldView
@@ -131,6 +132,12 @@ def test_the_picture_keeps_its_shape_in_any_space(space: tuple[int, int], expect
 @pytest.mark.unit
 def test_the_command_line_offers_every_drawing_method() -> None:
     assert set(tui_main.DRAWINGS) == set(DRAWINGS)
+
+
+@pytest.mark.unit
+def test_off_a_terminal_auto_draws_in_colour() -> None:
+    assert image_class("auto") is image_widgets.HalfcellImage  # the tests' output is no terminal
+    assert image_class("sixel") is image_widgets.SixelImage
 
 
 @pytest.mark.asyncio
