@@ -10,14 +10,19 @@ with none of them running, and picks them up as they appear.
 from __future__ import annotations
 
 import functools
+import io
+import logging
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any, TypeVar
 
+from PIL import Image
 from textual import work
 from textual.app import App, ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
+from textual.screen import Screen
 from textual.widgets import Footer, Header, Input
 from textual.worker import get_current_worker
 
@@ -25,17 +30,25 @@ from shared.bus import BusTimeout, RemoteError
 from shared.config import SessionOptions
 from tui import events
 from tui.action_panel import ActionPanel
+from tui.actions_screen import ActionsScreen
 from tui.bridge import PROBES, Bridge
+from tui.camera import compose as compose_picture
+from tui.camera_view import CameraView
 from tui.clarify import ClarifyPrompt
 from tui.command_input import CommandInput
 from tui.conversation import Conversation
+from tui.overview_screen import OverviewScreen
 from tui.robot_panel import RobotPanel
 from tui.status_bar import CONSEQUENCES, StatusBar
 from tui.world import WorldView
 from tui.world_panel import TableCanvas, WorldPanel
 
+log = logging.getLogger("hfpbd.tui")
+
 RECONNECT_SECONDS = 3.0
-NO_SPEECH = "push-to-talk needs the speech service, which is not running (start it: hfpbd speech); typing works as always"
+CAMERA_LOG_EVERY = 50   # pictures between two lines in the log about the camera's refresh rate
+NO_SPEECH = ("push-to-talk needs the speech service, which is not running (start it: hfpbd speech); "
+             "typing works as always")
 T = TypeVar("T")
 
 
@@ -57,9 +70,15 @@ class PbdApp(App[None]):
     """Program a two-armed robot by talking to it."""
 
     CSS_PATH = "app.tcss"
+    # the layout adapts below 110 columns and below 36 rows (app.tcss); it works from 80 × 24 up
+    HORIZONTAL_BREAKPOINTS = [(0, "-narrow"), (110, "-wide")]
+    VERTICAL_BREAKPOINTS = [(0, "-short"), (36, "-tall")]
     TITLE = "hands-free PbD"
     BINDINGS = [
         Binding("escape", "stop", "Stop robot", priority=True),
+        Binding("f2", "camera", "Camera", priority=True),
+        Binding("f3", "overview", "Overview", priority=True),
+        Binding("f4", "actions", "Actions", priority=True),
         Binding("f5", "execute", "Execute", priority=True),
         Binding("f6", "new_action", "New action", priority=True),
         Binding("f7", "switch_action('previous')", "Prev action", priority=True),
@@ -68,9 +87,17 @@ class PbdApp(App[None]):
         Binding("ctrl+q", "quit", "Quit", priority=True),
     ]
 
-    def __init__(self, options: SessionOptions, *, probe_seconds: float | None = 2.0) -> None:
-        """``probe_seconds`` is how often latencies are measured (None: never)."""
+    def __init__(self, options: SessionOptions, *, probe_seconds: float | None = 2.0,
+                 camera_drawing: str = "auto") -> None:
+        """``probe_seconds`` is how often latencies are measured (None: never); ``camera_drawing`` is
+        how pictures are drawn (``tui.camera_view.DRAWINGS``: a graphics protocol or half-blocks)."""
         super().__init__()
+        self.camera_drawing = camera_drawing
+        self._cloud: dict[str, Any] | None = None   # newest camera frame not yet composed
+        self._last_cloud: dict[str, Any] | None = None
+        self._composing = False
+        self._pictures = 0
+        self._actions_seen: tuple[Any, ...] = ()
         self.options = options
         self.bridge = Bridge(options, self)
         self.world = WorldView()
@@ -85,7 +112,7 @@ class PbdApp(App[None]):
         with Horizontal(id="main"):
             yield Conversation(id="conversation")
             with Vertical(id="side"):
-                yield WorldPanel(id="world")
+                yield WorldPanel(self.camera_drawing, id="world")
                 with Horizontal(id="panels"):
                     yield RobotPanel(id="robot")
                     yield ActionPanel(id="action")
@@ -96,18 +123,23 @@ class PbdApp(App[None]):
         yield Footer()
 
     def on_mount(self) -> None:
-        self.query_one("#conversation").border_title = "conversation"
-        self.query_one("#world").border_title = "world"
-        self.query_one("#robot").border_title = "robot"
-        self.query_one("#action").border_title = "action"
-        self.query_one("#clarify").border_title = "the robot asks"
-        self.query_one(CommandInput).focus()
-        self.query_one(StatusBar).set_connection(False, f"connecting to {self._where()}…")
+        self.main.query_one("#conversation").border_title = "conversation"
+        self.main.query_one("#robot").border_title = "robot"
+        self.main.query_one("#action").border_title = "action"
+        self.main.query_one("#clarify").border_title = "the robot asks"
+        self.main.query_one(CommandInput).focus()
+        self.main.query_one(StatusBar).set_connection(False, f"connecting to {self._where()}…")
+        self.main.query_one(WorldPanel).show_view("map")
         self._refresh_world()
-        self.query_one(ActionPanel).show({})
+        self.main.query_one(ActionPanel).show({})
         self.connect()
         if self.probe_seconds:
             self.set_interval(self.probe_seconds, self._probe_alive)
+
+    @property
+    def main(self) -> Screen[Any]:
+        """The programming screen, even while the actions or overview screen is on top of it."""
+        return self.screen_stack[0] if self.screen_stack else self.screen
 
     def on_unmount(self) -> None:
         self.bridge.close()
@@ -126,20 +158,22 @@ class PbdApp(App[None]):
 
     @while_running
     def on_bus_unavailable(self, event: events.BusUnavailable) -> None:
-        self.query_one(StatusBar).set_connection(
+        self.main.query_one(StatusBar).set_connection(
             False, f"cannot reach {self._where()}: {event.reason} — retrying every {RECONNECT_SECONDS:g} s")
         self.set_timer(RECONNECT_SECONDS, self.connect)
 
     @while_running
     def on_bus_connected(self, _event: events.BusConnected) -> None:
-        self.query_one(StatusBar).set_connection(True, f"on {self._where()}")
+        self.main.query_one(StatusBar).set_connection(True, f"on {self._where()}")
+        if self.main.query_one(WorldPanel).camera_shown:  # the camera was asked for before the bus was up
+            self.bridge.watch_camera()
 
     @while_running
     def on_presence(self, event: events.Presence) -> None:
-        self.query_one(StatusBar).set_alive(event.service, event.alive)
-        conversation = self.query_one(Conversation)
+        self.main.query_one(StatusBar).set_alive(event.service, event.alive)
+        conversation = self.main.query_one(Conversation)
         if not event.alive and event.service == "speech":
-            self.query_one(StatusBar).set_talking(False)
+            self.main.query_one(StatusBar).set_talking(False)
         if not event.alive and event.service in CONSEQUENCES:
             self._lost.add(event.service)
             conversation.add("warning", f"{event.service} stopped: {CONSEQUENCES[event.service]} until it is back")
@@ -153,23 +187,23 @@ class PbdApp(App[None]):
     # -- what the services say -----------------------------------------------
     @while_running
     def on_said(self, event: events.Said) -> None:
-        self.query_one(Conversation).add(event.kind, event.text)
+        self.main.query_one(Conversation).add(event.kind, event.text)
         if event.kind == "clarify" and event.candidates:
-            self.query_one(ClarifyPrompt).ask(event.text, event.candidates)
+            self.main.query_one(ClarifyPrompt).ask(event.text, event.candidates)
 
     @while_running
     def on_understood(self, event: events.Understood) -> None:
         result = event.result
         if result.get("kind") != "command":
             return
-        self.query_one(ClarifyPrompt).close()
+        self.main.query_one(ClarifyPrompt).close()
         args: dict[str, Any] = result.get("args") or {}
         object_id = args.get("object")
         if isinstance(object_id, str):
             self.world.highlighted = object_id
             self._refresh_world()
         shown = ", ".join(f"{k}={self.world.name_of(v) if k == 'object' else v}" for k, v in args.items())
-        self.query_one(Conversation).add("ui", f"understood: {result.get('procedure')}({shown})")
+        self.main.query_one(Conversation).add("ui", f"understood: {result.get('procedure')}({shown})")
 
     @while_running
     def on_objects_seen(self, event: events.ObjectsSeen) -> None:
@@ -184,54 +218,95 @@ class PbdApp(App[None]):
         self.world.robot = event.robot
         self.world.reach = event.reach
         self._refresh_world()
-        self.query_one(ActionPanel).show(event.robot)
+        self.main.query_one(ActionPanel).show(event.robot)
+        seen = (event.robot.get("action"), tuple(event.robot.get("actions") or ()))
+        if seen != self._actions_seen:
+            self._actions_seen = seen
+            if isinstance(self.screen, ActionsScreen):
+                self.screen.refresh_list()
+
+    @while_running
+    def on_cloud_seen(self, event: events.CloudSeen) -> None:
+        if not self.main.query_one(WorldPanel).camera_shown:
+            return
+        self._cloud = self._last_cloud = event.cloud
+        if not self._composing:
+            self._composing = True
+            self._compose_newest()
+
+    def _compose_newest(self) -> None:
+        view = self.main.query_one(CameraView)
+        self.compose_camera(*view.space(), view.cell, view.per_cell, self.main.query_one(WorldPanel).close_up)
+
+    @while_running
+    def on_camera_pictured(self, event: events.CameraPictured) -> None:
+        self._composing = False
+        view = self.main.query_one(CameraView)
+        view.show(event.picture)
+        self._pictures += 1
+        if self._pictures % CAMERA_LOG_EVERY == 0:
+            rate, spent = view.rate()
+            log.info("camera: %.1f pictures/s, %.2f ms on the UI thread per picture", rate, spent)
+        if self._cloud is not None and self.main.query_one(WorldPanel).camera_shown:
+            self._composing = True
+            self._compose_newest()
+
+    @while_running
+    def on_camera_failed(self, event: events.CameraFailed) -> None:
+        self._composing = False
+        self.main.query_one(CameraView).fail(event.reason)
+
+    @while_running
+    def on_overview_taken(self, event: events.OverviewTaken) -> None:
+        self.push_screen(OverviewScreen(event.image, self.options.namespace, self.camera_drawing))
 
     @while_running
     def on_sim_moved(self, event: events.SimMoved) -> None:
         self.world.ee = event.ee
         self.world.grippers = event.grippers
-        self.query_one(TableCanvas).show(self.world)
-        self.query_one(RobotPanel).show(self.world)
+        self.main.query_one(TableCanvas).show(self.world)
+        self.main.query_one(RobotPanel).show(self.world)
 
     @while_running
     def on_described(self, event: events.Described) -> None:
         self.world.descriptions = event.descriptions
         self._refresh_world()
-        self.query_one(CommandInput).vocabulary.learn(phrases=[*self._phrases, *event.descriptions.values()])
+        self.main.query_one(CommandInput).vocabulary.learn(phrases=[*self._phrases, *event.descriptions.values()])
 
     @while_running
     def on_vocabulary_loaded(self, event: events.VocabularyLoaded) -> None:
         self._phrases = event.phrases
-        self.query_one(CommandInput).vocabulary.learn(event.words, [*event.phrases, *self.world.descriptions.values()])
+        phrases = [*event.phrases, *self.world.descriptions.values()]
+        self.main.query_one(CommandInput).vocabulary.learn(event.words, phrases)
 
     @while_running
     def on_latency(self, event: events.Latency) -> None:
-        self.query_one(StatusBar).set_latency(event.service, event.seconds)
+        self.main.query_one(StatusBar).set_latency(event.service, event.seconds)
 
     @while_running
     def on_talking(self, event: events.Talking) -> None:
-        self.query_one(StatusBar).set_talking(event.listening)
+        self.main.query_one(StatusBar).set_talking(event.listening)
 
     @while_running
     def on_request_failed(self, event: events.RequestFailed) -> None:
-        self.query_one(Conversation).add("error", f"{event.what} failed: {event.reason}")
+        self.main.query_one(Conversation).add("error", f"{event.what} failed: {event.reason}")
 
     def _refresh_world(self) -> None:
-        self.query_one(WorldPanel).show(self.world)
-        self.query_one(RobotPanel).show(self.world)
+        self.main.query_one(WorldPanel).show(self.world)
+        self.main.query_one(RobotPanel).show(self.world)
 
     # -- what the user does --------------------------------------------------
     def on_input_submitted(self, event: Input.Submitted) -> None:
         line = event.value.strip()
-        entry = self.query_one(CommandInput)
+        entry = self.main.query_one(CommandInput)
         entry.value = ""
-        prompt = self.query_one(ClarifyPrompt)
+        prompt = self.main.query_one(ClarifyPrompt)
         if prompt.is_open and not line:
             prompt.choose_highlighted()
             return
         if prompt.is_open and line.isdigit():
             if not prompt.choose(int(line) - 1):
-                self.query_one(Conversation).add(
+                self.main.query_one(Conversation).add(
                     "warning", f"there is no answer {line}: choose 1 to {len(prompt.candidates)}, or say what you mean")
             return
         if not line:
@@ -241,21 +316,22 @@ class PbdApp(App[None]):
         self._send(line, line)
 
     def on_clarify_prompt_chosen(self, event: ClarifyPrompt.Chosen) -> None:
-        self.query_one(ClarifyPrompt).close()
+        self.main.query_one(ClarifyPrompt).close()
         self._send(f"{event.index + 1}. {event.label}", event.label, event.index)
 
     def _send(self, shown: str, text: str, choice: int | None = None) -> None:
-        conversation = self.query_one(Conversation)
+        conversation = self.main.query_one(Conversation)
         conversation.add("user", shown)
         if not self.bridge.connected:
-            conversation.add("warning", "not connected to the robot yet: this was not sent, say it again once connected")
+            conversation.add("warning",
+                             "not connected to the robot yet: this was not sent, say it again once connected")
             return
         self.bridge.say(text, choice)
-        if "nlu" not in self.query_one(StatusBar).alive:
+        if "nlu" not in self.main.query_one(StatusBar).alive:
             conversation.add("warning", "the language service (nlu) is not running: nobody understands this yet")
 
     def action_stop(self) -> None:
-        self.query_one(Conversation).add("user", "[Esc] stop")
+        self.main.query_one(Conversation).add("user", "[Esc] stop")
         self.stop_robot()
 
     def action_execute(self) -> None:
@@ -267,16 +343,43 @@ class PbdApp(App[None]):
     def action_switch_action(self, target: str) -> None:
         self._direct("switch_action", {"target": target}, f"[{'F7' if target == 'previous' else 'F8'}] {target} action")
 
+    def action_camera(self) -> None:
+        """Step from the top-down map to the head camera, its close-up, and back."""
+        panel = self.main.query_one(WorldPanel)
+        view = panel.next_view()
+        if view == "camera" and self.bridge.connected:
+            self.bridge.watch_camera()
+        elif view == "camera":
+            self.main.query_one(Conversation).add("warning", "not connected yet: the camera shows once connected")
+        if view != "map" and self._last_cloud is not None and not self._composing:
+            self._cloud = self._last_cloud   # redraw the frame in hand at once, not at the next one
+            self._composing = True
+            self._compose_newest()
+
+    def action_overview(self) -> None:
+        if isinstance(self.screen, OverviewScreen):
+            self.screen.dismiss()
+            return
+        self.main.query_one(Conversation).add("user", "[F3] overview picture")
+        self.take_overview()
+
+    def action_actions(self) -> None:
+        """Open the actions screen, or close it (Esc stays "stop the robot" on every screen)."""
+        if isinstance(self.screen, ActionsScreen):
+            self.screen.dismiss()
+        elif not isinstance(self.screen, OverviewScreen):
+            self.push_screen(ActionsScreen(self.bridge, self.options.namespace))
+
     def action_talk(self) -> None:
         """Push-to-talk as a toggle: terminals report key presses, never releases."""
-        bar = self.query_one(StatusBar)
+        bar = self.main.query_one(StatusBar)
         if "speech" not in bar.alive:
-            self.query_one(Conversation).add("warning", NO_SPEECH)
+            self.main.query_one(Conversation).add("warning", NO_SPEECH)
             return
         self.push_to_talk(not bar.talking)
 
     def _direct(self, procedure: str, args: dict[str, Any], shown: str) -> None:
-        self.query_one(Conversation).add("user", shown)
+        self.main.query_one(Conversation).add("user", shown)
         self.run_command(procedure, args)
 
     # -- blocking requests, off the event loop -------------------------------
@@ -303,6 +406,35 @@ class PbdApp(App[None]):
             self.post_message(events.Talking(False))  # a speech service that does not answer is not listening
             self.post_message(events.RequestFailed("push-to-talk", _reason(exc, "speech service")))
 
+    @work(thread=True, group="camera")
+    def compose_camera(self, columns: int, rows: int, cell: tuple[int, int], per_cell: tuple[int, int],
+                       close_up: bool) -> None:
+        """Compose the newest frame for the camera view (scaling and drawing stay off the UI thread)."""
+        cloud, self._cloud = self._cloud, None
+        if cloud is None:
+            return
+        try:
+            picture = compose_picture(cloud, replace(self.world), columns, rows, cell, per_cell, close_up)
+        except (ValueError, TypeError, IndexError, KeyError) as exc:  # a frame that passed the schema but not drawing
+            log.warning("camera frame not drawn: %s", exc)
+            self.post_message(events.CameraFailed(f"the last camera frame could not be drawn ({exc})"))
+            return
+        self.post_message(events.CameraPictured(picture))
+
+    @work(thread=True, exclusive=True, group="overview")
+    def take_overview(self) -> None:
+        try:
+            png = self.bridge.snapshot()
+        except (BusTimeout, RemoteError, ConnectionError) as exc:
+            self.post_message(events.RequestFailed("the overview picture", _reason(exc, "simulator")))
+            return
+        try:
+            image = Image.open(io.BytesIO(png)).convert("RGB")
+        except OSError as exc:  # Pillow's error for bytes that are no picture
+            self.post_message(events.RequestFailed("the overview picture", f"the simulator sent no PNG ({exc})"))
+            return
+        self.post_message(events.OverviewTaken(image))
+
     @work(thread=True, exclusive=True, group="vocabulary")
     def load_vocabulary(self) -> None:
         vocabulary = _patiently(self.bridge.vocabulary)
@@ -323,7 +455,7 @@ class PbdApp(App[None]):
             time.sleep(0.5)
 
     def _probe_alive(self) -> None:
-        bars = self.query(StatusBar)  # empty while the screen is being torn down
+        bars = self.main.query(StatusBar)  # empty while the screen is being torn down
         if self.bridge.connected and bars:
             self.probe(sorted(bars.first().alive & set(PROBES)))
 

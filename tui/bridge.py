@@ -37,6 +37,7 @@ class Bridge:
         self.options = options
         self._app = app
         self.bus: Bus | None = None
+        self._camera = False
 
     @property
     def connected(self) -> bool:
@@ -55,6 +56,13 @@ class Bridge:
         bus.watch_alive(lambda service, alive: self._app.post_message(events.Presence(service, alive)))
         self.bus = bus
         self._app.post_message(events.BusConnected())
+
+    def watch_camera(self) -> None:
+        """Start receiving the head camera (first time it is shown only: frames are megabytes each)."""
+        bus = self._bus()
+        if not self._camera:
+            self._camera = True
+            bus.subscribe(bus.keys.cloud, self._on_cloud, schema="cloud", latest_only=True)
 
     def close(self) -> None:
         if self.bus is not None:
@@ -77,6 +85,9 @@ class Bridge:
 
     def _on_sim_state(self, msg: dict[str, Any]) -> None:
         self._app.post_message(events.SimMoved(msg["ee"], msg["grippers"], msg.get("moving") or {}))
+
+    def _on_cloud(self, msg: dict[str, Any]) -> None:
+        self._app.post_message(events.CloudSeen(msg))
 
     # -- outgoing ------------------------------------------------------------
     def _bus(self) -> Bus:
@@ -117,6 +128,16 @@ class Bridge:
         bus = self._bus()
         reply = bus.request(bus.keys.speech("ptt"), {"on": on}, timeout=2.0)
         return bool(reply.get("listening"))
+
+    def actions(self, request: dict[str, Any]) -> dict[str, Any]:
+        """One request on the executor's actions queryable (list, rename, delete, steps, execute)."""
+        bus = self._bus()
+        return bus.request(bus.keys.executor_control("actions"), request, timeout=3.0)
+
+    def snapshot(self) -> bytes:
+        """A PNG of the whole robot from the simulator's overview camera (rendering takes a moment)."""
+        bus = self._bus()
+        return bytes(bus.request(bus.keys.sim_control("snapshot"), {}, timeout=20.0)["png"])
 
     def describe(self) -> dict[str, str]:
         bus = self._bus()

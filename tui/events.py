@@ -9,7 +9,10 @@ from __future__ import annotations
 
 from typing import Any
 
+from PIL import Image
 from textual.message import Message
+
+from tui.camera import Picture
 
 
 class BusConnected(Message):
@@ -120,3 +123,35 @@ class Talking(Message):
     def __init__(self, listening: bool) -> None:
         super().__init__()
         self.listening = listening
+
+
+class CloudSeen(Message):
+    """A ``sim/cloud`` frame (colour image, organised points, camera pose) for the camera view."""
+
+    def __init__(self, cloud: dict[str, Any]) -> None:
+        super().__init__()
+        self.cloud = cloud
+
+
+class CameraPictured(Message):
+    """A camera frame composed off the UI thread, ready to show."""
+
+    def __init__(self, picture: Picture) -> None:
+        super().__init__()
+        self.picture = picture
+
+
+class CameraFailed(Message):
+    """A camera frame could not be composed; ``reason`` says why (the view says it instead of a picture)."""
+
+    def __init__(self, reason: str) -> None:
+        super().__init__()
+        self.reason = reason
+
+
+class OverviewTaken(Message):
+    """The simulator's overview picture of the whole robot, decoded."""
+
+    def __init__(self, image: Image.Image) -> None:
+        super().__init__()
+        self.image = image

@@ -13,12 +13,18 @@ from collections.abc import Sequence
 
 from shared.config import add_session_arguments, options_from_args
 
+# the drawing methods' names, without importing textual-image (which asks the terminal what it can draw)
+DRAWINGS = ("auto", "halfcell", "sixel", "tgp")
+
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="hfpbd tui", description="Program the robot by talking to it, in a terminal.")
     add_session_arguments(parser, default_identity="operator")
     parser.add_argument("--probe-seconds", type=float, default=2.0, metavar="S",
                         help="how often to measure latency to the services; 0 turns it off (default: %(default)s)")
+    parser.add_argument("--camera-drawing", choices=sorted(DRAWINGS), default="auto",
+                        help="how camera pictures are drawn: a terminal graphics protocol (sixel, tgp), coloured "
+                             "half-blocks (halfcell), or the best the terminal offers (default: %(default)s)")
     parser.add_argument("--log-file", metavar="FILE",
                         help="write the UI's log here (the terminal itself belongs to the UI)")
     return parser
@@ -39,5 +45,5 @@ def main(argv: Sequence[str] | None = None) -> int:
         logging.getLogger().addHandler(logging.NullHandler())
     from tui.app import PbdApp  # Textual is imported only when the UI really starts
 
-    PbdApp(options, probe_seconds=args.probe_seconds or None).run()
+    PbdApp(options, probe_seconds=args.probe_seconds or None, camera_drawing=args.camera_drawing).run()
     return 0

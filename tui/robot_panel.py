@@ -30,7 +30,8 @@ class RobotPanel(Static):
             state = str(states.get(arm) or _state_from_sim(world.grippers.get(arm)) or "?")
             width = (world.grippers.get(arm) or {}).get("width")
             detail = f" {float(width) * 100:.1f} cm" if isinstance(width, (int, float)) else ""
-            rows.append((f"{arm} gripper", Text(state, style=_GRIPPER_STYLES.get(state, "")) + Text(detail, style="dim")))
+            shown = Text(state, style=_GRIPPER_STYLES.get(state, "")) + Text(detail, style="dim")
+            rows.append((f"{arm} gripper", shown))
         rows.append(("last arm", Text(str(robot.get("last_arm") or "—"))))
         last_object = robot.get("last_object")
         named = last_object in world.descriptions

@@ -1,4 +1,4 @@
-"""The world panel: every perceived object in a table, and the table seen from above."""
+"""The world panel: every perceived object in a table, and the table seen from above or by the head camera."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ from textual.containers import Vertical
 from textual.widget import Widget
 from textual.widgets import DataTable
 
+from tui.camera_view import CameraView
 from tui.world import ARMS, WorldView, hex_color, object_rgb, reach_text, size_text
 
 _TYPE_GLYPHS = {"cup": "c", "box": "b", "plate": "p", "bowl": "o"}
@@ -146,11 +147,43 @@ class TableCanvas(Widget):
 
 
 class WorldPanel(Vertical):
-    """Objects table above the top-down picture."""
+    """Objects table above the top-down picture, or above the head camera's picture."""
+
+    def __init__(self, drawing: str = "auto", **kwargs: object) -> None:
+        """``drawing`` is how the camera picture is drawn (see ``tui.camera_view.DRAWINGS``)."""
+        super().__init__(**kwargs)  # type: ignore[arg-type]
+        self.drawing = drawing
+        self.view = "map"
 
     def compose(self) -> ComposeResult:
         yield ObjectTable(id="objects")
         yield TableCanvas(id="canvas")
+        yield CameraView(self.drawing, id="camera")
+
+    VIEWS = ("map", "camera", "close-up")    # what F2 steps through
+    TITLES = {"map": "world", "camera": "world · head camera", "close-up": "world · head camera, close-up"}
+
+    @property
+    def camera_shown(self) -> bool:
+        return bool(self.query_one(CameraView).display)
+
+    @property
+    def close_up(self) -> bool:
+        return self.view == "close-up"
+
+    def next_view(self) -> str:
+        """Step to the next view (top-down map, camera, camera close-up) and show it."""
+        self.show_view(self.VIEWS[(self.VIEWS.index(self.view) + 1) % len(self.VIEWS)])
+        return self.view
+
+    def show_view(self, view: str) -> None:
+        """Show the top-down picture, or the camera's in place of it."""
+        self.view = view
+        self.border_title = self.TITLES[view]
+        on = view != "map"
+        self.query_one(CameraView).display = on
+        self.query_one(TableCanvas).display = not on
+        self.screen.set_class(on, "-camera")   # a short screen gives the picture the robot and action panels' rows
 
     def show(self, world: WorldView) -> None:
         self.query_one(ObjectTable).show(world)

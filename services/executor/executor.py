@@ -32,9 +32,10 @@ from typing import Any
 import numpy as np
 
 from services.executor import wording
-from services.executor.actions_cli import apply_action_op
+from services.executor.actions_control import apply as apply_actions_request
+from services.executor.actions_control import step_words
 from services.executor.commands import ADMIN, RECORDED, CommandError, check
-from services.executor.grounding import Regrounding, describe_kind, reground
+from services.executor.grounding import Regrounding, reground
 from services.executor.kinematics import ArmKinematics, joint_names
 from services.executor.procedures import Done, Procedures, StepFailed
 from services.executor.reach import reach_map
@@ -197,7 +198,7 @@ class Executor:
         elif procedure == "switch_action":
             self._switch(args["target"])
         elif procedure == "execute":
-            self._execute()
+            self._execute(context.get("action"), context.get("from_step", 1))
         elif procedure == "record":
             self._step(procedure, args, context, keep=False)
         else:
@@ -262,7 +263,14 @@ class Executor:
         return True
 
     # -- actions -----------------------------------------------------------------------------------
-    def _execute(self) -> None:
+    def _execute(self, action: int | None = None, start: int = 1) -> None:
+        """Replay the current action (or ``action``, which becomes current) from step ``start``."""
+        if action is not None:
+            try:
+                self.store.switch(action)
+            except StoreError as exc:  # deleted since the request was accepted
+                self.say(wording.sentence(str(exc)), "error")
+                return
         number = self.store.current
         if number == 0:
             self.say("There is no action to execute yet; teach me some steps first.", "error")
@@ -280,11 +288,13 @@ class Executor:
             self.say(f"Stopped action {number} before its first step.", "error")
             return
         snap = self.scene.snapshot()
-        matched = reground([s["landmark"] for s in steps if s.get("landmark")], snap.standing_objects())
+        matched = reground([s["landmark"] for s in steps[start - 1:] if s.get("landmark")], snap.standing_objects())
         if matched.missing:  # find every landmark before moving at all: no half-done action
             self.say(f"{next(iter(matched.missing.values()))} I can't run action {number}.", "error")
             return
         for i, step in enumerate(steps, start=1):
+            if i < start:
+                continue
             if self.cancel.is_set():
                 self.say(f"Stopped action {number} at step {i} of {len(steps)}.", "info")
                 return
@@ -340,10 +350,15 @@ class Executor:
         return objects
 
     def _on_control_actions(self, request: dict[str, Any]) -> dict[str, Any]:
-        """List, show, rename and delete actions for the TUI (errors become error replies)."""
-        reply = apply_action_op(self.store, request)
+        """Manage actions for the TUI (``actions_control``; errors become error replies)."""
+        reply = apply_actions_request(self.store, request, self._execute_from)
         self.publish_state()
         return reply
+
+    def _execute_from(self, number: int, start: int) -> tuple[bool, str]:
+        """Start replaying action ``number`` from step ``start``, as the "execute" command would."""
+        return self.submit("execute", {}, {"phrases": {}, "text": "", "utterance": "", "action": number,
+                                           "from_step": start})
 
     # -- situated state ---------------------------------------------------------------------------------
     def _reach_loop(self) -> None:
@@ -404,7 +419,7 @@ class Executor:
                 "can_move": self._can_move,
                 "action": number,
                 "actions": self.store.step_counts(),
-                "steps": [s.get("utterance") or s.get("text") or _step_words(s) for s in steps],
+                "steps": [step_words(s) for s in steps],
                 "progress": self._progress,
                 "holding": {arm: (h.object_id if h else None) for arm, h in self.procedures.held().items()},
             }
@@ -419,13 +434,3 @@ class Executor:
             except StoreError as exc:
                 log.error("cannot publish state: %s", exc)
 
-
-def _step_words(step: dict[str, Any]) -> str:
-    """Words for a step taught without an utterance (a direct command)."""
-    args = step.get("args", {})
-    landmark = step.get("landmark")
-    parts = [step["procedure"].replace("_", " ")]
-    parts += [str(v).replace("_", " ") for k, v in args.items() if k != "object"]
-    if landmark:
-        parts.append(f"the {describe_kind(landmark)}")
-    return " ".join(parts)

@@ -16,6 +16,7 @@ import os
 import tempfile
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import IO, Any
 
@@ -230,4 +231,16 @@ class ActionStore:
                 self._current -= 1
             elif self._current == number:
                 self._current = min(number, len(self._actions))
+            self._save()
+
+    def edit_steps(self, number: int, change: Callable[[list[dict[str, Any]]], None]) -> None:
+        """Change one action's step list in place with ``change`` and save it, under the store's lock.
+
+        ``change`` may raise ``StoreError`` to refuse; nothing is saved then.
+        """
+        with self._lock:
+            self._reload()
+            steps = json.loads(json.dumps(self._actions[self._index(number)]["steps"]))
+            change(steps)
+            self._actions[number - 1]["steps"] = steps
             self._save()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import tempfile
 import time
 from collections.abc import Callable, Iterator
@@ -11,6 +12,8 @@ from typing import Any
 
 from textual.pilot import Pilot
 
+from services.executor.actions_control import apply
+from services.executor.store import ActionStore, atomic_write_text
 from shared.bus import Bus, Publisher
 from shared.config import SessionOptions
 
@@ -95,3 +98,35 @@ def fixed_network(name: str) -> Iterator[tuple[Bus, SessionOptions]]:
     finally:
         hub.close()
         path.unlink(missing_ok=True)
+
+
+# Three actions as a person would have taught them; creation times fixed so pictures never change.
+TAUGHT = [
+    ("stack the cups", 1764590400.0, ["move your right hand above the red cup", "open your right hand",
+                                      "pick up the red cup", "place it on top of the blue cup"]),
+    (None, 1764594000.0, ["pick up the plate with your left hand", "move it up", "place it on the table"]),
+    ("tidy the box", 1764597600.0, ["pick up the green box"]),
+]
+
+
+def teach(store: ActionStore) -> None:
+    """Fill an empty store with ``TAUGHT`` (action 1 current)."""
+    for name, _created, said in TAUGHT:
+        store.create(name)
+        for words in said:
+            store.append_step({"procedure": "open", "args": {"arm": "right"}, "utterance": words})
+    data = json.loads(store.path.read_text())
+    for action, (_name, created, _said) in zip(data["actions"], TAUGHT, strict=True):
+        action["created"] = created
+    data["current"] = 1
+    atomic_write_text(store.path, json.dumps(data))
+
+
+def serve_actions(hub: Bus, store: ActionStore, runs: list[tuple[int, int]]) -> None:
+    """Answer ``executor/control/actions`` from ``hub`` as the executor does, recording runs asked for."""
+
+    def run(number: int, step: int) -> tuple[bool, str]:
+        runs.append((number, step))
+        return True, "accepted"
+
+    hub.serve(hub.keys.executor_control("actions"), lambda request: apply(store, request, run))

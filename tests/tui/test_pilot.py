@@ -205,7 +205,8 @@ async def test_world_panel_shows_objects_with_names_reach_and_the_referred_objec
         assert str(rows["obj0"][3]) == "the red cup"
         assert [str(rows[i][6]) for i in ("obj0", "obj1", "obj3")] == ["right", "both", "left"]
         assert str(rows["obj3"][5]) == "18×18×2 cm"
-        hub.publish(hub.keys.nlu_result, {"kind": "command", "procedure": "pick_up", "utterance": "pick up the blue cup",
+        hub.publish(hub.keys.nlu_result, {"kind": "command", "procedure": "pick_up",
+                                          "utterance": "pick up the blue cup",
                                           "args": {"arm": "left", "object": "obj1"}, "confidence": 0.9})
         await until(pilot, lambda: app.world.highlighted == "obj1", what="the highlight")
         await pilot.pause(0.1)

@@ -1,4 +1,4 @@
-"""Pictures of the main screen and of the clarification prompt (Textual pinned at 8.2.8).
+"""Pictures of the main screen, the clarification prompt, the camera view and the actions screen (Textual 8.2.8).
 
 The content comes over a real bus from a fixed namespace and socket so that
 every run draws the same screen.
@@ -6,21 +6,30 @@ every run draws the same screen.
 
 from __future__ import annotations
 
+import os
+import time
 from collections.abc import Awaitable, Callable
+from pathlib import Path
 from typing import Any
 
+import pytest
 from textual.pilot import Pilot
 
+from services.executor.store import ActionStore
 from shared.bus import Bus
-from tests.tui.helpers import DESCRIPTIONS, OBJECTS, SIM_STATE, fixed_network, stage_world, until
+from tests.tui.camera_frame import frame
+from tests.tui.helpers import DESCRIPTIONS, OBJECTS, SIM_STATE, fixed_network, serve_actions, stage_world, teach, until
+from tui.actions_screen import ActionsScreen
 from tui.app import PbdApp
+from tui.camera_view import CameraView
 from tui.clarify import ClarifyPrompt
 from tui.status_bar import StatusBar
 
 SIZE = (120, 40)
 
 
-def settled(app: PbdApp, hub: Bus, then: Callable[[Pilot], Awaitable[Any]] | None = None) -> Callable[[Pilot], Awaitable[None]]:
+def settled(app: PbdApp, hub: Bus,
+            then: Callable[[Pilot], Awaitable[Any]] | None = None) -> Callable[[Pilot], Awaitable[None]]:
     """Wait until the staged world is on screen, then run ``then``."""
 
     async def run_before(pilot: Pilot) -> None:
@@ -80,4 +89,53 @@ def test_clarification_prompt(snap_compare: Any) -> None:
             await pilot.press("down")
 
         assert snap_compare(app, terminal_size=SIZE, run_before=settled(app, hub, ask))
+        del world
+
+
+async def show_the_camera(app: PbdApp, hub: Bus, pilot: Pilot) -> None:
+    """F2, then the synthetic head-camera frame until the picture is on screen."""
+    await pilot.press("f2")
+    view = app.main.query_one(CameraView)
+    for _ in range(100):
+        if view.picture is not None:
+            break
+        hub.publish(hub.keys.cloud, frame())
+        await pilot.pause(0.1)
+    await until(pilot, lambda: view.picture is not None, what="the camera picture")
+
+
+async def open_the_actions(app: PbdApp, pilot: Pilot) -> None:
+    """F4, then the second step of the first action highlighted."""
+    await pilot.press("f4")
+    await until(pilot, lambda: isinstance(app.screen, ActionsScreen) and len(app.screen.actions) == 3,
+                what="the actions")
+    await pilot.press("tab", "down")
+
+
+@pytest.mark.parametrize("size", [SIZE, (80, 24)], ids=["120x40", "80x24"])
+def test_camera_view(snap_compare: Any, size: tuple[int, int]) -> None:
+    with fixed_network("snapcamera") as (hub, options):
+        world = stage_world(hub)
+        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell")
+
+        async def camera(pilot: Pilot) -> None:
+            await pick_up_the_red_cup(app, hub, pilot)
+            await show_the_camera(app, hub, pilot)
+
+        assert snap_compare(app, terminal_size=size, run_before=settled(app, hub, camera))
+        del world
+
+
+@pytest.mark.parametrize("size", [SIZE, (80, 24)], ids=["120x40", "80x24"])
+def test_actions_screen(snap_compare: Any, tmp_path: Path, size: tuple[int, int]) -> None:
+    os.environ["TZ"] = "UTC"  # creation times read the same everywhere
+    time.tzset()
+    store = ActionStore(tmp_path)
+    teach(store)
+    with fixed_network("snapactions") as (hub, options):
+        world = stage_world(hub)
+        serve_actions(hub, store, [])
+        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell")
+        assert snap_compare(app, terminal_size=size,
+                            run_before=settled(app, hub, lambda pilot: open_the_actions(app, pilot)))
         del world

@@ -1,4 +1,4 @@
-"""The real ``hfpbd tui`` program in a real terminal (tmux), used as a person would."""
+"""The real ``hfpbd tui`` program in a real terminal (tmux), used as a person would: talking, the camera, actions."""
 
 from __future__ import annotations
 
@@ -6,6 +6,7 @@ import queue
 import shutil
 import subprocess
 import sys
+import threading
 import time
 import uuid
 from collections.abc import Iterator
@@ -14,7 +15,10 @@ from typing import Any
 
 import pytest
 
+from services.executor.store import ActionStore
 from tests.processes import ROOT, Network
+from tests.tui.camera_frame import frame
+from tests.tui.helpers import serve_actions, stage_world, teach
 
 pytestmark = pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is not installed")
 
@@ -96,3 +100,43 @@ def test_a_person_at_the_terminal(network: Network, terminal: Terminal) -> None:
     while terminal.running() and time.monotonic() < deadline:
         time.sleep(0.2)
     assert not terminal.running(), "the UI did not quit on ctrl+q"
+
+
+def test_the_camera_and_the_actions_at_the_terminal(network: Network, terminal: Terminal, tmp_path: Path) -> None:
+    hub = network.hub
+    world = stage_world(hub)
+    store = ActionStore(tmp_path)
+    teach(store)
+    runs: list[tuple[int, int]] = []
+    serve_actions(hub, store, runs)
+    streaming = threading.Event()
+
+    def camera() -> None:  # the simulator's head camera, 5 frames a second
+        while not streaming.wait(0.2):
+            hub.publish(hub.keys.cloud, frame())
+
+    thread = threading.Thread(target=camera, daemon=True)
+    thread.start()
+    try:
+        terminal.wait_for("● executor")
+        terminal.type("F2")
+        screen = terminal.wait_for("world · head camera")
+        deadline = time.monotonic() + 30
+        while screen.count("▀") < 200 and time.monotonic() < deadline:
+            time.sleep(0.2)
+            screen = terminal.screen()
+        assert screen.count("▀") >= 200, f"no camera picture:\n{screen}"
+        assert "the green box" in screen and "obj2" in screen  # the name over the picture, the id only in the table
+
+        terminal.type("F4")
+        terminal.wait_for("stack the cups")
+        terminal.wait_for("tidy the box")
+        terminal.type("Tab", "Down", "e")
+        terminal.wait_for("executing action 1 from step 2")
+        assert runs == [(1, 2)]
+        terminal.type("F4")
+        terminal.wait_for("conversation")
+    finally:
+        streaming.set()
+        thread.join(timeout=5)
+        del world
