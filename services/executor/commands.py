@@ -1,16 +1,28 @@
 """The command space as the executor accepts it, and checking a command before anything runs.
 
-The table is the design notes' procedure contract. A command that names an
-unknown procedure, lacks a parameter or gives a value outside its domain is
-refused with a sentence that says which, so a bad message from any sender
-never reaches the robot.
+The table is the design notes' procedure contract, with its conversation
+additions: ``undo`` and ``repeat``, ``arm: "both"`` for the procedures that
+can use both hands at once, an optional ``distance`` on the directional
+moves, and ``then`` (further steps of the same utterance). A command that
+names an unknown procedure, lacks a parameter or gives a value outside its
+domain is refused with a sentence that says which, so a bad message from any
+sender never reaches the robot. A compound is checked whole before its first
+step runs: a bad later step refuses the utterance, it does not stop it
+half-way.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 ARMS = ("right", "left")
+BOTH = "both"
+# procedures whose arm may be "both": both arms at once, started together
+BOTH_ARMS = frozenset({"open", "close", "move_abs_dir", "move_abs_dest"})
+# procedures with an optional distance (metres) and its limits; absent means the default step
+DISTANCE_PROCEDURES = frozenset({"move_abs_dir", "move_rel_dir"})
+MIN_DISTANCE, MAX_DISTANCE = 0.01, 0.30
 RELATIONS = ("above", "next_to", "left_of", "right_of", "in_front_of", "behind", "on_top_of", "near")
 
 # procedure -> parameter -> allowed values (None: an object id; "int|target": action number or next/previous)
@@ -32,14 +44,65 @@ PROCEDURES: dict[str, dict[str, tuple[Any, ...] | None | str]] = {
     "switch_action": {"target": "int|target"},
     "execute": {},
     "stop": {},
+    "undo": {},
+    "repeat": {},
 }
-ADMIN = frozenset({"record", "create_action", "switch_action", "execute", "stop"})
+ADMIN = frozenset({"record", "create_action", "switch_action", "execute", "stop", "undo", "repeat"})
 # steps that are kept in an action when they succeed
 RECORDED = frozenset(PROCEDURES) - ADMIN
 
 
 class CommandError(ValueError):
     """The command is malformed; the message is the sentence to say."""
+
+
+@dataclass(frozen=True)
+class Step:
+    """One checked step of a command: what to run and the user's words for it."""
+
+    procedure: str
+    args: dict[str, Any]
+    phrases: dict[str, str]
+    text: str
+
+
+def check_compound(message: dict[str, Any]) -> list[Step]:
+    """The steps of an ``nlu/result`` command (its own, then each of ``then``), all checked before any runs.
+
+    A ``then`` item has ``procedure`` and ``args`` and may carry its own
+    ``phrases`` and ``text``; a step that fails the check refuses the whole
+    utterance with a sentence saying which step it was.
+    """
+    first = Step(message.get("procedure"), check(message.get("procedure"), message.get("args")),
+                 _phrases(message.get("phrases")), _text(message.get("text")))
+    extra = message.get("then") or []
+    if not isinstance(extra, list):
+        raise CommandError("The further steps of a command ('then') must be a list.")
+    if extra and first.procedure in ADMIN:
+        raise CommandError(f"{first.procedure.replace('_', ' ').capitalize()} has to be said on its own.")
+    steps = [first]
+    for number, item in enumerate(extra, start=2):
+        if not isinstance(item, dict):
+            raise CommandError(f"Step {number} of the command is not a command.")
+        try:
+            args = check(item.get("procedure"), item.get("args"))
+        except CommandError as exc:
+            raise CommandError(f"I can't do step {number} of that: {str(exc)[:1].lower()}{str(exc)[1:]}") from exc
+        if item["procedure"] in ADMIN:
+            raise CommandError(f"I can't do step {number} of that: {item['procedure'].replace('_', ' ')} "
+                               "has to be said on its own.")
+        steps.append(Step(item["procedure"], args, _phrases(item.get("phrases")), _text(item.get("text"))))
+    return steps
+
+
+def _phrases(value: Any) -> dict[str, str]:
+    if not isinstance(value, dict):
+        return {}
+    return {k: v for k, v in value.items() if isinstance(k, str) and isinstance(v, str)}
+
+
+def _text(value: Any) -> str:
+    return value if isinstance(value, str) else ""
 
 
 def check(procedure: Any, args: Any) -> dict[str, Any]:
@@ -56,7 +119,11 @@ def check(procedure: Any, args: Any) -> dict[str, Any]:
         if name not in args:
             raise CommandError(f"{procedure.replace('_', ' ').capitalize()} needs {_a(name)} {name}.")
         value = args[name]
-        if domain is None:
+        if name == "arm" and value == BOTH:
+            if procedure not in BOTH_ARMS:
+                raise CommandError(f"I can't {_VERBS.get(procedure, procedure.replace('_', ' '))} with both hands "
+                                   "at once; tell me which hand to use.")
+        elif domain is None:
             if not isinstance(value, str) or not value:
                 raise CommandError(f"The object of {procedure.replace('_', ' ')} must be an object id such as 'obj0'.")
         elif domain == "int|target":
@@ -65,7 +132,26 @@ def check(procedure: Any, args: Any) -> dict[str, Any]:
         elif value not in domain:
             raise CommandError(f"{value!r} is not {_a(name)} {name} I know; I know {', '.join(map(str, domain))}.")
         out[name] = value
+    if args.get("distance") is not None:
+        out["distance"] = _distance(procedure, args["distance"])
     return out
+
+
+# verbs for refusing "both" (the procedures that take one hand only)
+_VERBS = {"move_rel_dest": "move relative to an object", "move_rel_dir": "move towards or away from an object",
+          "pick_up": "pick something up", "place_abs": "put something down", "place_rel": "place something",
+          "point_to": "point", "rotate": "turn my wrists"}
+
+
+def _distance(procedure: str, value: Any) -> float:
+    if procedure not in DISTANCE_PROCEDURES:
+        raise CommandError(f"{procedure.replace('_', ' ').capitalize()} doesn't take a distance.")
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value:
+        raise CommandError("The distance must be a number of metres.")
+    if not MIN_DISTANCE - 1e-9 <= value <= MAX_DISTANCE + 1e-9:
+        raise CommandError(f"I can move {round(MIN_DISTANCE * 100)} to {round(MAX_DISTANCE * 100)} centimetres "
+                           f"at a time, not {value * 100:.0f}.")
+    return float(value)
 
 
 def _a(noun: str) -> str:
