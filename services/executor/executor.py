@@ -247,14 +247,21 @@ class Executor:
                 self.publish_state()
             note = None
             if len(steps) > 1:
-                rest = [s.procedure.replace("_", " ") for s in steps[number:]]
+                rest = [self._gerund(s) for s in steps[number:]]
                 note = f"That was step {number} of {len(steps)}" + \
-                    (f"; I didn't go on to {_listed(rest)}." if rest else ".")
+                    (f"; I didn't go on with {_listed(rest)}." if rest else ".")
             context = _context(step, utterance)
             if len(steps) > 1:
                 context["part"] = {"step": number, "of": len(steps)}
             if not self._step(step.procedure, step.args, context, keep=True, failure_note=note):
                 return
+
+    def _gerund(self, step: Step) -> str:
+        """"placing it on the plate with your right hand": a step not taken, for a compound's failure."""
+        snap = self.scene.snapshot()
+        text = wording.narration(step.procedure, step.args, step.phrases, lambda oid: refer(snap.objects, oid),
+                                 held="it")
+        return text[:1].lower() + text[1:].rstrip(".")
 
     def _undo(self) -> None:
         """Take back the current action's last step: remove it, then bring the robot back to before it."""
