@@ -713,6 +713,9 @@ class Procedures:
             self._go(arm, self._plan(kin, hover_q, wording.sentence(
                 f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}")))
             kin, snap = self._ready(arm)
+            # the landmark as seen before the held object hung over it: from above, the camera sees little of a
+            # plate under a cup, and perception may then place the plate up at the cup's bottom
+            kin.set_obstacles({**snap.obstacles(skip={held.object_id}), object: box})
             with kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):
                 descent = kin.straight_line(release)
             if descent is None:  # the view changed on the way there: on to the next release point
