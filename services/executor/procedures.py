@@ -324,19 +324,18 @@ class Procedures:
         Used for "to the side" and to take a step back (an arm returns to
         the pose it had before); an arm already there stays still.
         """
-        paths: dict[str, np.ndarray] = {}
+        planned: dict[str, Trajectory] = {}
         for arm, goal in joints.items():
             kin, _ = self._ready(arm)
             goal = np.asarray(goal, float)
             if np.max(np.abs(kin.arm_q - goal)) < 0.01:
                 continue
             why = wording.sentence(f"I can't find a clear path to move my {arm} hand {where}")
-            paths[arm] = self._plan(kin, goal, why).points
-        if len(paths) == 1:
-            arm, points = next(iter(paths.items()))
-            self._go(arm, self.arms[arm].timed(points))
-        elif paths:
-            self._go_together({arm: (points, False) for arm, points in paths.items()})
+            planned[arm] = self._plan(kin, goal, why)
+        if len(planned) == 1:
+            self._go(*next(iter(planned.items())))
+        elif planned:
+            self._go_together({arm: (trajectory.points, False) for arm, trajectory in planned.items()})
 
     # -- p2 ------------------------------------------------------------------------------------
     def move_rel_dest(self, arm: str, relation: str, object: str, preferred: list[float] | None = None) -> Done:
