@@ -9,13 +9,22 @@ picks a listed candidate.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
+from services.nlu import questions
 from services.nlu.commands import ADMIN_PROCEDURES
-from services.nlu.infer import Clarify, CommandResult, Model, Result
+from services.nlu.infer import Answer, Clarify, CommandResult, Model, Result
 from services.nlu.prior import History
 from services.nlu.tokens import read
 from services.nlu.weights import LANGUAGE
+from shared.contract import ARMS
+
+_WORD = re.compile(r"[a-z]+")
+_CANCEL = re.compile(r"(?:(?:no|oh|ok|okay|well|please|just) )*(?:cancel|never mind|nevermind|forget it|"
+                     r"forget about it|nothing|none|neither|none of them|neither of them|skip it|drop it|leave it)"
+                     r"(?: please| then)?")
+_OTHER = re.compile(r"(?:(?:no|nope|not that one|wrong|please) )*(?:the )?other(?: one)?(?: please)?")
 
 
 @dataclass
@@ -38,7 +47,13 @@ class Dialogue:
         """Interpret one utterance (or a numbered choice) in the current world."""
         if choice is not None:
             return self._choose(model, choice)
-        result = None
+        result: Result | None = questions.answer(model, text, self._history(model))
+        if result is not None:
+            return result  # a question, even one asked while a question is pending
+        if self.pending is not None:
+            settled = self._settle(model, text)
+            if settled is not None:
+                return settled
         if self.pending is not None and self._is_reply(text):
             clarify = self.pending.clarify
             result = model.parse(text, self._history(model), among=clarify.candidates, focus=clarify.params)
@@ -47,13 +62,24 @@ class Dialogue:
         self._remember(result, model)
         return result
 
+    def _settle(self, model: Model, text: str) -> Result | None:
+        """"cancel" drops the pending question; "no, the other one" takes the other of two candidates."""
+        words = " ".join(_WORD.findall(text.lower()))
+        if _CANCEL.fullmatch(words):
+            self.pending = None
+            return Clarify([], "All right, I dropped the question. What should I do?")
+        candidates = self.pending.clarify.candidates if self.pending is not None else []
+        if _OTHER.fullmatch(words) and len(candidates) == 2:
+            return self._choose(model, 1)
+        return None
+
     def _choose(self, model: Model, choice: int) -> Result:
         if self.pending is None:
             return Clarify([], "There is no question pending to choose an answer for.")
         candidates = self.pending.clarify.candidates
         if not 0 <= choice < len(candidates):
-            return Clarify([], f"There is no candidate {choice}; please choose from 0 to {len(candidates) - 1}.", candidates,
-                           self.pending.clarify.labels)
+            return Clarify([], f"There is no candidate {choice}; please choose from 0 to {len(candidates) - 1}.",
+                           candidates, self.pending.clarify.labels)
         command = candidates[choice]
         result = CommandResult(command, 1.0, model.describe_command(command), {}, 0.0)
         self._remember(result, model)
@@ -73,8 +99,11 @@ class Dialogue:
             if result.candidates:
                 self.pending = Pending(result)
             return
+        if isinstance(result, Answer):
+            return  # a question answered changes nothing, not even a pending question
         self.pending = None
-        command = result.command
-        if command.procedure not in ADMIN_PROCEDURES:
-            base = self._history(model)
-            self.history = History(command.arg("arm") or base.last_arm, command.arg("object") or base.last_object)
+        for command in result.commands:
+            if command.procedure not in ADMIN_PROCEDURES:
+                base = self._history(model)
+                arm = command.arg("arm") if command.arg("arm") in ARMS else base.last_arm
+                self.history = History(arm, command.arg("object") or base.last_object)

@@ -9,51 +9,26 @@ to rephrase (``params`` empty).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Any
-
 import numpy as np
 
+from services.nlu import compound, hands, modifiers, questions, relational
 from services.nlu.commands import NUMBER, PROCEDURES, Command
 from services.nlu.language import Index, Match
-from services.nlu.phrasing import command_text, parameter_question, rephrase_question
-from services.nlu.prior import History, history_scores, situation_scores
-from services.nlu.refexp import Scene
 from services.nlu.lexicon import OBJECT_SLOTS
+from services.nlu.phrasing import command_text, parameter_question, rephrase_question
+from services.nlu.prior import History, history_scores, side_scores, situation_scores
+from services.nlu.refexp import Scene
+from services.nlu.results import Answer, Clarify, CommandResult, Result
 from services.nlu.tokens import Term, Utterance, read
 from services.nlu.weights import DECISION, LANGUAGE
 from services.nlu.world import World
+from shared.contract import ARMS, BOTH, BOTH_ARM_PROCEDURES, DISTANCE_PROCEDURES, PLACES
+from shared.contract import PROCEDURES as PROCEDURES_CONTRACT
 
-MAX_WORDS = 60  # one step at a time; longer input is almost surely pasted text
+__all__ = ["Answer", "Clarify", "CommandResult", "Model", "Result"]
 
-
-@dataclass
-class CommandResult:
-    command: Command
-    confidence: float
-    text: str
-    phrases: dict[str, str]
-    score: float  # unnormalised log P(C|S) P(L|C,S), to compare speech hypotheses
-
-    def to_json(self) -> dict[str, Any]:
-        return {"kind": "command", "procedure": self.command.procedure, "args": dict(self.command.args),
-                "confidence": round(self.confidence, 4), "text": self.text, "phrases": self.phrases}
-
-
-@dataclass
-class Clarify:
-    params: list[str]
-    question: str
-    candidates: list[Command] = field(default_factory=list)
-    labels: list[str] = field(default_factory=list)  # one sentence per candidate, for menus
-    score: float = float("-inf")
-
-    def to_json(self) -> dict[str, Any]:
-        return {"kind": "clarify", "params": self.params, "question": self.question,
-                "candidates": [c.as_dict() for c in self.candidates]}
-
-
-Result = CommandResult | Clarify
+MAX_WORDS = 60  # a few steps at a time; longer input is almost surely pasted text
+MAX_CHARS = 400
 
 
 class Model:
@@ -64,6 +39,8 @@ class Model:
         self.scene = Scene(world)
         self.index = Index(world, self.scene)
         self.situation = situation_scores(world, self.index.commands)
+        self.sides = side_scores(world, self.index.commands)
+        self._history_parts: dict[History, np.ndarray] = {}
 
     @property
     def default_history(self) -> History:
@@ -71,35 +48,83 @@ class Model:
 
     def parse(self, text: str, history: History | None = None, among: list[Command] | None = None,
               focus: list[str] | None = None) -> Result:
-        """Understand ``text``.
+        """Understand ``text``: a question, one command, or several in a row.
 
         ``among`` restricts the choice to a pending clarification's candidates
         and ``focus`` to the parameters it asked about, so a reply "left" to
         "Which hand?" is read as the arm, not as "the leftmost object".
         """
+        problem = _too_long(text)
+        if problem is not None:
+            return Clarify([], problem)
+        history = history or self.default_history
+        if among is None:
+            reply = questions.answer(self, text, history)
+            if reply is not None:
+                return reply
+            parts = compound.split(text)
+            if len(parts) > 1:
+                return compound.run(self, parts, history)
+        return self.parse_step(text, history, among, focus)
+
+    def parse_step(self, text: str, history: History, among: list[Command] | None = None,
+                   focus: list[str] | None = None) -> Result:
+        """One command: the model's choice, with the distance and "both hands" said put into it."""
+        said = modifiers.extract(text)
+        if said.problem is not None:
+            return Clarify(["distance"], said.problem)
+        result = self._understand(said.text, history, among, focus)
+        first = result.command if isinstance(result, CommandResult) else \
+            result.candidates[0] if isinstance(result, Clarify) and result.candidates else None
+        if said.two_arms and first is not None and first.arg("arm") is not None:
+            options = [first.with_arg("arm", arm) for arm in ARMS]
+            return Clarify(["arm"], "You named both hands. Which hand do you mean: the right hand or the left hand?",
+                           options, [command_text(c, self.scene) for c in options], result.score)
+        if said.both and isinstance(result, Clarify) and result.candidates:
+            one_handed = _one_handed(result.candidates[0], self.scene, result.score)
+            if one_handed is not None and len({c.procedure for c in result.candidates}) == 1:
+                return one_handed
+        if isinstance(result, CommandResult):
+            return qualify(result, said, self.scene)
+        return result
+
+    def history_part(self, history: History) -> np.ndarray:
+        """The per-utterance part of the prior: last arm (or the object's side), last object (once per history)."""
+        part = self._history_parts.get(history)
+        if part is None:
+            part = self._history_parts[history] = history_scores(self.index.arm, self.index.object, history,
+                                                                 self.world, self.sides)
+        return part
+
+    def _understand(self, text: str, history: History, among: list[Command] | None,
+                    focus: list[str] | None) -> Result:
         utterance = read(text)
         if focus:
             utterance = _focused(utterance, focus)
-        if len(text.split()) > MAX_WORDS:
-            return Clarify([], f"That is too long ({len(text.split())} words). Please say one step at a time.")
         if not utterance.terms:
             return Clarify([], _not_understood(utterance))
-        history = history or self.default_history
-        last = self.world.index_of(history.last_object) if history.last_object in self.world.ids else None
+        last = self.referent(history)
         allowed = self._allowed(among)
         within = None
         if allowed is not None:
             objects = set(self.index.object[allowed]) - {-1}
             within = frozenset(int(i) for i in objects) or None
-        match = self.index.match(utterance.terms, last, within)
-        scores = LANGUAGE.beta * match.scores + self.situation
-        scores += history_scores(self.index.arm, self.index.object, history, self.world)
+        terms = relational.resolve(self.scene, utterance.terms, last, within)
+        match = self.index.match(terms, last, within)
+        scores = LANGUAGE.beta * match.scores + self.situation + self.history_part(history)
         if not match.has_number:
             scores[self.index.number] = -np.inf
         considered = allowed if allowed is not None else np.arange(len(scores))
         if match.scores[considered].max(initial=0.0) <= 0.0:
             return Clarify([], _not_understood(utterance))
-        return self._decide(scores, considered, match, utterance)
+        return self._decide(scores, considered, match, history)
+
+    def referent(self, history: History) -> int | None:
+        """What "it" means: the object in a hand (the last used hand's first), else the last object referred to."""
+        held = {obj.held_by: i for i, obj in enumerate(self.world.objects) if obj.held_by is not None}
+        if held:
+            return held[history.last_arm] if history.last_arm in held else next(iter(held.values()))
+        return self.world.index_of(history.last_object) if history.last_object in self.world.ids else None
 
     def _allowed(self, among: list[Command] | None) -> np.ndarray | None:
         if not among:
@@ -108,28 +133,52 @@ class Model:
         found = sorted({p for p in positions if p is not None})
         return np.array(found, dtype=int) if found else None
 
-    def _decide(self, scores: np.ndarray, considered: np.ndarray, match: Match, utterance: Utterance) -> Result:
+    def _decide(self, scores: np.ndarray, considered: np.ndarray, match: Match, history: History) -> Result:
         local = scores[considered]
         best_score = float(local.max())
-        order = considered[np.argsort(-local, kind="stable")]
-        tied = [int(i) for i in order if scores[i] >= best_score - DECISION.tie]
+        near = considered[local >= best_score - DECISION.tie]
+        tied = [int(i) for i in near[np.argsort(-scores[near], kind="stable")]]
         confidence = 1.0 / float(np.exp(local - best_score).sum())
         if len(tied) == 1:
-            return self._command(tied[0], confidence, best_score, match)
+            return self._command(tied[0], confidence, best_score, match, history)
         everything = [self._filled(self.index.commands[i], match) for i in tied]
         if len({c.procedure for c in everything}) > 1:
             firsts = _one_per_procedure(everything)[:DECISION.max_candidates]
             return Clarify([], rephrase_question(firsts, self.scene), firsts,
                            [command_text(c, self.scene) for c in firsts], best_score)
+        try:
+            hands.already_held(self, everything[0].procedure, match)
+        except hands.Refusal as refusal:
+            return Clarify([], str(refusal))
         candidates = everything[:DECISION.max_candidates]
         labels = [command_text(c, self.scene) for c in candidates]
         procedure = candidates[0].procedure
         params = [p for p in PROCEDURES[procedure] if len({c.arg(p) for c in candidates}) > 1]
+        if params == ["arm"] and procedure in PLACES:  # an empty hand's place: the hand that picks up decides
+            situated = self._situated(candidates[0], {}, confidence, best_score, match, history)
+            if isinstance(situated, CommandResult) and situated.command.procedure == "pick_up":
+                return situated
         return Clarify(params, parameter_question(params, candidates, self.scene), candidates, labels, best_score)
 
-    def _command(self, position: int, confidence: float, score: float, match: Match) -> CommandResult:
+    def _command(self, position: int, confidence: float, score: float, match: Match, history: History) -> Result:
         command = self._filled(self.index.commands[position], match)
-        phrases = self.index.explain(position, match)
+        return self._situated(command, self.index.explain(position, match), confidence, score, match, history)
+
+    def _situated(self, command: Command, phrases: dict[str, str], confidence: float, score: float, match: Match,
+                  history: History) -> Result:
+        """The command as the hands' state allows it (see ``hands``), with its sentence."""
+        if command.procedure == "execute" and match.has_number:  # "play action 2": that action, then run it
+            switch = self._filled(Command("switch_action", (("target", NUMBER),)), match)
+            text = f"{command_text(switch, self.scene)}, then {command_text(command, self.scene, phrases)}"
+            return CommandResult(switch, confidence, text, {}, score, (command,))
+        try:
+            commands = hands.situate(self, command, match, history, "arm" in phrases)
+        except hands.Refusal as refusal:
+            return Clarify([], str(refusal))
+        if commands[0] != command:  # a pick-up first: the user's words are about the step after it
+            texts = [command_text(commands[0], self.scene)]
+            texts += [command_text(c, self.scene, phrases) for c in commands[1:]]
+            return CommandResult(commands[0], confidence, ", then ".join(texts), {}, score, commands[1:])
         return CommandResult(command, confidence, command_text(command, self.scene, phrases), phrases, score)
 
     def _filled(self, command: Command, match: Match) -> Command:
@@ -141,7 +190,8 @@ class Model:
 
     def ground(self, text: str) -> dict[str, float]:
         """P(object | referring phrase) over the world's objects (paper Fig. 3)."""
-        probabilities = self.scene.ground(read(text).terms)
+        terms = relational.resolve(self.scene, read(text).terms, self.scene.last_object, phrase=True)
+        probabilities = self.scene.ground(terms)
         return {obj.id: round(float(p), 4) for obj, p in zip(self.world.objects, probabilities)}
 
     def describe(self) -> dict[str, str]:
@@ -150,6 +200,48 @@ class Model:
 
     def describe_command(self, command: Command, phrases: dict[str, str] | None = None) -> str:
         return command_text(command, self.scene, phrases)
+
+
+def _too_long(text: str) -> str | None:
+    """Refuse pasted text at once (before any reading, so a 10,000-character line costs nothing)."""
+    if len(text) > MAX_CHARS:
+        return f"That is too long ({len(text)} characters). Please say one step at a time."
+    words = len(text.split())
+    if words > MAX_WORDS:
+        return f"That is too long ({words} words). Please say one step at a time."
+    return None
+
+
+def qualify(result: CommandResult, said: modifiers.Modifiers, scene: Scene) -> Result:
+    """Put a distance and "both hands" into the command chosen, or say why they do not fit it."""
+    command = result.command
+    if said.distance is not None:
+        if command.procedure not in DISTANCE_PROCEDURES:
+            return Clarify(["distance"], "A distance goes with a move in a direction, like \"move up 5 centimetres\" "
+                           "or \"move towards the cup a little\".")
+        command = Command(command.procedure, command.args + (("distance", round(said.distance, 4)),))
+    elif said.bare_number and command.procedure in DISTANCE_PROCEDURES:
+        return Clarify(["distance"], "How far is that? Please say the distance with a unit, like \"5 centimetres\".")
+    if said.both and command.arg("arm") is not None:
+        refusal = _one_handed(command, scene, result.score)
+        if refusal is not None:
+            return refusal
+        command = command.with_arg("arm", BOTH)
+    if command == result.command:
+        return result
+    phrases = {k: v for k, v in result.phrases.items() if not (k == "arm" and said.both)}
+    text = command_text(command, scene, phrases)
+    return CommandResult(command, result.confidence, text, phrases, result.score, result.then)
+
+
+def _one_handed(command: Command, scene: Scene, score: float) -> Clarify | None:
+    """The question for "both hands" on a procedure done with one hand (None where both may do it)."""
+    if command.arg("arm") is None or command.procedure in BOTH_ARM_PROCEDURES:
+        return None
+    verb = PROCEDURES_CONTRACT[command.procedure].verb
+    options = [command.with_arg("arm", arm) for arm in ARMS]
+    return Clarify(["arm"], f"I can {verb} with only one hand at a time. Which hand do you mean: the right hand "
+                   "or the left hand?", options, [command_text(c, scene) for c in options], score)
 
 
 def _focused(utterance: Utterance, focus: list[str]) -> Utterance:
@@ -184,5 +276,6 @@ def _one_per_procedure(candidates: list[Command]) -> list[Command]:
 def _not_understood(utterance: Utterance) -> str:
     if utterance.unknown:
         words = ", ".join(f"'{w}'" for w in dict.fromkeys(utterance.unknown))
-        return f"Sorry, I don't know the word{'s' if len(utterance.unknown) > 1 else ''} {words}. Please rephrase the command."
+        plural = "s" if len(utterance.unknown) > 1 else ""
+        return f"Sorry, I don't know the word{plural} {words}. Please rephrase the command."
     return "Sorry, I did not understand that. Please rephrase the command."

@@ -16,13 +16,21 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from services.nlu.commands import NUMBER, PROCEDURES, Command, enumerate_commands
-from services.nlu.lexicon import OBJECT_SLOTS, PLACE, Meaning
+from services.nlu.lexicon import LANDMARK_PHRASES, OBJECT_SLOTS, PLACE, Meaning
 from services.nlu.refexp import Scene
 from services.nlu.tokens import Term
 from services.nlu.weights import LANGUAGE
 from services.nlu.world import ARMS, World
+from shared.contract import MOVES, PLACES
 
 _ARG_SLOTS = ("destination", "relation", "direction", "target")
+CARRYING = MOVES | PLACES | {"rotate"}
+LANDMARKED = frozenset({"move_rel_dest", "move_rel_dir", "place_rel"})
+
+
+def _is_relational(term: Term) -> bool:
+    """A relation or object-relative direction: what follows it is a landmark."""
+    return term.words in LANDMARK_PHRASES
 
 
 @dataclass
@@ -33,6 +41,12 @@ class Match:
     terms: tuple[Term, ...]
     object_vectors: dict[int, np.ndarray] = field(default_factory=dict)
     has_number: bool = False
+    theme_end: int = 0  # terms before this one are the theme (see ``Index.match``)
+
+    def grounding(self, upto: int | None = None) -> np.ndarray | None:
+        """The summed object-word scores per object (of the terms before ``upto``); None when none was said."""
+        vectors = [v for i, v in self.object_vectors.items() if upto is None or i < upto]
+        return np.sum(vectors, axis=0) if vectors else None
 
 
 class Index:
@@ -60,9 +74,14 @@ class Index:
                 self._columns[(slot, value)] = values == value
         self.number = self._columns.get(("target", NUMBER), np.zeros(n, dtype=bool))
         self.place = np.isin(self.procedure, list(PLACE))
+        # the commands that carry what their arm holds: "it" and the words for the held object may name it
+        carrying = np.isin(self.procedure, list(CARRYING))
         holder = {obj.held_by: i for i, obj in enumerate(world.objects) if obj.held_by is not None}
-        # for place commands, the object held by the command's arm: "put the cup down" names it
-        self.held = np.array([holder.get(c.arg("arm"), -1) if c.procedure in PLACE else -1 for c in self.commands])
+        self.held = np.array([holder.get(c.arg("arm"), -1) if carrying[i] else -1 for i, c in enumerate(self.commands)])
+        grippers = world.robot.grippers
+        self.landmarked = np.isin(self.procedure, list(LANDMARKED)).astype(int)
+        self.carries = self.place | (carrying & np.array([grippers.get(c.arg("arm")) == "holding"
+                                                         or c.arg("arm") in holder for c in self.commands]))
         self._verb_columns: dict[frozenset[str], np.ndarray] = {}
 
     def column(self, meaning: Meaning) -> np.ndarray:
@@ -78,8 +97,13 @@ class Index:
         return self._columns.get((meaning.slot, meaning.value), np.zeros(len(self.commands), dtype=bool))
 
     def match(self, terms: tuple[Term, ...], last_object: int | None, within: frozenset[int] | None = None) -> Match:
-        """Word-match score of every command for these terms."""
+        """Word-match score of every command for these terms.
+
+        Object words before the first relation or direction ("move *the red cup* above the plate") are the
+        theme: they may name what the commanding hand holds. Words after it name the landmark only.
+        """
         object_vectors = self.scene.term_vectors(terms, within, last_object)
+        theme_end = next((i for i, term in enumerate(terms) if _is_relational(term)), len(terms))
         total = np.zeros(len(self.commands))
         for index, term in enumerate(terms):
             best = np.zeros(len(self.commands))
@@ -93,14 +117,16 @@ class Index:
             vector = object_vectors.get(index)
             if vector is not None:
                 padded = np.append(vector, 0.0)
-                np.maximum(best, padded[self.object], out=best)
-                np.maximum(best, padded[self.held], out=best)
+                # the theme of a relative command is not its landmark
+                np.maximum(best, padded[self.object] * (self.landmarked == 0 if index < theme_end else 1), out=best)
+                if index < theme_end:
+                    np.maximum(best, padded[self.held], out=best)
                 anaphor = max((m.weight for r in term.readings for m in r if m.slot == "anaphor"), default=0.0)
-                if anaphor:
-                    np.maximum(best, anaphor * self.place, out=best)  # "it" is what the hand holds
+                if anaphor and index < theme_end:
+                    np.maximum(best, anaphor * self.carries, out=best)  # "it" is what the hand holds
             total += best
         has_number = any(term.number is not None for term in terms)
-        return Match(total, terms, object_vectors, has_number)
+        return Match(total, terms, object_vectors, has_number, theme_end if theme_end < len(terms) else 0)
 
     def explain(self, command_index: int, match: Match) -> dict[str, str]:
         """The user's own words for each parameter of one command (phrase tracking)."""
@@ -108,17 +134,22 @@ class Index:
         phrases: dict[str, str] = {}
         object_words: list[str] = []
         obj = self.object[command_index]
+        theme_end = next((i for i, term in enumerate(match.terms) if _is_relational(term)), len(match.terms))
         for index, term in enumerate(match.terms):
-            best_score, best_slots = 0.0, ()
+            best_score = 0.0
+            best_slots: tuple[str, ...] = ()
+            theme = index < theme_end
             for reading in term.readings:
                 if reading[0].slot in OBJECT_SLOTS:
                     vector = match.object_vectors.get(index)
                     held = self.held[command_index]
-                    score = float(vector[obj]) if vector is not None and obj >= 0 else 0.0
+                    landmark = not (theme and command.procedure in LANDMARKED)
+                    score = float(vector[obj]) if vector is not None and obj >= 0 and landmark else 0.0
                     slots: tuple[str, ...] = ("object",)
-                    if vector is not None and held >= 0 and vector[held] > score:
+                    if theme and vector is not None and held >= 0 and vector[held] > score:
                         score, slots = float(vector[held]), ()  # words for the held object
-                    if reading[0].slot == "anaphor" and command.procedure in PLACE and reading[0].weight > score:
+                    if theme and reading[0].slot == "anaphor" and self.carries[command_index] \
+                            and reading[0].weight > score:
                         score, slots = reading[0].weight, ()  # "it" is the held object, not the landmark
                 else:
                     fits = [m for m in reading if self.column(m)[command_index]]

@@ -86,10 +86,10 @@ def choose(readings: Iterable[Reading], nlu_weight: float = NLU_WEIGHT) -> Choic
     usable = list(readings)
     if not usable:
         return None
-    groups: dict[Command, list[Reading]] = {}
+    groups: dict[tuple[Command, ...], list[Reading]] = {}  # by every step: "pick it up and lift it" is not "pick it up"
     for reading in usable:
         if isinstance(reading.result, CommandResult):
-            groups.setdefault(reading.result.command, []).append(reading)
+            groups.setdefault(reading.result.commands, []).append(reading)
     if not groups:
         return Choice(max(usable, key=lambda r: r.weight(nlu_weight)), 0.0)
     best = max(groups.values(), key=lambda group: _log_sum(r.weight(nlu_weight) for r in group))

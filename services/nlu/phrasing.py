@@ -10,45 +10,27 @@ from __future__ import annotations
 
 from services.nlu.commands import NUMBER, Command
 from services.nlu.refexp import Scene
+from shared.contract import BOTH, PROCEDURES, arm_words, distance_words
+from shared.contract import value_words as option_words
 
-DEFAULT_VERBS = {
-    "move_abs_dest": "move", "move_rel_dest": "move", "move_abs_dir": "move", "move_rel_dir": "move",
-    "pick_up": "pick up", "place_abs": "place", "place_rel": "place", "point_to": "point to",
-    "look_at": "look at", "rotate": "rotate", "open": "open", "close": "close", "record": "record",
-    "create_action": "create", "switch_action": "switch to", "execute": "execute", "stop": "stop",
-}
-OPTION_WORDS = {
-    "side": "to the side", "table": "on the table", "here": "here",
-    "above": "above", "next_to": "next to", "left_of": "to the left of", "right_of": "to the right of",
-    "in_front_of": "in front of", "behind": "behind", "on_top_of": "on top of", "near": "near",
-    "up": "up", "down": "down", "left": "to the left", "right": "to the right", "forward": "forward",
-    "backward": "backward", "towards": "towards", "away_from": "away from",
-    "cw": "clockwise", "ccw": "counterclockwise", "next": "the next action", "previous": "the previous action",
-}
 SLOT_QUESTIONS = {
     "arm": "Which hand", "object": "Which object", "relation": "Where exactly", "direction": "Which direction",
     "destination": "Where", "target": "Which action",
 }
 
 
-def arm_words(arm: str) -> str:
-    return f"{arm} hand"
-
-
-def option_words(value: object) -> str:
-    if isinstance(value, int):
-        return f"action {value}"
-    return OPTION_WORDS.get(str(value), str(value).replace("_", " "))
-
-
 def command_text(command: Command, scene: Scene, phrases: dict[str, str] | None = None) -> str:
     """The sentence for ``command``, in the user's words where they gave them."""
     phrases = phrases or {}
-    verb = phrases.get("verb", DEFAULT_VERBS[command.procedure])
+    verb = phrases.get("verb", PROCEDURES[command.procedure].verb)
+    verb = verb.split(" your ")[0]  # "put your hand": the hand is said after the verb
     arm = command.arg("arm")
     said_arm = phrases.get("arm", "")
     names_limb = arm is not None and arm in said_arm and any(w in said_arm for w in ("hand", "arm", "gripper"))
-    hand = f"your {said_arm}" if names_limb else (f"your {arm_words(arm)}" if arm else "")
+    hand = f"your {said_arm}" if names_limb else (f"your {arm_words(arm)}" if arm and arm != BOTH else
+                                                  arm_words(arm) if arm else "")
+    distance = command.arg("distance")
+    far = distance_words(distance) if distance is not None else ""
     obj = _object_words(command, scene)
 
     def option(slot: str) -> str:
@@ -61,10 +43,10 @@ def command_text(command: Command, scene: Scene, phrases: dict[str, str] | None 
     p = command.procedure
     if p in ("move_abs_dest", "move_abs_dir"):
         slot = "destination" if p == "move_abs_dest" else "direction"
-        words = [verb, hand, option(slot)]
+        words = [verb, hand, option(slot), far]
     elif p in ("move_rel_dest", "move_rel_dir"):
         slot = "relation" if p == "move_rel_dest" else "direction"
-        words = [verb, hand, option(slot), obj]
+        words = [verb, hand, far, option(slot), obj]
     elif p in ("pick_up", "point_to"):
         words = [verb, obj, "with", hand]
     elif p == "place_abs":
@@ -78,13 +60,15 @@ def command_text(command: Command, scene: Scene, phrases: dict[str, str] | None 
     elif p in ("open", "close"):
         words = [verb, hand]
     elif p == "record":
-        words = [verb, "the objects on the table"]
+        words = [verb] if "table" in verb else [verb, "the objects on the table"]
     elif p == "create_action":
-        words = [verb, "a new action"]
+        words = [verb] if "action" in verb else [verb, "a new action"]
     elif p == "switch_action":
+        if phrases.get("target") == phrases.get("verb"):  # "the next action" said it all
+            verb = PROCEDURES[p].verb
         words = [verb.removesuffix(" action"), option_words(command.arg("target"))]
     elif p == "execute":
-        words = [verb, "the current action"]
+        words = [verb] if "action" in verb else [verb, "the current action"]
     else:
         words = [verb]
     return " ".join(w for w in words if w)

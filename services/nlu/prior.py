@@ -14,8 +14,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from services.nlu.commands import Command
-from services.nlu.weights import PRIOR
+from services.nlu.weights import MARGINS, PRIOR
 from services.nlu.world import ARMS, World, WorldObject
+from shared.contract import REL_DIRECTIONS, RELATIONS
+
+# the reach keys these rules read (each must be one the executor publishes: tests/nlu/test_contract.py)
+READ_KEYS = frozenset({"pick_up", "place", *RELATIONS, *REL_DIRECTIONS})
 
 
 @dataclass(frozen=True)
@@ -32,11 +36,22 @@ def situation_scores(world: World, commands: list[Command]) -> np.ndarray:
     return np.array([_situation(world, objects, command) for command in commands], dtype=float)
 
 
-def history_scores(arm_index: np.ndarray, object_index: np.ndarray, history: History, world: World) -> np.ndarray:
-    """Prefer the last arm used and the last object referred to."""
+def side_scores(world: World, commands: list[Command]) -> np.ndarray:
+    """Penalty of each arm command on an object lying on the other arm's side (for when no hand was used yet)."""
+    side = {obj.id: ("right" if obj.position[1] < -MARGINS.side_m else "left" if obj.position[1] > MARGINS.side_m
+                     else None) for obj in world.objects}
+    return np.array([PRIOR.far_side if c.arg("arm") is not None
+                     and side.get(c.arg("object")) not in (None, c.arg("arm")) else 0.0 for c in commands])
+
+
+def history_scores(arm_index: np.ndarray, object_index: np.ndarray, history: History, world: World,
+                   sides: np.ndarray) -> np.ndarray:
+    """Prefer the last arm used (or, with none yet, the arm on the object's side) and the last object referred to."""
     scores = np.zeros(len(arm_index))
     if history.last_arm in ARMS:
         scores += PRIOR.unused_arm * ((arm_index >= 0) & (arm_index != ARMS.index(history.last_arm)))
+    else:
+        scores += sides
     if history.last_object is not None and history.last_object in world.ids:
         last = world.index_of(history.last_object)
         scores += PRIOR.novel_object * ((object_index >= 0) & (object_index != last))
@@ -71,8 +86,6 @@ def _situation(world: World, objects: dict[str, WorldObject], command: Command) 
             score += PRIOR.impossible
     elif procedure == "place_rel":
         unreachable_if(command.arg("relation"), "place")
-    elif procedure == "point_to":
-        unreachable_if("point_to")
     elif procedure == "open" and gripper == "open":
         score += PRIOR.impossible
     elif procedure == "close" and gripper in ("closed", "holding"):
@@ -86,7 +99,7 @@ def _situation(world: World, objects: dict[str, WorldObject], command: Command) 
     if procedure in ("place_abs", "place_rel") and gripper is not None and gripper != "holding":
         score += PRIOR.impossible
     if procedure in ("move_rel_dest", "move_rel_dir", "place_rel") and obj is not None and obj.held_by == arm:
-        score += PRIOR.impossible  # relative to the very object in that hand
+        score += PRIOR.never  # relative to the very object in that hand
     return score
 
 

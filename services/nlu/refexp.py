@@ -20,7 +20,7 @@ from itertools import combinations
 
 import numpy as np
 
-from services.nlu.lexicon import Meaning
+from services.nlu.lexicon import OBJECT_SLOTS, Meaning
 from services.nlu.tokens import Term
 from services.nlu.weights import LANGUAGE, MARGINS
 from services.nlu.world import World
@@ -56,12 +56,16 @@ class Scene:
         pos = np.array([o.position for o in world.objects], dtype=float).reshape(self.n, 3)
         size = np.array([o.size for o in world.objects], dtype=float).reshape(self.n, 3)
         self.features = {"x": pos[:, 0], "y": pos[:, 1], "height": size[:, 2], "volume": size.prod(axis=1)}
+        self.xy = pos[:, :2]
         self.colors = np.array([o.color for o in world.objects], dtype=object)
         self.types = np.array([o.type for o in world.objects], dtype=object)
         self.everyone = frozenset(range(self.n))
         last = world.robot.last_object
         self.last_object = world.index_of(last) if last is not None else None
         self._groups: dict[tuple[frozenset[int], str], frozenset[int]] = {}
+        self._matching: dict[tuple[frozenset[str], frozenset[str]], frozenset[int]] = {}
+        self._descriptions: dict[int, Expression] = {}
+        self._plain: dict[int, Expression] = {}
 
     # -- labels ------------------------------------------------------------
     def group(self, context: frozenset[int], label: str) -> frozenset[int]:
@@ -96,6 +100,13 @@ class Scene:
     # -- categories --------------------------------------------------------
     def matching(self, colors: set[str], types: set[str]) -> frozenset[int]:
         """Objects whose colour and type agree with every colour and type word given."""
+        key = (frozenset(colors), frozenset(types))
+        cached = self._matching.get(key)
+        if cached is None:
+            cached = self._matching[key] = self._match(colors, types)
+        return cached
+
+    def _match(self, colors: set[str], types: set[str]) -> frozenset[int]:
         mask = np.ones(self.n, dtype=bool)
         for color in colors:
             mask &= self.colors == color
@@ -140,6 +151,8 @@ class Scene:
                 vector[:] = LANGUAGE.generic_noun
             else:
                 vector[last_object] = meaning.weight
+        elif meaning.slot == "refer":
+            vector[list(meaning.value)] = meaning.weight
         elif meaning.slot == "label":
             members = list(self.group(context, meaning.value))
             vector[members] = meaning.weight
@@ -156,7 +169,26 @@ class Scene:
 
     # -- description -------------------------------------------------------
     def describe(self, index: int) -> Expression:
-        """The shortest expression that singles out object ``index`` (location first)."""
+        """The shortest expression that singles out object ``index`` (location first); computed once per world."""
+        cached = self._descriptions.get(index)
+        if cached is None:
+            cached = self.plain(index)
+            if not cached.unique:
+                from services.nlu import relational  # it resolves phrases against this module's scenes
+
+                text = relational.describe(self, index)
+                cached = Expression(text, True) if text is not None else cached
+            self._descriptions[index] = cached
+        return cached
+
+    def plain(self, index: int) -> Expression:
+        """The expression from colour, type and salient labels alone (no relation to another object)."""
+        cached = self._plain.get(index)
+        if cached is None:
+            cached = self._plain[index] = self._describe(index)
+        return cached
+
+    def _describe(self, index: int) -> Expression:
         obj = self.world.objects[index]
         noun = obj.type if obj.type != "unknown" else "object"
         types = {obj.type} if obj.type != "unknown" else set()
@@ -181,7 +213,7 @@ class Scene:
         if context == {index}:
             return [()]
         fitting = [label for label in (*LABELS, "middle") if index in self.group(context, label)]
-        singles = [(label,) for label in fitting if self.group(context, label) == {index}]
+        singles: list[tuple[str, ...]] = [(label,) for label in fitting if self.group(context, label) == {index}]
         if singles:
             return singles
         return [pair for pair in combinations(fitting, 2)
@@ -193,7 +225,7 @@ class Scene:
 
 def _object_meanings(term: Term) -> list[Meaning]:
     return [m for reading in term.readings for m in reading
-            if m.slot in ("color", "type", "label", "generic", "anaphor")]
+            if m.slot in OBJECT_SLOTS]
 
 
 def _priority(label: str) -> int:

@@ -13,14 +13,14 @@ import logging
 import threading
 from typing import Any
 
-from shared.bus import Bus
-from shared.service import run_service, wait_until_stopped
 from services.nlu.context import Dialogue
-from services.nlu.infer import Clarify, CommandResult, Model, Result
-from services.nlu.nbest import NOT_MADE_OUT, most_plausible
+from services.nlu.infer import Answer, Clarify, Model, Result
 from services.nlu.lexicon import vocabulary
+from services.nlu.nbest import NOT_MADE_OUT, most_plausible
 from services.nlu.templates import sentence_templates
 from services.nlu.world import COLORS, TYPES, WorldError, parse_world
+from shared.bus import Bus
+from shared.service import run_service, wait_until_stopped
 
 log = logging.getLogger("hfpbd.nlu")
 
@@ -60,7 +60,8 @@ class LiveWorld:
             log.warning("ignoring executor/state: %s", exc)
             return
         with self.lock:
-            moved = (robot.get("last_arm"), robot.get("last_object")) != (self.robot.get("last_arm"), self.robot.get("last_object"))
+            moved = (robot.get("last_arm"), robot.get("last_object")) != (self.robot.get("last_arm"),
+                                                                          self.robot.get("last_object"))
             self.robot, self.reach = robot, reach
             if moved:
                 self.dialogue.observe_robot()  # the robot's own account of history is newer
@@ -124,8 +125,11 @@ class NluService:
     def _publish(self, result: Result, text: str) -> None:
         self.results.put({**result.to_json(), "utterance": text})
         if isinstance(result, Clarify):
-            self.bus.publish(self.bus.keys.say, {"text": result.question, "kind": "clarify", "candidates": result.labels})
-        log.info("%r -> %s", text, result.command.as_dict() if isinstance(result, CommandResult) else result.question)
+            self.bus.publish(self.bus.keys.say,
+                             {"text": result.question, "kind": "clarify", "candidates": result.labels})
+        elif isinstance(result, Answer):
+            self.bus.publish(self.bus.keys.say, {"text": result.text, "kind": "info"})
+        log.info("%r -> %s", text, result.to_json())
 
     def _say_error(self, text: str) -> None:
         self.bus.publish(self.bus.keys.say, {"text": text, "kind": "error"})
@@ -165,7 +169,8 @@ def _body(bus: Bus, _args: argparse.Namespace, stop: threading.Event) -> None:
     service = NluService(bus)
     keys = bus.keys
     bus.subscribe(keys.objects, service.live.on_objects, schema="objects", latest_only=True, history=True)
-    bus.subscribe(keys.executor_state, service.live.on_executor, schema="executor_state", latest_only=True, history=True)
+    bus.subscribe(keys.executor_state, service.live.on_executor, schema="executor_state", latest_only=True,
+                  history=True)
     bus.subscribe(keys.utterance, service.on_utterance, schema="utterance")
     bus.serve(keys.nlu_query("parse"), service.serve_parse)
     bus.serve(keys.nlu_query("ground"), service.serve_ground)

@@ -32,6 +32,8 @@ _SHAPES: dict[str, tuple[str, ...]] = {
     "switch_action": ("<verb> <target>", "<verb> action <number>"),
     "execute": ("<verb>",),
     "stop": ("<verb>",),
+    "undo": ("<verb>",),
+    "repeat": ("<verb>",),
 }
 
 

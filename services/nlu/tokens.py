@@ -17,16 +17,30 @@ from functools import lru_cache
 from rapidfuzz import process
 from rapidfuzz.distance import DamerauLevenshtein
 
-from services.nlu.lexicon import FILLERS, MAX_PHRASE_WORDS, NUMBER_WORDS, PHRASES, WORDS, Reading, number_reading
+from services.nlu.lexicon import (
+    FILLERS,
+    MAX_PHRASE_WORDS,
+    NUMBER_WORDS,
+    ORDINALS,
+    PHRASES,
+    WORDS,
+    Reading,
+    number_reading,
+)
 from services.nlu.weights import DECISION
 
 _TOKEN = re.compile(r"[a-z0-9]+")
 _KNOWN = WORDS | FILLERS | frozenset(NUMBER_WORDS)
-_CHOICES = sorted(_KNOWN)
+# a typo is never corrected into a number word: "give" must not become "five" (and switch to action 5)
+_CHOICES = sorted(_KNOWN - frozenset(NUMBER_WORDS))
 _SUFFIXES = (("ies", "y"), ("es", ""), ("s", ""), ("ed", ""), ("ed", "e"), ("d", ""), ("ing", ""), ("ing", "e"),
              ("er", ""), ("est", ""))
 # verbs whose particle may come after the object ("pick it up", "put the cup down")
 _SPLIT_PARTICLES = {"pick": "up", "put": "down", "set": "down", "lay": "down"}
+_DIGIT_ORDINALS = {f"{i}{suffix}": word for i, (suffix, word) in
+                   enumerate(zip(("st", "nd", "rd", "th", "th"), ORDINALS), 1)}  # "2nd" -> "second"
+# "the cup that is next to the box": the relative clause's words say nothing the phrase does not
+_CLAUSE = re.compile(r"\b(?:that|which|who)(?: is|'s| are| s)\b")
 _ARM_WORDS = frozenset({"hand", "arm", "gripper", "claw"})
 
 
@@ -57,7 +71,7 @@ class Utterance:
 
 def read(text: str) -> Utterance:
     """Segment ``text`` into terms; unknown words are returned, not dropped silently."""
-    raw = _TOKEN.findall(text.lower().replace("_", " "))
+    raw = _TOKEN.findall(_CLAUSE.sub(" ", text.lower().replace("_", " ")))
     tokens: list[str] = []
     unknown: list[str] = []
     for token in raw:
@@ -89,6 +103,7 @@ def read(text: str) -> Utterance:
 @lru_cache(maxsize=4096)
 def canonical(token: str) -> str | None:
     """The known word ``token`` stands for (itself, its stem, or a typo's fix), else None."""
+    token = _DIGIT_ORDINALS.get(token, token)
     if token in _KNOWN or token.isdigit():
         return token
     for suffix, replacement in _SUFFIXES:

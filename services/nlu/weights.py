@@ -16,10 +16,15 @@ Prior P(C|S) (log scale, added to a command's score; 0 = no opinion):
 - ``unused_arm``: the command uses the arm that was not used last.
 - ``unreachable``: the reachability map says that arm cannot do that with that
   object, or a directional move would leave the arm's reachable space.
+- ``far_side``: no hand has been used yet and the object lies on the other
+  arm's side of the robot (beyond ``Margins.side_m``); the nearer arm is taken
+  and the question "Which hand?" is left for objects in the middle.
+- ``never``: relative to the object the commanding hand holds (DESIGN.md:
+  never its landmark); no words outweigh it.
 - ``impossible``: the command cannot make sense in this state (open an open
   hand, close a closed or holding one, place with an empty hand, pick up with
   a full hand, stop while idle, execute while executing, switch past the
-  first or last action, place an object relative to itself).
+  first or last action).
 
 Language P(L|C,S) (weights of matched words; verbs weigh most for choosing the
 command, adjectives most for choosing the object):
@@ -43,6 +48,8 @@ class PriorWeights:
     unused_arm: float = -0.5
     unreachable: float = -2.5
     impossible: float = -6.0
+    never: float = -50.0       # a landmark the commanding hand holds: no words can make it one
+    far_side: float = -0.5     # no hand used yet: the arm on the other side of the object
 
 
 @dataclass(frozen=True)
@@ -67,6 +74,7 @@ class Margins:
     location_m: float = 0.07   # leftmost/rightmost (y), nearest/farthest (x)
     height_m: float = 0.05     # tallest/shortest (z extent)
     volume_m3: float = 0.0005  # biggest/smallest
+    side_m: float = 0.05       # |y| beyond which an object is on one arm's side (hand choice)
 
 
 @dataclass(frozen=True)

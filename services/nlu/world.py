@@ -12,10 +12,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-ARMS = ("right", "left")
-COLORS = ("red", "green", "blue", "yellow", "orange", "purple", "white", "black", "grey", "unknown")
-TYPES = ("cup", "box", "plate", "bowl", "unknown")
-GRIPPER_STATES = ("open", "closed", "holding")
+from shared.contract import ARMS, COLORS, GRIPPER_STATES, TYPES
+
+__all__ = ["ARMS", "COLORS", "GRIPPER_STATES", "TYPES", "World", "WorldError", "WorldObject", "load_world",
+           "parse_world"]
 
 
 class WorldError(ValueError):
@@ -77,7 +77,8 @@ def load_world(path: str | Path) -> World:
     try:
         data = json.loads(text)
     except json.JSONDecodeError as exc:
-        raise WorldError(f"world file {str(path)!r} is not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}") from None
+        raise WorldError(f"world file {str(path)!r} is not valid JSON: {exc.msg} "
+                         f"at line {exc.lineno}, column {exc.colno}") from None
     return parse_world(data)
 
 
@@ -100,7 +101,8 @@ def parse_world(data: Any, *, strict: bool = True) -> World:
     robot = _parse_robot(data.get("robot", {}))
     if robot.last_object is not None and robot.last_object not in ids:
         if strict:
-            raise WorldError(f"robot.last_object {robot.last_object!r} is not one of the objects ({', '.join(ids) or 'none'})")
+            known = ", ".join(ids) or "none"
+            raise WorldError(f"robot.last_object {robot.last_object!r} is not one of the objects ({known})")
         robot = RobotState(**{**robot.__dict__, "last_object": None})
     return World(objects, robot)
 
@@ -190,4 +192,5 @@ def _vector(value: Any, where: str) -> tuple[float, float, float]:
 
 
 def _kind(value: Any) -> str:
-    return {dict: "an object", list: "a list", str: "a string"}.get(type(value), type(value).__name__)
+    kinds: dict[type, str] = {dict: "an object", list: "a list", str: "a string"}
+    return kinds.get(type(value), type(value).__name__)

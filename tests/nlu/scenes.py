@@ -8,7 +8,8 @@ from typing import Any
 from services.nlu.world import COLORS, TYPES
 
 
-def obj(object_id: str, color: str, kind: str, x: float, y: float, size: tuple[float, float, float] = (0.07, 0.07, 0.10),
+def obj(object_id: str, color: str, kind: str, x: float, y: float,
+        size: tuple[float, float, float] = (0.07, 0.07, 0.10),
         **extra: Any) -> dict[str, Any]:
     return {"id": object_id, "color": color, "type": kind, "position": [x, y, 0.75 + size[2] / 2],
             "size": list(size), **extra}

@@ -43,6 +43,20 @@ def test_parse_batch_one_line_per_input(world_file: Path, tmp_path: Path) -> Non
     assert results[1]["params"] == ["object"] and results[2]["params"] == []
 
 
+def test_batch_carries_then_answers_and_refusals(world_file: Path, tmp_path: Path) -> None:
+    batch = tmp_path / "lines.txt"
+    lines = ["put the red cup on the plate", "what do you see", "move up 5 cm", "move up 50 cm", "x" * 10000]
+    batch.write_text("\n".join(lines) + "\n")
+    done = hfpbd("parse", "--world", str(world_file), "--batch", str(batch))
+    assert done.returncode == 0, done.stderr
+    placed, seen, moved, too_far, pasted = (json.loads(line) for line in done.stdout.splitlines())
+    assert placed["procedure"] == "pick_up" and placed["then"][0]["procedure"] == "place_rel"
+    assert seen["kind"] == "answer" and seen["topic"] == "scene"
+    assert moved["args"]["distance"] == 0.05
+    assert too_far["kind"] == "clarify" and too_far["params"] == ["distance"]
+    assert pasted["kind"] == "clarify" and "too long" in pasted["question"]
+
+
 def test_ground_and_describe(world_file: Path, tmp_path: Path) -> None:
     grounded = json.loads(hfpbd("ground", "--world", str(world_file), "the red cup").stdout)
     assert max(grounded, key=grounded.get) == "obj0" and sum(grounded.values()) == pytest.approx(1, abs=1e-3)
@@ -51,7 +65,8 @@ def test_ground_and_describe(world_file: Path, tmp_path: Path) -> None:
     lines = hfpbd("ground", "--world", str(world_file), "--batch", str(batch)).stdout.splitlines()
     assert [max(m, key=m.get) for m in map(json.loads, lines)] == ["obj2", "obj1"]
     described = json.loads(hfpbd("describe", "--world", str(world_file)).stdout)
-    assert described == {"obj0": "the rightmost cup", "obj1": "the leftmost cup", "obj2": "the box", "obj3": "the plate"}
+    assert described == {"obj0": "the rightmost cup", "obj1": "the leftmost cup", "obj2": "the box",
+                         "obj3": "the plate"}
 
 
 @pytest.mark.parametrize("content, message", [
@@ -88,10 +103,14 @@ def test_missing_batch_file(world_file: Path, tmp_path: Path) -> None:
 
 
 def test_benchmark_prints_its_table() -> None:
-    done = subprocess.run([HFPBD, "bench", "nlu", "--rounds", "20", "--sizes", "1", "4"],
-                          capture_output=True, text=True, timeout=120, cwd=ROOT)
+    done = subprocess.run([HFPBD, "bench", "nlu", "--rounds", "20", "--sizes", "1", "4", "--batch-lines", "100"],
+                          capture_output=True, text=True, timeout=240, cwd=ROOT)
     assert done.returncode == 0, done.stderr
     rows = [fields for fields in (line.split() for line in done.stdout.splitlines())
             if len(fields) >= 6 and fields[0].isdigit()]
     assert [row[0] for row in rows] == ["1", "4"]
     assert "parse p99 target" in done.stdout and ("PASS" in done.stdout or "MISS" in done.stdout)
+    accuracy = {line.split()[0]: line.split()[3] for line in done.stdout.splitlines() if line.endswith("%")
+                or "(>= 97%)" in line}
+    assert {"paper", "held", "relational", "compound", "distance", "questions", "typos", "all"} <= set(accuracy)
+    assert [line.split()[1] for line in done.stdout.splitlines() if line.startswith("  batch,")] == ["4", "16", "64"]

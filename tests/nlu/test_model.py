@@ -28,14 +28,22 @@ HOLDING = dict(grippers={"right": "holding", "left": "open"})
 PROCEDURE_CASES = [
     ("move your right hand to the side", None, {"procedure": "move_abs_dest", "arm": "right", "destination": "side"}),
     ("move the left arm out of the way", None, {"procedure": "move_abs_dest", "arm": "left", "destination": "side"}),
-    ("move your right hand above the red cup", None, {"procedure": "move_rel_dest", "arm": "right", "relation": "above", "object": "obj0"}),
-    ("move right hand next to the blue cup", None, {"procedure": "move_rel_dest", "arm": "right", "relation": "next_to", "object": "obj1"}),
-    ("move your left hand to the left of the box", None, {"procedure": "move_rel_dest", "arm": "left", "relation": "left_of", "object": "obj2"}),
-    ("move right hand to the right of the plate", None, {"procedure": "move_rel_dest", "arm": "right", "relation": "right_of", "object": "obj3"}),
-    ("go in front of the green box", None, {"procedure": "move_rel_dest", "arm": "right", "relation": "in_front_of", "object": "obj2"}),
-    ("move behind the box", None, {"procedure": "move_rel_dest", "arm": "right", "relation": "behind", "object": "obj2"}),
-    ("move on top of the plate", None, {"procedure": "move_rel_dest", "arm": "right", "relation": "on_top_of", "object": "obj3"}),
-    ("move near the blue cup", None, {"procedure": "move_rel_dest", "arm": "right", "relation": "near", "object": "obj1"}),
+    ("move your right hand above the red cup", None,
+     {"procedure": "move_rel_dest", "arm": "right", "relation": "above", "object": "obj0"}),
+    ("move right hand next to the blue cup", None,
+     {"procedure": "move_rel_dest", "arm": "right", "relation": "next_to", "object": "obj1"}),
+    ("move your left hand to the left of the box", None,
+     {"procedure": "move_rel_dest", "arm": "left", "relation": "left_of", "object": "obj2"}),
+    ("move right hand to the right of the plate", None,
+     {"procedure": "move_rel_dest", "arm": "right", "relation": "right_of", "object": "obj3"}),
+    ("go in front of the green box", None,
+     {"procedure": "move_rel_dest", "arm": "right", "relation": "in_front_of", "object": "obj2"}),
+    ("move behind the box", None,
+     {"procedure": "move_rel_dest", "arm": "right", "relation": "behind", "object": "obj2"}),
+    ("move on top of the plate", None,
+     {"procedure": "move_rel_dest", "arm": "right", "relation": "on_top_of", "object": "obj3"}),
+    ("move near the blue cup", None,
+     {"procedure": "move_rel_dest", "arm": "right", "relation": "near", "object": "obj1"}),
     ("move your right hand up", None, {"procedure": "move_abs_dir", "arm": "right", "direction": "up"}),
     ("move down", None, {"procedure": "move_abs_dir", "arm": "right", "direction": "down"}),
     ("move left hand right", None, {"procedure": "move_abs_dir", "arm": "left", "direction": "right"}),
@@ -44,17 +52,23 @@ PROCEDURE_CASES = [
     ("move backward", None, {"procedure": "move_abs_dir", "arm": "right", "direction": "backward"}),
     ("raise your left hand", None, {"procedure": "move_abs_dir", "arm": "left", "direction": "up"}),
     ("lower the right arm", None, {"procedure": "move_abs_dir", "arm": "right", "direction": "down"}),
-    ("move towards the box", None, {"procedure": "move_rel_dir", "arm": "right", "direction": "towards", "object": "obj2"}),
-    ("move your hand closer to the red cup", None, {"procedure": "move_rel_dir", "arm": "right", "direction": "towards", "object": "obj0"}),
-    ("move away from the plate", None, {"procedure": "move_rel_dir", "arm": "right", "direction": "away_from", "object": "obj3"}),
+    ("move towards the box", None,
+     {"procedure": "move_rel_dir", "arm": "right", "direction": "towards", "object": "obj2"}),
+    ("move your hand closer to the red cup", None,
+     {"procedure": "move_rel_dir", "arm": "right", "direction": "towards", "object": "obj0"}),
+    ("move away from the plate", None,
+     {"procedure": "move_rel_dir", "arm": "right", "direction": "away_from", "object": "obj3"}),
     ("pick up the red cup", None, {"procedure": "pick_up", "arm": "right", "object": "obj0"}),
     ("grab the blue cup with your left hand", None, {"procedure": "pick_up", "arm": "left", "object": "obj1"}),
     ("take the box", None, {"procedure": "pick_up", "arm": "right", "object": "obj2"}),
     ("place it on the table", HOLDING, {"procedure": "place_abs", "arm": "right", "destination": "table"}),
     ("put it down here", HOLDING, {"procedure": "place_abs", "arm": "right", "destination": "here"}),
-    ("place it next to the green box", HOLDING, {"procedure": "place_rel", "arm": "right", "relation": "next_to", "object": "obj2"}),
-    ("put it on the plate", HOLDING, {"procedure": "place_rel", "arm": "right", "relation": "on_top_of", "object": "obj3"}),
-    ("place it behind the blue cup", HOLDING, {"procedure": "place_rel", "arm": "right", "relation": "behind", "object": "obj1"}),
+    ("place it next to the green box", HOLDING,
+     {"procedure": "place_rel", "arm": "right", "relation": "next_to", "object": "obj2"}),
+    ("put it on the plate", HOLDING,
+     {"procedure": "place_rel", "arm": "right", "relation": "on_top_of", "object": "obj3"}),
+    ("place it behind the blue cup", HOLDING,
+     {"procedure": "place_rel", "arm": "right", "relation": "behind", "object": "obj1"}),
     ("point to the plate", None, {"procedure": "point_to", "arm": "right", "object": "obj3"}),
     ("point at the red cup with the left hand", None, {"procedure": "point_to", "arm": "left", "object": "obj0"}),
     ("look at the box", None, {"procedure": "look_at", "object": "obj2"}),
@@ -70,6 +84,8 @@ PROCEDURE_CASES = [
     ("switch to action two", None, {"procedure": "switch_action", "target": 2}),
     ("execute", None, {"procedure": "execute"}),
     ("stop", dict(executing=True), {"procedure": "stop"}),
+    ("undo", None, {"procedure": "undo"}),
+    ("again", None, {"procedure": "repeat"}),
 ]
 
 
@@ -93,8 +109,10 @@ def test_ordinary_spelling(text: str) -> None:
 
 
 @pytest.mark.parametrize("text, expected", [
-    ("move right-hand to-the-left-of the blue cup", {"procedure": "move_rel_dest", "arm": "right", "relation": "left_of", "object": "obj1"}),
-    ("Move your LEFT hand, to the right of the blue cup!", {"procedure": "move_rel_dest", "arm": "left", "relation": "right_of", "object": "obj1"}),
+    ("move right-hand to-the-left-of the blue cup",
+     {"procedure": "move_rel_dest", "arm": "right", "relation": "left_of", "object": "obj1"}),
+    ("Move your LEFT hand, to the right of the blue cup!",
+     {"procedure": "move_rel_dest", "arm": "left", "relation": "right_of", "object": "obj1"}),
     ("move left hand up", {"procedure": "move_abs_dir", "arm": "left", "direction": "up"}),
 ])
 def test_multiword_phrases_are_units(text: str, expected: dict[str, Any]) -> None:
@@ -102,12 +120,14 @@ def test_multiword_phrases_are_units(text: str, expected: dict[str, Any]) -> Non
 
 
 def test_paper_example_up_uses_last_arm() -> None:
-    assert command("up", table_scene(last_arm="left")) == {"procedure": "move_abs_dir", "arm": "left", "direction": "up"}
+    assert command("up", table_scene(last_arm="left")) == {"procedure": "move_abs_dir", "arm": "left",
+                                                           "direction": "up"}
 
 
 def test_paper_example_above_with_one_object() -> None:
     scene = world(obj("obj0", "red", "cup", 0.6, 0.0), last_arm="left")
-    assert command("above", scene) == {"procedure": "move_rel_dest", "arm": "left", "relation": "above", "object": "obj0"}
+    assert command("above", scene) == {"procedure": "move_rel_dest", "arm": "left", "relation": "above",
+                                       "object": "obj0"}
 
 
 def test_paper_example_above_uses_last_object() -> None:
@@ -124,7 +144,8 @@ def test_paper_example_biggest_is_ambiguous_then_tallest_is_not() -> None:
 
 
 def test_paper_example_pick_it_up_resolves_to_last_object() -> None:
-    assert command("Pick it up", table_scene(last_object="obj1")) == {"procedure": "pick_up", "arm": "right", "object": "obj1"}
+    assert command("Pick it up", table_scene(last_object="obj1")) == {"procedure": "pick_up", "arm": "right",
+                                                                      "object": "obj1"}
 
 
 @pytest.mark.parametrize("anaphor", ["it", "that", "the same one", "that one", "this"])
@@ -202,10 +223,11 @@ def test_execute_while_executing_means_stop_is_preferred() -> None:
 
 @pytest.mark.parametrize("text, last_arm, params, phrase", [
     ("pick up the cup", "right", ["object"], "Which object do you mean: the rightmost cup or the leftmost cup?"),
-    ("point to the red cup", None, ["arm"], "Which hand do you mean: the right hand or the left hand?"),
+    ("point to the box", None, ["arm"], "Which hand do you mean: the right hand or the left hand?"),
     ("switch action", None, ["target"], "Which action do you mean: the next action or the previous action?"),
     ("point to the cup", None, ["arm", "object"],
-     "Which hand do you mean: the right hand or the left hand? And which object: the rightmost cup or the leftmost cup?"),
+     "Which hand do you mean: the right hand or the left hand? "
+     "And which object: the rightmost cup or the leftmost cup?"),
 ])
 def test_clarifications_name_the_parameters_in_contention(text: str, last_arm: str | None, params: list[str],
                                                           phrase: str) -> None:
@@ -246,7 +268,8 @@ def test_no_objects_still_understands_object_free_commands() -> None:
 
 @pytest.mark.parametrize("text, phrases", [
     ("grab the red cup", {"verb": "grab", "object": "red cup"}),
-    ("move the left arm on top of the box", {"verb": "move", "arm": "left arm", "relation": "on top of", "object": "box"}),
+    ("move the left arm on top of the box",
+     {"verb": "move", "arm": "left arm", "relation": "on top of", "object": "box"}),
 ])
 def test_phrase_tracking(text: str, phrases: dict[str, str]) -> None:
     result = parse(text)

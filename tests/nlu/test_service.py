@@ -41,7 +41,8 @@ def live(network: Network, launcher: Launcher) -> Network:
     keys = network.hub.keys
     objects = network.hub.publisher(keys.objects, cached=True)
     executor = network.hub.publisher(keys.executor_state, cached=True)
-    objects.put({"stamp": time.time(), "objects": [{**o, "held_by": None, "confidence": 0.9} for o in scene["objects"]]})
+    objects.put({"stamp": time.time(),
+                 "objects": [{**o, "held_by": None, "confidence": 0.9} for o in scene["objects"]]})
     executor.put({"stamp": time.time(), "robot": {**scene["robot"], "action": 1, "actions": [0]},
                   "reach": {"obj1": {"right": {"pick_up": False}, "left": {"pick_up": True}}}})
     launcher.start("nlu")
@@ -78,7 +79,8 @@ def test_clarification_is_said_and_a_choice_answers_it(live: Network) -> None:
     assert len(line["candidates"]) == len(question["candidates"]) == 2
     say(live, text="", choice=0)
     chosen = next_result(results)
-    assert chosen["kind"] == "command" and {"procedure": chosen["procedure"], "args": chosen["args"]} == question["candidates"][0]
+    assert chosen["kind"] == "command" and {"procedure": chosen["procedure"],
+                                            "args": chosen["args"]} == question["candidates"][0]
 
 
 def test_nbest_picks_the_plausible_hypothesis(live: Network) -> None:
@@ -132,3 +134,24 @@ def test_queryables(live: Network) -> None:
         live.hub.request(keys.nlu_query("parse"), {"text": "up", "world": {"objects": 5}})
     with pytest.raises(RemoteError, match="needs 'text'"):
         live.hub.request(keys.nlu_query("ground"), {})
+
+
+def test_a_question_is_answered_on_the_result_and_said_as_info(live: Network) -> None:
+    results = collect(live, live.hub.keys.nlu_result)
+    spoken = collect(live, live.hub.keys.say)
+    time.sleep(0.3)
+    say(live, text="what do you see?")
+    answer = next_result(results)
+    assert answer["kind"] == "answer" and answer["topic"] == "scene" and answer["utterance"] == "what do you see?"
+    said = spoken.get(timeout=10)
+    assert said["kind"] == "info" and said["text"] == answer["text"] and "I see 4 objects" in said["text"]
+
+
+def test_a_compound_is_one_result_with_then(live: Network) -> None:
+    results = collect(live, live.hub.keys.nlu_result)
+    time.sleep(0.3)
+    say(live, text="pick up the red cup and put it on the plate")
+    result = next_result(results)
+    assert (result["procedure"], result["args"]) == ("pick_up", {"arm": "right", "object": "obj0"})
+    assert result["then"] == [{"procedure": "place_rel", "args": {"arm": "right", "relation": "on_top_of",
+                                                                  "object": "obj3"}}]

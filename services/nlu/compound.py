@@ -1,0 +1,115 @@
+"""Utterances that ask for several steps: "pick up the red cup and put it in the box", "move up, then left".
+
+Why step by step: each part is understood in the world the parts before it
+leave behind (after "pick up the red cup" the right hand holds it, so "put it
+in the box" is a place with that hand and "it" is the cup). The result is the
+first command with the rest under ``then`` (DESIGN.md); a part that cannot be
+understood is asked about, naming that part, and nothing of the utterance runs.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+from services.nlu.commands import Command
+from services.nlu.lexicon import PHRASES
+from services.nlu.prior import History
+from services.nlu.results import Clarify, CommandResult, Result
+from services.nlu.weights import LANGUAGE
+from services.nlu.world import RobotState, World
+from shared.contract import ARMS, BOTH
+
+if TYPE_CHECKING:
+    from services.nlu.infer import Model
+
+_ALWAYS = re.compile(r"\s*(?:,\s*)?(?:\band then\b|\bthen\b|\bafter that\b|\bafterwards\b|\bnext,|;"
+                     r"|(?<=[a-z])\.(?=\s|$))\s*")
+_AND = re.compile(r"\s*(?:,\s*and\b|\band\b|,)\s*")
+_JOINS = re.compile(r"\b(?:and|then|after|afterwards|next)\b|[,;.]")
+MAX_STEPS = 6  # more than this in one breath is almost surely pasted text
+
+
+def split(text: str) -> list[str]:
+    """The parts of ``text`` that are commands of their own (one part when it is a single command)."""
+    if not _JOINS.search(text):
+        return [text]
+    parts: list[str] = []
+    for chunk in _ALWAYS.split(text):
+        pieces = [p for p in _AND.split(chunk) if p.strip()]
+        if not pieces:
+            continue
+        merged = [pieces[0]]
+        for piece in pieces[1:]:
+            if _has_verb(piece):
+                merged.append(piece)
+            else:
+                merged[-1] = f"{merged[-1]} and {piece}"  # "between the cup and the box"
+        parts.extend(merged)
+    return [p.strip() for p in parts if p.strip()] or [text]
+
+
+def _has_verb(text: str) -> bool:
+    words = text.lower().split()
+    for n in range(min(4, len(words)), 0, -1):
+        readings = PHRASES.get(" ".join(words[:n]))
+        if readings and any(m.slot == "procedure" and m.weight >= LANGUAGE.verb for r in readings for m in r):
+            return True
+    for word in words[:3]:  # "please put it there", "now pick it up"
+        readings = PHRASES.get(word, ())
+        if any(m.slot == "procedure" and m.weight >= LANGUAGE.verb for r in readings for m in r):
+            return True
+    return False
+
+
+def run(model: Model, parts: list[str], history: History) -> Result:
+    """Understand the parts in order, each in the world the ones before leave."""
+    if len(parts) > MAX_STEPS:
+        return Clarify([], f"That is {len(parts)} steps in one go. Please give me at most {MAX_STEPS} at a time.")
+    commands: list[Command] = []
+    texts: list[str] = []
+    score, confidence = 0.0, 1.0
+    current = model
+    for part in parts:
+        result = current.parse_step(part, history)
+        if not isinstance(result, CommandResult):
+            if isinstance(result, Clarify):
+                prefix = f"About \"{part}\": " if commands else ""
+                return Clarify(result.params, prefix + result.question, result.candidates if not commands else [],
+                               result.labels if not commands else [], result.score)
+            return result
+        commands.extend(result.commands)
+        texts.append(result.text)
+        score += result.score
+        confidence *= result.confidence
+        world = current.world
+        for command in result.commands:
+            world = after(world, command)
+            history = History(command.arg("arm") if command.arg("arm") in ARMS else history.last_arm,
+                              command.arg("object") or history.last_object)
+        current = type(model)(world)
+    return CommandResult(commands[0], confidence, ", then ".join(texts), {}, score, tuple(commands[1:]))
+
+
+def after(world: World, command: Command) -> World:
+    """The world as ``command`` leaves it, as far as the next step's understanding needs."""
+    arm, object_id = command.arg("arm"), command.arg("object")
+    robot = world.robot
+    grippers = dict(robot.grippers)
+    objects = world.objects
+    arms = ARMS if arm == BOTH else (arm,)
+    if command.procedure == "pick_up":
+        grippers[arm] = "holding"
+        objects = tuple(replace(o, held_by=arm) if o.id == object_id else o for o in objects)
+    elif command.procedure in ("place_abs", "place_rel", "open"):
+        for hand in arms:
+            grippers[hand] = "open"
+        objects = tuple(replace(o, held_by=None) if o.held_by in arms else o for o in objects)
+    elif command.procedure == "close":
+        for hand in arms:
+            grippers[hand] = "holding" if any(o.held_by == hand for o in objects) else "closed"
+    last_arm = arm if arm in ARMS else robot.last_arm
+    last_object = object_id or robot.last_object
+    return World(objects, RobotState(**{**robot.__dict__, "grippers": grippers, "last_arm": last_arm,
+                                        "last_object": last_object}))

@@ -1,0 +1,90 @@
+"""What the hands allow: a command the words ask for that the grippers' state turns into another, or refuses.
+
+Why after inference: the prior only ranks commands, and a word the user said
+outweighs it by design; but some readings are wrong however well the words
+fit, and the right answer is then another command or a reason, not the
+runner-up:
+
+- picking up what a hand already holds is refused, naming the object and hand
+  (not some other object that shares a word with it);
+- a place with an empty hand is a pick-up first when the utterance names what
+  to place ("put the red cup on the plate": ``pick_up`` then ``place_rel``),
+  and otherwise the move to that place ("put your right hand over the box");
+  with nowhere to move to, it is refused.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from services.nlu.commands import Command
+from services.nlu.language import Match
+from services.nlu.prior import History
+from shared.contract import ARMS
+
+if TYPE_CHECKING:
+    from services.nlu.infer import Model
+
+
+class Refusal(Exception):
+    """The command cannot be done in this state; the message says why, in the robot's words."""
+
+
+def situate(model: Model, command: Command, match: Match, history: History,
+            said_arm: bool) -> tuple[Command, ...]:
+    """The commands that carry out ``command`` in the current state (the first is the one asked for)."""
+    world = model.world
+    if command.procedure == "pick_up":
+        already_held(model, command.procedure, match)
+        return (command,)
+    if command.procedure not in ("place_abs", "place_rel") or not _empty(model, command.arg("arm")):
+        return (command,)
+    theme = _unique(match.grounding(match.theme_end) if match.theme_end else match.grounding(), model)
+    if command.procedure == "place_rel" and theme == world.index_of(command.arg("object")):
+        theme = None
+    if theme is not None and world.objects[theme].held_by is None:
+        arm = command.arg("arm") if said_arm else _best_arm(model, theme, history, command.arg("arm"))
+        return (Command("pick_up", (("arm", arm), ("object", world.ids[theme]))), command.with_arg("arm", arm))
+    if command.procedure == "place_rel":
+        return (Command("move_rel_dest", command.args),)
+    raise Refusal(f"My {command.arg('arm')} hand is not holding anything to put down.")
+
+
+def already_held(model: Model, procedure: str, match: Match) -> None:
+    """Refuse a pick-up whose words mean an object a hand already holds."""
+    if procedure != "pick_up":
+        return
+    held = _unique(match.grounding(), model)
+    if held is not None and model.world.objects[held].held_by is not None:
+        obj = model.world.objects[held]
+        raise Refusal(f"I am already holding {model.scene.describe(held).text} in my {obj.held_by} hand.")
+
+
+def _empty(model: Model, arm: str) -> bool:
+    """The hand is known to hold nothing (an unknown gripper state may be holding)."""
+    state = model.world.robot.grippers.get(arm)
+    return state is not None and state != "holding" and all(o.held_by != arm for o in model.world.objects)
+
+
+def _unique(grounding: np.ndarray | None, model: Model) -> int | None:
+    """The one object the words fit best, or None when they fit none or several equally."""
+    if grounding is None or not len(grounding) or grounding.max() <= 0:
+        return None
+    best = np.flatnonzero(grounding >= grounding.max() - 1e-9)
+    return int(best[0]) if len(best) == 1 else None
+
+
+def _best_arm(model: Model, obj: int, history: History, fallback: str) -> str:
+    """The arm the prior prefers for picking ``obj`` up (``fallback`` when both are equal)."""
+    scores: dict[str, float] = {}
+    object_id = model.world.ids[obj]
+    for arm in ARMS:
+        position = model.index.position.get(Command("pick_up", (("arm", arm), ("object", object_id))))
+        if position is None:
+            return fallback
+        scores[arm] = float(model.situation[position] + model.history_part(history)[position])
+    if abs(scores["right"] - scores["left"]) < 1e-9:
+        return fallback
+    return max(scores, key=scores.__getitem__)

@@ -1,0 +1,178 @@
+"""Questions the user asks the robot, answered from the world state (DESIGN.md: ``kind: answer``).
+
+Why a separate reader: a question is not a command with a missing verb;
+"where is the red cup" must not point at it and "what do you see" must not
+look at something. Questions are recognised by their opening words, before
+the command model reads anything, and answered in the robot's words, naming
+objects by their referring expressions (never by their ids).
+"""
+
+from __future__ import annotations
+
+import re
+from typing import TYPE_CHECKING
+
+from services.nlu.lexicon import NUMBER_WORDS
+from services.nlu.results import Answer
+from services.nlu.tokens import canonical, read
+from services.nlu.weights import MARGINS
+from shared.contract import ARMS
+
+if TYPE_CHECKING:
+    from services.nlu.infer import Model
+    from services.nlu.prior import History
+
+_PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple((topic, re.compile(pattern)) for topic, pattern in (
+    ("help", r"^(?:help\b|help me\b|what (?:can|should|do) i (?:say|do|ask|tell)|what (?:can|do) you (?:do|understand)"
+             r"|what commands|which commands|how do i (?:talk|speak|use)|what are the commands|how does this work)"),
+    ("holding", r"^(?:what (?:are|do|did) you (?:holding|have|carrying|hold|got|grab)|what(?:'s| is) in (?:your|my) "
+                r"(?:\w+ )?(?:hand|gripper|arm)s?|are you holding|do you have anything|is (?:your|the) (?:\w+ )?hand "
+                r"(?:empty|full|holding)|what do you hold|what have you got)"),
+    ("actions", r"^(?:what(?:'s| is| does| do)? (?:(?:in|inside) )?(?:action|program) (?P<number>\w+)"
+                r"|how many (?:actions|programs|steps)|which action|what actions|list (?:the |all )?actions"
+                r"|what (?:have|did) i (?:program|record|teach|make)|what is the current action|what(?:'s| is) "
+                r"(?:the )?current action|show (?:me )?(?:the )?actions)"),
+    ("object", r"^(?:where(?:'s| is| are)|is there|are there|do you see|can you see|have you seen|where did|where)"
+               r"\b(?P<phrase>.*)"),
+    ("scene", r"^(?:what (?:do |can )?you (?:see|notice)|which (?:objects|things)"
+              r"|what(?:'s| is| are) (?:on|in front of you|there|around|in view)"
+              r"|what (?:objects|things)|describe (?:the |what)|list (?:the |all )?(?:objects|things)"
+              r"|how many (?:objects|things)"
+              r"|tell me what you see|what is on the table|what have you (?:got|found) on the table)"),
+))
+_POLITE = re.compile(r"^(?:(?:hey|ok|okay|so|well|and|robot|please|now|tell me|can you tell me|could you tell me|"
+                     r"do you know),? )+")
+
+
+# the first words a question can start with (after "please", "tell me", ...): a cheap test before the patterns
+_OPENERS = frozenset("help what whats where wheres is are do can have how which list describe tell show could so ok "
+                     "okay hey well and robot please now".split())
+_CONTRACTED = re.compile(r"\b(what|where)(?:'s|s)\b")
+
+
+def answer(model: Model, text: str, history: History) -> Answer | None:
+    """The answer when ``text`` is a question; None when it is not one."""
+    first = text.lstrip().split(" ", 1)[0].lower().strip("?!.,")
+    if first not in _OPENERS and not first.startswith(("what'", "where'")):
+        return None
+    lowered = " ".join(re.sub(r"[?!.,]+", " ", text.lower()).split())
+    lowered = _CONTRACTED.sub(lambda found: found[1] + " is", _POLITE.sub("", lowered))
+    found_any = _match(lowered)
+    if found_any is None:  # "what do you sea": the same question with its typos corrected
+        found_any = _match(" ".join(word if word in _OPENERS else canonical(word) or word for word in lowered.split()))
+    if found_any is None:
+        return None
+    topic, found = found_any
+    if topic == "object":
+        return Answer(topic, _where(model, found["phrase"]))
+    if topic == "actions":
+        return Answer(topic, _actions(model, found.groupdict().get("number")))
+    return Answer(topic, {"help": _help, "holding": _holding, "scene": _scene}[topic](model))
+
+
+def _match(lowered: str) -> tuple[str, re.Match[str]] | None:
+    for topic, pattern in _PATTERNS:
+        found = pattern.search(lowered)
+        if found is not None:
+            return topic, found
+    return None
+
+
+def _named(model: Model, index: int) -> str:
+    obj = model.world.objects[index]
+    text = model.scene.describe(index).text
+    return text if obj.color in ("unknown",) or obj.color in text else f"{text} ({obj.color})"
+
+
+def _where_is(model: Model, index: int) -> str:
+    obj = model.world.objects[index]
+    if obj.held_by is not None:
+        return f"in my {obj.held_by} hand"
+    x, y, _ = obj.position
+    margin = MARGINS.location_m
+    side = "on my right" if y < -margin else "on my left" if y > margin else "straight ahead"
+    return f"{side}, {x * 100:.0f} cm in front of me"
+
+
+def _scene(model: Model) -> str:
+    objects = model.world.objects
+    if not objects:
+        return "I don't see any objects on the table."
+    names = [_named(model, i) + (f" in my {o.held_by} hand" if o.held_by else "") for i, o in enumerate(objects)]
+    count = f"{len(names)} object{'s' if len(names) > 1 else ''}"
+    return f"I see {count}: {_listed(names)}."
+
+
+def _where(model: Model, phrase: str) -> str:
+    terms = read(phrase).terms
+    colors = {m.value for t in terms for r in t.readings for m in r if m.slot == "color"}
+    types = {m.value for t in terms for r in t.readings for m in r if m.slot == "type"}
+    words = " ".join(t.words for t in terms) or "that"
+    matching = model.scene.matching(colors, types)
+    if not (colors or types) or not matching:
+        if not (colors or types):
+            return _scene(model)
+        return f"I don't see {_article(words)} {words.removeprefix('the ')}."
+    grounding = model.scene.ground(terms)
+    best = [i for i in matching if grounding[i] >= grounding[list(matching)].max() - 1e-6]
+    if len(best) == 1:
+        return f"{_named(model, best[0])[0].upper()}{_named(model, best[0])[1:]} is {_where_is(model, best[0])}."
+    places = [f"{_named(model, i)} {_where_is(model, i)}" for i in best]
+    return f"I see {len(best)}: {_listed(places)}."
+
+
+def _holding(model: Model) -> str:
+    parts = []
+    for arm in ARMS:
+        held = [i for i, o in enumerate(model.world.objects) if o.held_by == arm]
+        state = model.world.robot.grippers.get(arm)
+        if held:
+            parts.append(f"my {arm} hand is holding {_named(model, held[0])}")
+        elif state == "holding":
+            parts.append(f"my {arm} hand is holding something I can't see")
+        else:
+            parts.append(f"my {arm} hand is empty")
+    text = " and ".join(parts)
+    return text[0].upper() + text[1:] + "."
+
+
+def _actions(model: Model, number_word: str | None) -> str:
+    robot = model.world.robot
+    steps = list(robot.actions)
+    if not steps:
+        return "There are no actions yet. Say \"create a new action\" to start one."
+    current = f" The current one is action {robot.action}." if robot.action is not None else ""
+    number = _number(number_word)
+    if number is None:
+        counts = ", ".join(f"action {i} has {_steps(n)}" for i, n in enumerate(steps, 1))
+        return f"There {'is 1 action' if len(steps) == 1 else f'are {len(steps)} actions'}: {counts}.{current}"
+    if not 1 <= number <= len(steps):
+        return f"There is no action {number}; there {'is' if len(steps) == 1 else 'are'} {len(steps)}."
+    where = " It is the current one." if robot.action == number else current
+    return f"Action {number} has {_steps(steps[number - 1])}.{where}"
+
+
+def _help(_model: Model) -> str:
+    return ("You can say things like \"pick up the red cup\", \"put it on the plate\", \"move your left hand up "
+            "5 centimetres\", \"open both hands\", \"create a new action\", \"execute\", \"undo\", \"again\", or ask "
+            "\"what do you see\" and \"what are you holding\".")
+
+
+def _number(word: str | None) -> int | None:
+    if word is None:
+        return None
+    if word.isdigit():
+        return int(word)
+    return NUMBER_WORDS.get(word)
+
+
+def _steps(count: int) -> str:
+    return f"{count} step{'' if count == 1 else 's'}"
+
+
+def _article(words: str) -> str:
+    return "the" if words.startswith("the ") else "a"
+
+
+def _listed(items: list[str]) -> str:
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
