@@ -16,38 +16,21 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-ARMS = ("right", "left")
-BOTH = "both"
-# procedures whose arm may be "both": both arms at once, started together
-BOTH_ARMS = frozenset({"open", "close", "move_abs_dir", "move_abs_dest"})
-# procedures with an optional distance (metres) and its limits; absent means the default step
-DISTANCE_PROCEDURES = frozenset({"move_abs_dir", "move_rel_dir"})
-MIN_DISTANCE, MAX_DISTANCE = 0.01, 0.30
-RELATIONS = ("above", "next_to", "left_of", "right_of", "in_front_of", "behind", "on_top_of", "near")
+from shared import contract
 
-# procedure -> parameter -> allowed values (None: an object id; "int|target": action number or next/previous)
+ARMS = contract.ARMS
+BOTH = contract.BOTH
+BOTH_ARMS = contract.BOTH_ARM_PROCEDURES
+DISTANCE_PROCEDURES = contract.DISTANCE_PROCEDURES
+MIN_DISTANCE, MAX_DISTANCE = contract.DISTANCE.min_m, contract.DISTANCE.max_m
+
+# procedure -> parameter -> allowed values (None: an object id; "int|target": action number or next/previous),
+# the required parameters of the contract's procedures; ``distance`` is optional and checked on its own
 PROCEDURES: dict[str, dict[str, tuple[Any, ...] | None | str]] = {
-    "move_abs_dest": {"arm": ARMS, "destination": ("side",)},
-    "move_rel_dest": {"arm": ARMS, "relation": RELATIONS, "object": None},
-    "move_abs_dir": {"arm": ARMS, "direction": ("up", "down", "left", "right", "forward", "backward")},
-    "move_rel_dir": {"arm": ARMS, "direction": ("towards", "away_from"), "object": None},
-    "pick_up": {"arm": ARMS, "object": None},
-    "place_abs": {"arm": ARMS, "destination": ("table", "here")},
-    "place_rel": {"arm": ARMS, "relation": RELATIONS, "object": None},
-    "point_to": {"arm": ARMS, "object": None},
-    "look_at": {"object": None},
-    "rotate": {"arm": ARMS, "direction": ("cw", "ccw")},
-    "open": {"arm": ARMS},
-    "close": {"arm": ARMS},
-    "record": {},
-    "create_action": {},
-    "switch_action": {"target": "int|target"},
-    "execute": {},
-    "stop": {},
-    "undo": {},
-    "repeat": {},
-}
-ADMIN = frozenset({"record", "create_action", "switch_action", "execute", "stop", "undo", "repeat"})
+    name: {p.name: (ARMS if p.kind == "arm" else None if p.kind == "object" else "int|target" if p.kind == "action"
+                    else p.domain) for p in procedure.required}
+    for name, procedure in contract.PROCEDURES.items()}
+ADMIN = contract.ADMIN_PROCEDURES
 # steps that are kept in an action when they succeed
 RECORDED = frozenset(PROCEDURES) - ADMIN
 
@@ -148,7 +131,7 @@ def _distance(procedure: str, value: Any) -> float:
         raise CommandError(f"{procedure.replace('_', ' ').capitalize()} doesn't take a distance.")
     if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value:
         raise CommandError("The distance must be a number of metres.")
-    if not MIN_DISTANCE - 1e-9 <= value <= MAX_DISTANCE + 1e-9:
+    if not contract.DISTANCE.allows(round(float(value), 6)):
         raise CommandError(f"I can move {round(MIN_DISTANCE * 100)} to {round(MAX_DISTANCE * 100)} centimetres "
                            f"at a time, not {value * 100:.0f}.")
     return float(value)
