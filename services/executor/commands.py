@@ -54,11 +54,16 @@ def check_compound(message: dict[str, Any]) -> list[Step]:
 
     A ``then`` item has ``procedure`` and ``args`` and may carry its own
     ``phrases`` and ``text``; a step that fails the check refuses the whole
-    utterance with a sentence saying which step it was.
+    utterance with a sentence saying which step it was. The utterance's own
+    verb is not narrated for a compound's first step, since it may name a
+    later one.
     """
-    first = Step(message.get("procedure"), check(message.get("procedure"), message.get("args")),
-                 _phrases(message.get("phrases")), _text(message.get("text")))
     extra = message.get("then") or []
+    phrases = _phrases(message.get("phrases"))
+    if extra:  # the utterance's verb may belong to a later step ("put" in "put the cup on the plate" is the place)
+        phrases.pop("verb", None)
+    first = Step(message.get("procedure"), check(message.get("procedure"), message.get("args")), phrases,
+                 _text(message.get("text")))
     if not isinstance(extra, list):
         raise CommandError("The further steps of a command ('then') must be a list.")
     if extra and first.procedure in ADMIN:
