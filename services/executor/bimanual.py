@@ -15,11 +15,11 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from services.executor.kinematics import JOINT_SPEED, PREFIX, ArmKinematics, Trajectory, joint_names
+from services.executor.kinematics import JOINT_ACCEL, JOINT_SPEED, PREFIX, ArmKinematics, Trajectory, joint_names
 
 MIN_DURATION = 0.5     # seconds: the shortest joint motion of both arms
 CHECKS_PER_SECOND = 40  # instants at which the two moving arms are checked against each other
-HELD = "held:"
+PEAK_ACCELERATION = 10.0 / np.sqrt(3.0)  # a minimum-jerk motion's peak acceleration, in travel / duration²
 
 
 def _minimum_jerk(u: np.ndarray) -> np.ndarray:
@@ -51,15 +51,20 @@ def timed_together(paths: Mapping[str, np.ndarray]) -> dict[str, Trajectory]:
     """Timed trajectories for untimed joint paths, sharing one start, one end and one time law.
 
     The duration is the shortest for which no joint of either arm exceeds
-    the planning speed anywhere (at least :data:`MIN_DURATION`).
+    the planning speed anywhere, nor (by the minimum-jerk law's peak, for
+    the joint's whole travel) the planning acceleration — a box held by the
+    friction of two hands must not be jerked out of them — and at least
+    :data:`MIN_DURATION`.
     """
     shares = {arm: _time_share(_way_shares(p)) if len(p) > 1 else np.zeros(1) for arm, p in paths.items()}
     duration = MIN_DURATION
     for arm, points in paths.items():
         if len(points) < 2:
             continue
-        steps = np.max(np.abs(np.diff(points, axis=0)), axis=1)
-        duration = max(duration, float(np.max(steps / (JOINT_SPEED * np.maximum(np.diff(shares[arm]), 1e-9)))))
+        steps = np.abs(np.diff(points, axis=0))
+        shortest_by_speed = np.max(steps.max(axis=1) / (JOINT_SPEED * np.maximum(np.diff(shares[arm]), 1e-9)))
+        shortest_by_acceleration = np.sqrt(PEAK_ACCELERATION * steps.sum(axis=0).max() / JOINT_ACCEL)
+        duration = max(duration, float(shortest_by_speed), float(shortest_by_acceleration))
     out: dict[str, Trajectory] = {}
     for arm, points in paths.items():
         if len(points) < 2:  # standing still for the other arm's motion
