@@ -195,8 +195,7 @@ def test_both_hands_move_together_and_one_holding_refuses_open_both(stack: Stack
     assert abs(r0 - l0) <= 0.05 and abs(r1 - l1) <= 0.1, f"right {r0:.3f}-{r1:.3f}, left {l0:.3f}-{l1:.3f}"
     assert len(steps_of(stack)) == 1
 
-    with recorder.recording():
-        ok(stack.command("close", {"arm": "both"}, utterance="close both hands"))
+    ok(stack.command("close", {"arm": "both"}, utterance="close both hands"))
     assert stack.state["robot"]["grippers"] == {"right": "closed", "left": "closed"}
     ok(stack.command("open", {"arm": "both"}, utterance="open both hands"))
     assert stack.state["robot"]["grippers"] == {"right": "open", "left": "open"}
