@@ -204,8 +204,9 @@ def test_both_hands_move_together_and_one_holding_refuses_open_both(stack: Stack
     ok(stack.command("pick_up", {"arm": "right", "object": stack.pid("obj0")}))
     with stack.unchanged_arms():
         said = stack.command("open", {"arm": "both"}, utterance="open both hands")
-    assert texts(said, "error") == ["My right hand is holding the red cup, so I won't open both hands; "
-                                    "tell me which hand to open."]
+    refusal = texts(said, "error")
+    assert len(refusal) == 1 and refusal[0].startswith("My right hand is holding the ") and "cup" in refusal[0]
+    assert refusal[0].endswith(", so I won't open both hands; tell me which hand to open."), refusal
     assert stack.robot["grippers"]["right"]["holding"] == "obj0"
     lifted = stack.position("obj0")[2]
     ok(stack.command("move_abs_dir", {"arm": "both", "direction": "up", "distance": 0.05}))  # carried along
