@@ -24,9 +24,14 @@ OPERATIONS = "list, show, rename, delete, delete_step, move_step or execute"
 
 
 def step_words(step: dict[str, Any]) -> str:
-    """A step as the user said it; a step given without words (a key) is spelled from its procedure."""
-    if step.get("utterance") or step.get("text"):
-        return str(step.get("utterance") or step.get("text"))
+    """A step as the user said it; a step given without words (a key) is spelled from its procedure.
+
+    One step of a compound ("part") is named by its own sentence: the
+    utterance's words cover all of its steps.
+    """
+    said = None if step.get("part") else step.get("utterance")
+    if said or step.get("text"):
+        return str(said or step.get("text"))
     args = step.get("args", {})
     landmark = step.get("landmark")
     parts = [step["procedure"].replace("_", " ")]

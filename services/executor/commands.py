@@ -1,45 +1,96 @@
 """The command space as the executor accepts it, and checking a command before anything runs.
 
-The table is the design notes' procedure contract. A command that names an
-unknown procedure, lacks a parameter or gives a value outside its domain is
-refused with a sentence that says which, so a bad message from any sender
-never reaches the robot.
+The table is the design notes' procedure contract, with its conversation
+additions: ``undo`` and ``repeat``, ``arm: "both"`` for the procedures that
+can use both hands at once, an optional ``distance`` on the directional
+moves, and ``then`` (further steps of the same utterance). A command that
+names an unknown procedure, lacks a parameter or gives a value outside its
+domain is refused with a sentence that says which, so a bad message from any
+sender never reaches the robot. A compound is checked whole before its first
+step runs: a bad later step refuses the utterance, it does not stop it
+half-way.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
-ARMS = ("right", "left")
-RELATIONS = ("above", "next_to", "left_of", "right_of", "in_front_of", "behind", "on_top_of", "near")
+from shared import contract
 
-# procedure -> parameter -> allowed values (None: an object id; "int|target": action number or next/previous)
+ARMS = contract.ARMS
+BOTH = contract.BOTH
+BOTH_ARMS = contract.BOTH_ARM_PROCEDURES
+DISTANCE_PROCEDURES = contract.DISTANCE_PROCEDURES
+MIN_DISTANCE, MAX_DISTANCE = contract.DISTANCE.min_m, contract.DISTANCE.max_m
+
+# procedure -> parameter -> allowed values (None: an object id; "int|target": action number or next/previous),
+# the required parameters of the contract's procedures; ``distance`` is optional and checked on its own
 PROCEDURES: dict[str, dict[str, tuple[Any, ...] | None | str]] = {
-    "move_abs_dest": {"arm": ARMS, "destination": ("side",)},
-    "move_rel_dest": {"arm": ARMS, "relation": RELATIONS, "object": None},
-    "move_abs_dir": {"arm": ARMS, "direction": ("up", "down", "left", "right", "forward", "backward")},
-    "move_rel_dir": {"arm": ARMS, "direction": ("towards", "away_from"), "object": None},
-    "pick_up": {"arm": ARMS, "object": None},
-    "place_abs": {"arm": ARMS, "destination": ("table", "here")},
-    "place_rel": {"arm": ARMS, "relation": RELATIONS, "object": None},
-    "point_to": {"arm": ARMS, "object": None},
-    "look_at": {"object": None},
-    "rotate": {"arm": ARMS, "direction": ("cw", "ccw")},
-    "open": {"arm": ARMS},
-    "close": {"arm": ARMS},
-    "record": {},
-    "create_action": {},
-    "switch_action": {"target": "int|target"},
-    "execute": {},
-    "stop": {},
-}
-ADMIN = frozenset({"record", "create_action", "switch_action", "execute", "stop"})
+    name: {p.name: (ARMS if p.kind == "arm" else None if p.kind == "object" else "int|target" if p.kind == "action"
+                    else p.domain) for p in procedure.required}
+    for name, procedure in contract.PROCEDURES.items()}
+ADMIN = contract.ADMIN_PROCEDURES
 # steps that are kept in an action when they succeed
 RECORDED = frozenset(PROCEDURES) - ADMIN
 
 
 class CommandError(ValueError):
     """The command is malformed; the message is the sentence to say."""
+
+
+@dataclass(frozen=True)
+class Step:
+    """One checked step of a command: what to run and the user's words for it."""
+
+    procedure: str
+    args: dict[str, Any]
+    phrases: dict[str, str]
+    text: str
+
+
+def check_compound(message: dict[str, Any]) -> list[Step]:
+    """The steps of an ``nlu/result`` command (its own, then each of ``then``), all checked before any runs.
+
+    A ``then`` item has ``procedure`` and ``args`` and may carry its own
+    ``phrases`` and ``text``; a step that fails the check refuses the whole
+    utterance with a sentence saying which step it was. The utterance's own
+    verb is not narrated for a compound's first step, since it may name a
+    later one.
+    """
+    extra = message.get("then") or []
+    phrases = _phrases(message.get("phrases"))
+    if extra:  # the utterance's verb may belong to a later step ("put" in "put the cup on the plate" is the place)
+        phrases.pop("verb", None)
+    first = Step(message.get("procedure"), check(message.get("procedure"), message.get("args")), phrases,
+                 _text(message.get("text")))
+    if not isinstance(extra, list):
+        raise CommandError("The further steps of a command ('then') must be a list.")
+    if extra and first.procedure in ADMIN:
+        raise CommandError(f"{first.procedure.replace('_', ' ').capitalize()} has to be said on its own.")
+    steps = [first]
+    for number, item in enumerate(extra, start=2):
+        if not isinstance(item, dict):
+            raise CommandError(f"Step {number} of the command is not a command.")
+        try:
+            args = check(item.get("procedure"), item.get("args"))
+        except CommandError as exc:
+            raise CommandError(f"I can't do step {number} of that: {str(exc)[:1].lower()}{str(exc)[1:]}") from exc
+        if item["procedure"] in ADMIN:
+            raise CommandError(f"I can't do step {number} of that: {item['procedure'].replace('_', ' ')} "
+                               "has to be said on its own.")
+        steps.append(Step(item["procedure"], args, _phrases(item.get("phrases")), _text(item.get("text"))))
+    return steps
+
+
+def _phrases(value: Any) -> dict[str, str]:
+    if not isinstance(value, dict):
+        return {}
+    return {k: v for k, v in value.items() if isinstance(k, str) and isinstance(v, str)}
+
+
+def _text(value: Any) -> str:
+    return value if isinstance(value, str) else ""
 
 
 def check(procedure: Any, args: Any) -> dict[str, Any]:
@@ -56,7 +107,11 @@ def check(procedure: Any, args: Any) -> dict[str, Any]:
         if name not in args:
             raise CommandError(f"{procedure.replace('_', ' ').capitalize()} needs {_a(name)} {name}.")
         value = args[name]
-        if domain is None:
+        if name == "arm" and value == BOTH:
+            if procedure not in BOTH_ARMS:
+                raise CommandError(f"I can't {_VERBS.get(procedure, procedure.replace('_', ' '))} with both hands "
+                                   "at once; tell me which hand to use.")
+        elif domain is None:
             if not isinstance(value, str) or not value:
                 raise CommandError(f"The object of {procedure.replace('_', ' ')} must be an object id such as 'obj0'.")
         elif domain == "int|target":
@@ -65,7 +120,26 @@ def check(procedure: Any, args: Any) -> dict[str, Any]:
         elif value not in domain:
             raise CommandError(f"{value!r} is not {_a(name)} {name} I know; I know {', '.join(map(str, domain))}.")
         out[name] = value
+    if args.get("distance") is not None:
+        out["distance"] = _distance(procedure, args["distance"])
     return out
+
+
+# verbs for refusing "both" (the procedures that take one hand only)
+_VERBS = {"move_rel_dest": "move relative to an object", "move_rel_dir": "move towards or away from an object",
+          "pick_up": "pick something up", "place_abs": "put something down", "place_rel": "place something",
+          "point_to": "point", "rotate": "turn my wrists"}
+
+
+def _distance(procedure: str, value: Any) -> float:
+    if procedure not in DISTANCE_PROCEDURES:
+        raise CommandError(f"{procedure.replace('_', ' ').capitalize()} doesn't take a distance.")
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value:
+        raise CommandError("The distance must be a number of metres.")
+    if not contract.DISTANCE.allows(round(float(value), 6)):
+        raise CommandError(f"I can move {round(MIN_DISTANCE * 100)} to {round(MAX_DISTANCE * 100)} centimetres "
+                           f"at a time, not {value * 100:.0f}.")
+    return float(value)
 
 
 def _a(noun: str) -> str:

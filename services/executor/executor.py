@@ -20,6 +20,13 @@ Threads and why:
 
 Every change (a command started or ended, a gripper changed, a new reach
 map) republishes the situated state on ``executor/state``.
+
+A command from the NLU may be a compound (``then``): its steps run in order
+on the worker as one job, each narrated and recorded as its own step, and
+the first that fails ends the job with a sentence naming it. ``undo`` takes
+back the current action's last step (``services/executor/undo.py``) and
+``repeat`` runs the last robot command again; both are jobs of the worker
+like any other, so they are refused while something runs.
 """
 
 from __future__ import annotations
@@ -34,7 +41,7 @@ import numpy as np
 from services.executor import wording
 from services.executor.actions_control import apply as apply_actions_request
 from services.executor.actions_control import step_words
-from services.executor.commands import ADMIN, RECORDED, CommandError, check
+from services.executor.commands import ADMIN, BOTH, RECORDED, CommandError, Step, check, check_compound
 from services.executor.grounding import Regrounding, reground
 from services.executor.kinematics import ArmKinematics, joint_names
 from services.executor.procedures import Done, Procedures, StepFailed
@@ -43,6 +50,7 @@ from services.executor.referring import refer
 from services.executor.robot import SimRobot, Stopped
 from services.executor.scene import ARMS, Scene
 from services.executor.store import ActionStore, StoreError
+from services.executor.undo import before_state, reverse
 from shared.bus import Bus, BusTimeout, RemoteError
 
 log = logging.getLogger("hfpbd.executor")
@@ -70,7 +78,8 @@ class Executor:
         self._busy: str | None = None           # procedure being run by the worker
         self._executing = False
         self._progress: dict[str, int] | None = None
-        self._pending: tuple[str, dict[str, Any], dict[str, Any]] | None = None
+        self._pending: tuple[list[Step], str] | None = None
+        self._last_command: tuple[list[Step], str] | None = None   # what "repeat" runs again
         self._wake = threading.Condition(self._lock)
         self._publish_lock = threading.Lock()
         self._last_arm: str | None = None
@@ -123,38 +132,49 @@ class Executor:
             self.publish_state()
 
     def _on_nlu_result(self, message: dict[str, Any]) -> None:
-        if message.get("kind") != "command":
+        if message.get("kind") != "command":  # a clarification or an answer: nothing moves, nothing is recorded
             return
-        phrases = message.get("phrases") if isinstance(message.get("phrases"), dict) else {}
-        context = {"phrases": {k: v for k, v in phrases.items() if isinstance(v, str)},
-                   "text": message.get("text") if isinstance(message.get("text"), str) else "",
-                   "utterance": message.get("utterance", "")}
-        ok, text = self.submit(message.get("procedure"), message.get("args"), context)
+        try:
+            steps = check_compound(message)
+        except CommandError as exc:
+            self.say(str(exc), "error")
+            return
+        utterance = message.get("utterance") if isinstance(message.get("utterance"), str) else ""
+        ok, text = self.submit(steps, utterance)
         if not ok:
             self.say(text, "error")
 
     def _on_control_command(self, request: dict[str, Any]) -> dict[str, Any]:
-        ok, text = self.submit(request.get("procedure"), request.get("args"), {"phrases": {}, "text": "", "utterance": ""})
+        try:
+            steps = [Step(request.get("procedure"), check(request.get("procedure"), request.get("args")), {}, "")]
+        except CommandError as exc:
+            return {"ok": False, "message": str(exc)}
+        ok, text = self.submit(steps, "")
         return {"ok": ok, "message": text}
 
     # -- dispatch ---------------------------------------------------------------------------
-    def submit(self, procedure: Any, args: Any, context: dict[str, Any]) -> tuple[bool, str]:
-        """Accept a command for the worker, or say why not. Stop acts at once."""
-        try:
-            args = check(procedure, args)
-        except CommandError as exc:
-            return False, str(exc)
+    def submit(self, steps: list[Step], utterance: str) -> tuple[bool, str]:
+        """Accept checked steps (one command, or a compound) for the worker, or say why not. Stop acts at once."""
+        procedure = steps[0].procedure
         if procedure == "stop":
             return True, self._stop()
         with self._wake:
             if self._busy is not None:
-                doing = "an action" if self._executing else self._busy.replace("_", " ")
-                return False, f"I'm still busy with {doing}; say \"stop\" to interrupt it."
+                return False, self._busy_refusal(procedure)
             self._busy = procedure
-            self._pending = (procedure, args, context)
+            self._pending = (steps, utterance)
             self.cancel.clear()
             self._wake.notify_all()
         return True, "accepted"
+
+    def _busy_refusal(self, procedure: str) -> str:
+        """Why a command that arrived while another runs is refused (called with the lock held)."""
+        doing = f"action {self.store.current}" if self._executing else (self._busy or "").replace("_", " ")
+        if procedure == "undo":
+            verb = "executing" if self._executing else "still busy with"
+            return f"I can't undo a step while I'm {verb} {doing}; say \"stop\" first."
+        doing = "an action" if self._executing else doing
+        return f"I'm still busy with {doing}; say \"stop\" to interrupt it."
 
     def _stop(self) -> str:
         with self._lock:
@@ -172,13 +192,14 @@ class Executor:
                 self._wake.wait_for(lambda: self._pending is not None or self._closing.is_set())
                 if self._closing.is_set():
                     return
-                procedure, args, context = self._pending  # type: ignore[misc]
+                steps, utterance = self._pending  # type: ignore[misc]
                 self._pending = None
             # Busy and idle are both published from this thread, in order, so
             # even a command that finishes at once shows as taken up, then done.
             self.publish_state()
+            procedure = steps[0].procedure
             try:
-                self._run_command(procedure, args, context)
+                self._run_command(steps, utterance)
             except Exception:  # a bug must not kill the worker: say so and carry on
                 log.exception("command %s failed unexpectedly", procedure)
                 self.say(f"Something went wrong inside me while doing {procedure.replace('_', ' ')}; "
@@ -191,7 +212,8 @@ class Executor:
                 self._reach_stale.set()
                 self.publish_state()
 
-    def _run_command(self, procedure: str, args: dict[str, Any], context: dict[str, Any]) -> None:
+    def _run_command(self, steps: list[Step], utterance: str) -> None:
+        procedure, args = steps[0].procedure, steps[0].args
         if procedure == "create_action":
             number = self.store.create()
             self.say(f"Created action {number}.", "info")
@@ -200,9 +222,72 @@ class Executor:
         elif procedure == "execute":
             self._execute(context.get("action"), context.get("from_step", 1))
         elif procedure == "record":
-            self._step(procedure, args, context, keep=False)
+            self._step(procedure, args, _context(steps[0], utterance), keep=False)
+        elif procedure == "undo":
+            self._undo()
+        elif procedure == "repeat":
+            if self._last_command is None:
+                self.say("There is nothing to repeat yet: tell me what to do first.", "error")
+                return
+            self._run_steps(*self._last_command)
         else:
-            self._step(procedure, args, context, keep=True)
+            self._last_command = (steps, utterance)
+            self._run_steps(steps, utterance)
+
+    def _run_steps(self, steps: list[Step], utterance: str) -> None:
+        """Run a command's steps in order, each recorded as its own step; the first failure ends the rest.
+
+        Each step is checked, narrated and said to have failed as a single
+        command would be; a compound adds which of its steps failed and what
+        was left undone.
+        """
+        for number, step in enumerate(steps, start=1):
+            with self._lock:
+                self._busy = step.procedure
+            if number > 1:
+                self.publish_state()
+            note = None
+            if len(steps) > 1:
+                rest = [self._gerund(s) for s in steps[number:]]
+                note = f"That was step {number} of {len(steps)}" + \
+                    (f"; I didn't go on with {_listed(rest)}." if rest else ".")
+            context = _context(step, utterance)
+            if len(steps) > 1:
+                context["part"] = {"step": number, "of": len(steps)}
+            if not self._step(step.procedure, step.args, context, keep=True, failure_note=note):
+                return
+
+    def _gerund(self, step: Step) -> str:
+        """"placing it on the plate with your right hand": a step not taken, for a compound's failure."""
+        snap = self.scene.snapshot()
+        text = wording.narration(step.procedure, step.args, step.phrases, lambda oid: refer(snap.objects, oid),
+                                 held="it")
+        return text[:1].lower() + text[1:].rstrip(".")
+
+    def _undo(self) -> None:
+        """Take back the current action's last step: remove it, then bring the robot back to before it."""
+        number = self.store.current
+        steps = self.store.get(number)["steps"] if number else []
+        if not steps:
+            where = f" in action {number}: it has no steps" if number else ": nothing has been taught yet"
+            self.say(f"There is nothing to undo{where}.", "error")
+            return
+        step = steps[-1]
+        words = step_words(step)
+        self.say(f"Undoing \u201c{words}\u201d.", "narration")
+        self.store.remove_last_step()
+        self.publish_state()
+        try:
+            reverse(step, self.procedures)
+        except Stopped:
+            self.say(f"Stopped. I took step {len(steps)} out of action {number}, but my arms are not all the way "
+                     "back.", "info")
+            return
+        except StepFailed as exc:
+            self.say(f"I took step {len(steps)} out of action {number}, but I couldn't reverse it: "
+                     f"{str(exc)[:1].lower()}{str(exc)[1:]}", "error")
+            return
+        self.say(f"Took back step {len(steps)} of action {number}.", "info")
 
     def _switch(self, target: Any) -> None:
         current, count = self.store.current, self.store.count()
@@ -225,18 +310,27 @@ class Executor:
 
     # -- one step ------------------------------------------------------------------------------
     def _step(self, procedure: str, args: dict[str, Any], context: dict[str, Any], *, keep: bool,
-              preferred: list[float] | None = None) -> bool:
-        """Narrate, run and (when ``keep``) record one procedure; False when it failed or was stopped."""
+              preferred: list[float] | None = None, failure_note: str | None = None) -> bool:
+        """Narrate, run and (when ``keep``) record one procedure; False when it failed or was stopped.
+
+        ``failure_note`` is added to the error sentence (which step of a
+        compound this was).
+        """
         snap = self.scene.snapshot()
         if procedure not in ADMIN:
-            self._last_arm = args.get("arm", self._last_arm)
+            if args.get("arm") != BOTH:
+                self._last_arm = args.get("arm", self._last_arm)
             if args.get("object"):
                 self._last_object = args["object"]
+
+        def failed(text: str) -> bool:
+            self.say(f"{text} {failure_note}" if failure_note else text, "error")
+            return False
         try:
             self.procedures.precheck(procedure, args)
         except StepFailed as exc:
-            self.say(str(exc), "error")
-            return False
+            return failed(str(exc))
+        before = before_state(snap, self.procedures) if keep and procedure in RECORDED else None
         held_words = self.procedures.held_description(args["arm"], snap) if "arm" in args else None
         if procedure != "record":
             self.say(wording.narration(procedure, args, context.get("phrases"), lambda oid: refer(snap.objects, oid),
@@ -251,15 +345,17 @@ class Executor:
             self.say("Stopped.", "info")
             return False
         except StepFailed as exc:
-            self.say(str(exc), "error")
-            return False
+            return failed(str(exc))
         if done.message:
             self.say(done.message, "info")
-        if keep and procedure in RECORDED:
+        if before is not None:
             step = {"procedure": procedure, "args": args, "phrases": context.get("phrases", {}),
                     "text": context.get("text", ""), "utterance": context.get("utterance", ""),
-                    "landmark": done.landmark, "relative_pose": done.relative_pose}
+                    "landmark": done.landmark, "relative_pose": done.relative_pose, "before": before}
+            if context.get("part"):
+                step["part"] = context["part"]
             self.store.append_step(step)
+            self.publish_state()
         return True
 
     # -- actions -----------------------------------------------------------------------------------
@@ -433,4 +529,14 @@ class Executor:
                 self._state_publisher.put(self.state_message())
             except StoreError as exc:
                 log.error("cannot publish state: %s", exc)
+
+
+def _context(step: Step, utterance: str) -> dict[str, Any]:
+    """What a step keeps of the user's words: the phrases and sentence of that step, the whole utterance."""
+    return {"phrases": step.phrases, "text": step.text, "utterance": utterance}
+
+
+def _listed(words: list[str]) -> str:
+    """"a", "a and b", "a, b and c"."""
+    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} and {words[-1]}"
 

@@ -23,7 +23,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-STEP = 0.10
+from shared.contract import DISTANCE
+
+STEP = DISTANCE.default_m  # a directional move without a distance
 GAP = 0.05
 ABOVE = 0.10
 ON_TOP = 0.05

@@ -26,19 +26,22 @@ import logging
 import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
 
 from services.executor import geometry as geo
 from services.executor import targets, wording
+from services.executor.bimanual import first_clash, timed_together
+from services.executor.commands import BOTH
 from services.executor.geometry import Box
 from services.executor.grounding import descriptor
 from services.executor.kinematics import ArmKinematics, Trajectory
 from services.executor.reach import sync
 from services.executor.referring import refer
 from services.executor.robot import MotionError, SimRobot, Started, Stopped
-from services.executor.scene import Scene, SceneSnapshot
+from services.executor.scene import ARMS, Scene, SceneSnapshot
 from services.executor.targets import EdgeGrasp, Held, overhang, thin_and_wide
 from shared.robot import ROBOT
 
@@ -127,6 +130,9 @@ class Procedures:
         arm = args.get("arm")
         if arm is None:
             return
+        if arm == BOTH:
+            self._precheck_both(procedure, snap)
+            return
         gripper = snap.gripper_state(arm)
         held = self.held()
         if procedure in ("place_abs", "place_rel"):
@@ -147,6 +153,31 @@ class Procedures:
         elif procedure in ("move_rel_dest", "move_rel_dir", "point_to") and held[arm] is not None \
                 and held[arm].object_id == object_id:
             raise StepFailed(wording.sentence(f"I'm holding {refer(snap.objects, object_id)} in my {arm} hand"))
+
+    def _precheck_both(self, procedure: str, snap: SceneSnapshot) -> None:
+        """Open or close both hands: refused while a hand holds something, or when neither would change.
+
+        Opening both would drop what one hand holds, and closing both cannot
+        close the hand that holds it; the user is asked to name the hand
+        meant. Moving both hands while one holds something is fine: the held
+        object is carried along (it is attached to its hand in the planning).
+        """
+        if procedure not in ("open", "close"):
+            return
+        verb = procedure
+        for hand in ARMS:
+            if snap.gripper_state(hand) == "holding":
+                held = self.held().get(hand)
+                what = refer(snap.objects, held.object_id) if held else "something"
+                raise StepFailed(wording.sentence(f"My {hand} hand is holding {what}, so I won't {verb} both hands; "
+                                                  f"tell me which hand to {verb}"))
+        if not self._grippers_to_change(procedure, snap):
+            raise StepFailed(f"Both my hands are already {'open' if procedure == 'open' else 'closed'}.")
+
+    @staticmethod
+    def _grippers_to_change(procedure: str, snap: SceneSnapshot) -> list[str]:
+        """The hands an open (close) of both hands has to move: those not open (those open)."""
+        return [hand for hand in ARMS if (snap.gripper_state(hand) == "open") == (procedure == "close")]
 
     # -- helpers --------------------------------------------------------------------------
     def _snapshot(self) -> SceneSnapshot:
@@ -193,8 +224,50 @@ class Procedures:
             raise StepFailed(wording.sentence(f"My {arm} arm was blocked: {outcome.message or outcome.status}"))
         self.scene.wait_robot(version, STATE_WAIT)
 
+    def _go_together(self, paths: dict[str, tuple[np.ndarray, bool]]) -> None:
+        """Both arms along their joint paths (``(path, contact)`` each), started together, ending together.
+
+        The paths are timed by one time law (:func:`timed_together`) and
+        checked against each other at common instants before anything moves.
+        """
+        trajectories = timed_together({arm: path for arm, (path, _) in paths.items()})
+        if first_clash({arm: self.arms[arm] for arm in paths}, trajectories) is not None:
+            raise StepFailed("My hands would hit each other if they moved together; move them one at a time.")
+        for arm, (_, contact) in paths.items():
+            if not contact:
+                self._press[arm] = None
+        version = self.scene.snapshot().robot_version
+        try:
+            started = self.robot.start_together({
+                arm: partial(self.robot.start_arm, arm, trajectories[arm].points, trajectories[arm].times, contact)
+                for arm, (_, contact) in paths.items()})
+            outcomes = {arm: self.robot.finish(motion) for arm, motion in started.items()}
+        except MotionError as exc:
+            raise StepFailed(wording.sentence(f"My arms could not move: {exc}")) from exc
+        blocked = [f"my {arm} arm was blocked: {o.message or o.status}"
+                   for arm, o in outcomes.items() if o.status != "done"]
+        if blocked:
+            raise StepFailed(wording.sentence("; ".join(blocked)))
+        self.scene.wait_robot(version, STATE_WAIT)
+
     def _grip(self, arm: str, width: float) -> None:
         self._end_grip(arm, self._start_grip(arm, width))
+
+    def _grip_together(self, arms: list[str], width: float) -> None:
+        """Open or close several grippers at once (started in the same instant, waited for together)."""
+        if len(arms) == 1:
+            self._grip(arms[0], width)
+            return
+        version = self.scene.snapshot().robot_version
+        try:
+            started = self.robot.start_together({arm: partial(self.robot.start_gripper, arm, width, GRIP_FORCE)
+                                                 for arm in arms})
+            for motion in started.values():
+                self.robot.finish(motion)
+        except MotionError as exc:
+            raise StepFailed(wording.sentence(f"My grippers could not move: {exc}")) from exc
+        self.scene.wait_robot(version, STATE_WAIT)
+        self.scene.wait_robot(self.scene.snapshot().robot_version, STATE_WAIT)
 
     def _start_grip(self, arm: str, width: float) -> Gripping:
         """Start the gripper moving; the arm may move meanwhile (see :meth:`_end_grip`)."""
@@ -237,10 +310,32 @@ class Procedures:
 
     # -- p1 ----------------------------------------------------------------------------------
     def move_abs_dest(self, arm: str, destination: str = "side") -> Done:
+        if arm == BOTH:
+            self.return_to({hand: arm_pose("side", hand) for hand in ARMS}, "to the side")
+            return Done()
         kin, _ = self._ready(arm)
         goal = np.asarray(ROBOT.arm_pose("side", arm), float)
         self._go(arm, self._plan(kin, goal, wording.sentence(f"I can't find a clear path to move my {arm} hand to the side")))
         return Done()
+
+    def return_to(self, joints: dict[str, Any], where: str = "back") -> None:
+        """Arms to the given joint positions (both together when both move), on collision-free paths.
+
+        Used for "to the side" and to take a step back (an arm returns to
+        the pose it had before); an arm already there stays still.
+        """
+        planned: dict[str, Trajectory] = {}
+        for arm, goal in joints.items():
+            kin, _ = self._ready(arm)
+            goal = np.asarray(goal, float)
+            if np.max(np.abs(kin.arm_q - goal)) < 0.01:
+                continue
+            why = wording.sentence(f"I can't find a clear path to move my {arm} hand {where}")
+            planned[arm] = self._plan(kin, goal, why)
+        if len(planned) == 1:
+            self._go(*next(iter(planned.items())))
+        elif planned:
+            self._go_together({arm: (trajectory.points, False) for arm, trajectory in planned.items()})
 
     # -- p2 ------------------------------------------------------------------------------------
     def move_rel_dest(self, arm: str, relation: str, object: str, preferred: list[float] | None = None) -> Done:
@@ -274,18 +369,72 @@ class Procedures:
         return None if held is None else self._refresh_held(held, snap, kin)
 
     # -- p3 -------------------------------------------------------------------------------------
-    def move_abs_dir(self, arm: str, direction: str) -> Done:
+    def move_abs_dir(self, arm: str, direction: str, distance: float = geo.STEP) -> Done:
+        if arm == BOTH:
+            return self._both_directions(direction, distance)
         kin, snap = self._ready(arm)
         unit = np.asarray(geo.DIRECTIONS[direction], float)
         leaving = self._press[arm] is not None
         press = self._still_pressing(arm, kin, snap, unit)
-        goal = geo.direction_target(kin.fk(), direction)
+        goal = geo.direction_target(kin.fk(), direction, distance)
         words = wording.DIRECTION_WORDS[direction]
         why = wording.sentence(f"I can't move my {arm} hand {words} any further")
         if leaving and press is None:   # off the object it pressed: a plain move
             self._go(arm, self._line(kin, goal, why))
             return Done()
         self._move_line(arm, kin, goal, unit, press, why)
+        return Done()
+
+    def _both_directions(self, direction: str, distance: float) -> Done:
+        """Both hands ``distance`` along a base axis at once, each as a one-hand move would go.
+
+        A hand that would press against an object presses (a box squeezed
+        between both hands rises with them); a hand that would start a press
+        with open fingers closes them first, both at once.
+        """
+        unit = np.asarray(geo.DIRECTIONS[direction], float)
+        words = wording.DIRECTION_WORDS[direction]
+        goals: dict[str, np.ndarray] = {}
+        paths: dict[str, tuple[np.ndarray, bool]] = {}
+        presses: dict[str, Press] = {}
+        closing: list[str] = []
+        for arm in ARMS:
+            kin, snap = self._ready(arm)
+            leaving = self._press[arm] is not None
+            press = self._still_pressing(arm, kin, snap, unit)
+            goals[arm] = goal = geo.direction_target(kin.fk(), direction, distance)
+            why = wording.sentence(f"I can't move my {arm} hand {words} any further")
+            if press is None and (leaving or not kin.gripper_touching()):
+                path = kin.line_path(goal)
+                if path is not None:
+                    paths[arm] = (path, False)
+                    continue
+                if leaving:
+                    raise StepFailed(why)
+            if press is None and snap.gripper_state(arm) == "open":
+                with kin.fingers(CLOSE_WIDTH):
+                    if kin.contact_line(goal) is None:
+                        raise StepFailed(why)
+                closing.append(arm)  # planned again below, once the fingers are closed
+                continue
+            move = kin.contact_line(goal, pressing=press.object_ids if press else ())
+            if move is None:
+                raise StepFailed(why)
+            paths[arm] = (move.path, True)
+            presses[arm] = Press(move.touched, press.direction if press else unit, move.path[-1].copy())
+        if closing:
+            self._grip_together(closing, CLOSE_WIDTH)
+            for arm in closing:
+                kin, _ = self._ready(arm)
+                move = kin.contact_line(goals[arm])
+                if move is None:
+                    raise StepFailed(wording.sentence(f"I can't move my {arm} hand {words} any further"))
+                paths[arm] = (move.path, True)
+                presses[arm] = Press(move.touched, unit, move.path[-1].copy())
+        self._go_together(paths)
+        for arm in presses:
+            log.info("%s hand presses against %s", arm, presses[arm].object_ids)
+            self._press[arm] = presses[arm]
         return Done()
 
     def _still_pressing(self, arm: str, kin: ArmKinematics, snap: SceneSnapshot, unit: np.ndarray) -> Press | None:
@@ -351,11 +500,11 @@ class Procedures:
         return kin
 
     # -- p4 -------------------------------------------------------------------------------------
-    def move_rel_dir(self, arm: str, direction: str, object: str) -> Done:
+    def move_rel_dir(self, arm: str, direction: str, object: str, distance: float = geo.STEP) -> Done:
         kin, snap = self._ready(arm)
         obj = self._object(snap, object)
         box = Box.of(obj)
-        goal = geo.relative_direction_target(kin.fk(), box, direction)
+        goal = geo.relative_direction_target(kin.fk(), box, direction, distance)
         words = refer(snap.objects, object)
         if goal is None:
             raise StepFailed(wording.sentence(f"My {arm} hand is already as close to {words} as it can get"))
@@ -563,6 +712,9 @@ class Procedures:
             self._go(arm, self._plan(kin, hover_q, wording.sentence(
                 f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}")))
             kin, snap = self._ready(arm)
+            # the landmark as seen before the held object hung over it: from above, the camera sees little of a
+            # plate under a cup, and perception may then place the plate up at the cup's bottom
+            kin.set_obstacles({**snap.obstacles(skip={held.object_id}), object: box})
             with kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):
                 descent = kin.straight_line(release)
             if descent is None:  # the view changed on the way there: on to the next release point
@@ -575,6 +727,32 @@ class Procedures:
             done.landmark = self._landmark(obj)
             return done
         raise StepFailed(wording.cannot_reach(arm, relation, words))
+
+    def put_back(self, arm: str, center: np.ndarray) -> Done:
+        """Set the held object down with its centre where ``center`` was (taking back a pick-up).
+
+        The same release as a placement: hover above the spot, straight
+        down until the object's bottom is just above where it stood, open,
+        back off; headings near the grasp's own are tried when it is out of
+        reach.
+        """
+        kin, snap = self._ready(arm)
+        held = self._refresh_held(self._holding(arm, snap, "put back"), snap, kin)
+        spot = np.asarray(center, float) + [0.0, 0.0, geo.RELEASE_CLEARANCE]
+        for release in geo.carry_poses(kin.fk(), held.box.center, [spot], targets.CARRY_YAWS):
+            hover = geo.shifted(release, [0.0, 0.0, targets.HOVER])
+            hover_q = self._lowerable(kin, snap, held, hover, release)
+            if hover_q is None:
+                continue
+            self._go(arm, self._plan(kin, hover_q, "I can't find a clear path to put it back where it stood."))
+            kin, snap = self._ready(arm)
+            with kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):
+                descent = kin.straight_line(release)
+            if descent is None:
+                raise StepFailed("I can't lower it back to where it stood: something is in the way now.")
+            self._go(arm, descent)
+            return self._release(arm, held)
+        raise StepFailed(f"I can't reach the place where {refer(snap.objects, held.object_id)} stood.")
 
     def _lowerable(self, kin: ArmKinematics, snap: SceneSnapshot, held: Held, hover: np.ndarray,
                    release: np.ndarray) -> np.ndarray | None:
@@ -637,20 +815,24 @@ class Procedures:
         return Done()
 
     def open(self, arm: str) -> Done:
-        self._grip(arm, OPEN_WIDTH)
-        self._set_held(arm, None)
+        hands = self._grippers_to_change("open", self._snapshot()) if arm == BOTH else [arm]
+        self._grip_together(hands, OPEN_WIDTH)
+        for hand in hands:
+            self._set_held(hand, None)
         return Done()
 
     def close(self, arm: str) -> Done:
-        self._grip(arm, CLOSE_WIDTH)
+        hands = self._grippers_to_change("close", self._snapshot()) if arm == BOTH else [arm]
+        self._grip_together(hands, CLOSE_WIDTH)
         snap = self._snapshot()
-        if snap.gripper_state(arm) == "holding":
-            kin, _ = self._ready(arm)
-            tool = kin.fk()
-            nearest = min(snap.objects.values(), default=None,
-                          key=lambda o: float(np.linalg.norm(np.asarray(o["position"]) - tool[:3])))
-            if nearest is not None:
-                self._set_held(arm, Held(nearest["id"], Box.of(nearest), tool))
+        for hand in hands:
+            if snap.gripper_state(hand) == "holding":
+                kin, _ = self._ready(hand)
+                tool = kin.fk()
+                nearest = min(snap.objects.values(), default=None,
+                              key=lambda o: float(np.linalg.norm(np.asarray(o["position"]) - tool[:3])))
+                if nearest is not None:
+                    self._set_held(hand, Held(nearest["id"], Box.of(nearest), tool))
         return Done()
 
     # -- p13 -------------------------------------------------------------------------------------------------

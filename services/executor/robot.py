@@ -133,10 +133,40 @@ class SimRobot:
         ``contact``: a press, which the simulator reports done when it ends
         blocked against an object.
         """
+        return self.finish(self.start_arm(arm, points, times, contact))
+
+    def start_arm(self, arm: str, points: np.ndarray, times: np.ndarray, contact: bool = False) -> Started:
+        """Start a timed joint trajectory without waiting for it (see :meth:`finish`)."""
         payload = {"arm": arm, "points": np.asarray(points, np.float64), "times": np.asarray(times, np.float64)}
         if contact:
             payload["contact"] = True
-        return self._run("arm", payload, float(times[-1]) if len(times) else 0.0)
+        return self._start("arm", payload, float(times[-1]) if len(times) else 0.0)
+
+    def start_together(self, starts: dict[str, Callable[[], Started]]) -> dict[str, Started]:
+        """Send several motion requests at the same instant, each from its own thread.
+
+        Sent one after the other, the second would start a full request
+        round trip after the first (tens of milliseconds on a busy machine);
+        sent together they reach the simulator's loop together and start in
+        the same physics step. Raises the first failure once all have answered.
+        """
+        results: dict[str, Started | BaseException] = {}
+
+        def send(name: str, start: Callable[[], Started]) -> None:
+            try:
+                results[name] = start()
+            except BaseException as exc:  # handed to the caller's thread below
+                results[name] = exc
+
+        threads = [threading.Thread(target=send, args=item, daemon=True) for item in starts.items()]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        for result in results.values():
+            if isinstance(result, BaseException):
+                raise result
+        return results  # type: ignore[return-value]
 
     def start_gripper(self, arm: str, width: float, force: float) -> Started:
         """Start opening or closing a gripper without waiting, so the arm can move meanwhile (see :meth:`finish`)."""
@@ -144,6 +174,10 @@ class SimRobot:
 
     def look_at(self, point: np.ndarray) -> Outcome:
         return self._run("head", {"look_at": [float(v) for v in point]}, SHORT_MOTION)
+
+    def turn_head(self, pan: float, tilt: float) -> Outcome:
+        """Turn the head to the given joint angles (undoing a look)."""
+        return self._run("head", {"pan": float(pan), "tilt": float(tilt)}, SHORT_MOTION)
 
     def stop(self) -> None:
         """Stop every motion now (best effort: called while another thread waits on it)."""

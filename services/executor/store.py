@@ -213,6 +213,16 @@ class ActionStore:
             self._save()
             return self._current, len(steps)
 
+    def remove_last_step(self) -> dict[str, Any]:
+        """Remove and return the current action's last step (an undo); StoreError when there is none."""
+        with self._lock:
+            self._reload()
+            if self._current == 0 or not self._actions[self._current - 1]["steps"]:
+                raise StoreError("there is no step to remove")
+            step = self._actions[self._current - 1]["steps"].pop()
+            self._save()
+            return step
+
     def rename(self, number: int, name: str) -> None:
         if not name.strip():
             raise StoreError("an action's name cannot be empty")

@@ -68,6 +68,8 @@ HAND_NOUNS = frozenset({"hand", "arm", "gripper", "hands", "arms", "grippers"})
 def arm_words(arm: str, phrases: Mapping[str, str] | None = None, *, own: bool = False) -> str:
     """"your right hand" in narration (the user's address to the robot), "my right hand" in errors."""
     said = (phrases or {}).get("arm")
+    if arm == "both":
+        return "both my hands" if own else "both hands"
     if said and not own:
         if not HAND_NOUNS.intersection(said.split()):
             said = f"{said} hand"  # "move your left to the right" is how people talk, not how the robot should answer
@@ -91,10 +93,13 @@ def narration(procedure: str, args: Mapping, phrases: Mapping[str, str] | None, 
                      "relation" if "relation" in args else "direction")
     if procedure == "move_abs_dest":
         return sentence(f"{verb} {hand} {_word(DESTINATION_WORDS, args['destination'], phrases, 'destination')}")
-    if procedure in ("move_rel_dest", "move_rel_dir"):
+    if procedure == "move_rel_dir":
+        return sentence(f"{verb} {hand} {_distance(args)}{relation} {obj}")
+    if procedure == "move_rel_dest":
         return sentence(f"{verb} {hand} {relation} {obj}")
     if procedure == "move_abs_dir":
-        return sentence(f"{verb} {hand} {_word(DIRECTION_WORDS, args['direction'], phrases, 'direction')}")
+        direction = _word(DIRECTION_WORDS, args["direction"], phrases, "direction")
+        return sentence(f"{verb} {hand} {_distance(args)}{direction}")
     if procedure in ("pick_up", "point_to"):
         return sentence(f"{verb} {obj} with {hand}")
     if procedure == "place_abs":
@@ -110,6 +115,16 @@ def narration(procedure: str, args: Mapping, phrases: Mapping[str, str] | None, 
     if procedure in ("open", "close"):
         return sentence(f"{verb} {hand}")
     return sentence(f"{verb}")
+
+
+def _distance(args: Mapping) -> str:
+    """"5 centimetres " for a move given a distance (nothing for the default step)."""
+    distance = args.get("distance")
+    if distance is None:
+        return ""
+    centimetres = round(float(distance) * 100, 1)
+    number = f"{centimetres:g}"
+    return f"{number} centimetre{'' if number == '1' else 's'} "
 
 
 # -- failures -----------------------------------------------------------------

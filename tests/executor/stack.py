@@ -117,12 +117,15 @@ class Stack:
                              timeout, "the executor to be idle")
 
     def command(self, procedure: str, args: dict[str, Any] | None = None, *, phrases: dict[str, str] | None = None,
-                utterance: str = "", wait: bool = True, timeout: float = 120.0) -> list[dict[str, Any]]:
-        """Send a command as the NLU does; return what the robot said about it."""
+                utterance: str = "", wait: bool = True, timeout: float = 120.0,
+                then: list[dict[str, Any]] | None = None) -> list[dict[str, Any]]:
+        """Send a command as the NLU does (``then``: further steps); return what the robot said about it."""
         start, runs = len(self.lines), self.runs
-        self.hub.publish(self.hub.keys.nlu_result, {
-            "kind": "command", "procedure": procedure, "args": args or {}, "phrases": phrases or {},
-            "text": utterance, "utterance": utterance or procedure.replace("_", " ")})
+        message = {"kind": "command", "procedure": procedure, "args": args or {}, "phrases": phrases or {},
+                   "text": utterance, "utterance": utterance or procedure.replace("_", " ")}
+        if then is not None:
+            message["then"] = then
+        self.hub.publish(self.hub.keys.nlu_result, message)
         if not wait:
             return []
         # the command is accepted (a busy state) or refused (an error line) within a moment, then runs to its end

@@ -138,3 +138,18 @@ def test_hfpbd_command_reaches_the_actions_tool(tmp_path: Path) -> None:
                             capture_output=True, text=True, env={**os.environ, "HFPBD_DATA_DIR": str(tmp_path)}, timeout=60)
     assert result.returncode == 0, result.stderr
     assert "(unnamed)" in result.stdout
+
+
+def test_undo_removes_the_current_actions_last_step_on_disk(tmp_path: Path) -> None:
+    store = ActionStore(tmp_path)
+    store.create()
+    store.append_step(STEP)
+    store.create()
+    store.append_step(STEP)
+    store.append_step({**STEP, "procedure": "place_abs"})
+    assert store.remove_last_step()["procedure"] == "place_abs"
+    assert ActionStore(tmp_path).step_counts() == [1, 1]
+    store.remove_last_step()
+    with pytest.raises(StoreError, match="there is no step to remove"):
+        store.remove_last_step()
+    assert ActionStore(tmp_path).step_counts() == [1, 0]
