@@ -9,7 +9,7 @@ from services.executor import wording
 from services.executor.bimanual import MIN_DURATION, PEAK_ACCELERATION, first_clash, timed_together
 from services.executor.commands import CommandError, check, check_compound
 from services.executor.kinematics import JOINT_ACCEL, JOINT_SPEED, ArmKinematics, joint_names
-from services.sim.layout import arm_pose
+from shared.robot import ROBOT
 
 
 def refer(oid: str) -> str:
@@ -99,7 +99,7 @@ def arms() -> dict[str, ArmKinematics]:
 
 
 def test_arms_swinging_into_each_other_are_caught_and_apart_they_pass(arms: dict[str, ArmKinematics]) -> None:
-    side = {arm: np.asarray(arm_pose("side", arm), float) for arm in arms}
+    side = {arm: np.asarray(ROBOT.arm_pose("side", arm), float) for arm in arms}
     for arm, kin in arms.items():
         for each in arms:
             kin.set_joints(dict(zip(joint_names(each), side[each])))
