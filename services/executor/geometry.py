@@ -30,6 +30,7 @@ ON_TOP = 0.05
 POINT_DISTANCE = 0.14
 RELEASE_CLEARANCE = 0.015  # a placed object's bottom is released this far above its support
 PLACE_SHIFT = 0.02  # metres a release point may move off the exact one when that is out of reach
+DOWN_RINGS = (0.04, 0.08, 0.12)  # metres: "put it down" may move the object this far when right below is taken
 TOP_MARGIN = 0.01   # a held object released on a top stays this far inside its edges
 ROTATE_STEP = 1.6  # rad, the paper's wrist-roll increment
 MAX_GRIP_WIDTH = 0.085  # widest object the open gripper can close around, with margin
@@ -247,6 +248,21 @@ def carry_poses(tool_pose: np.ndarray, held_center: np.ndarray, centers: list[np
 def table_release_center(held_center: np.ndarray, held_size: np.ndarray, table_z: float) -> np.ndarray:
     """Keep x, y; lower the held object until its bottom is just above the table."""
     return np.array([held_center[0], held_center[1], table_z + RELEASE_CLEARANCE + held_size[2] / 2])
+
+
+def table_release_centers(held_center: np.ndarray, held_size: np.ndarray, table_z: float) -> list[np.ndarray]:
+    """Straight below the held object first, then on rings around that spot (nearest first).
+
+    "Put it down" means about here: when the spot below is taken (the hand
+    was moved over a plate) or cannot be reached straight down, a free spot
+    a few centimetres away is as good.
+    """
+    below = table_release_center(held_center, held_size, table_z)
+    out = [below]
+    for radius in DOWN_RINGS:
+        for angle in np.linspace(0.0, 2 * np.pi, 8, endpoint=False):
+            out.append(below + radius * np.array([np.cos(angle), np.sin(angle), 0.0]))
+    return out
 
 
 # -- directions, pointing, grasping ---------------------------------------------

@@ -396,7 +396,8 @@ class Procedures:
                 continue
             kin.set_joints(snap.joints())
             tool = kin.fk()
-            self._set_held(arm, Held(object, Box.of(obj), tool))
+            box = Box.of(obj)
+            self._set_held(arm, targets.held_in_hand(object, box, tool, self._support_below(object, box, snap)))
             kin, snap = self._ready(arm)
             trajectory = self._lift(kin, grasp.lift[2] - grasp.grasp[2])
             if trajectory is None:
@@ -518,12 +519,24 @@ class Procedures:
     def place_abs(self, arm: str, destination: str) -> Done:
         kin, snap = self._ready(arm)
         held = self._refresh_held(self._holding(arm, snap), snap, kin)
-        support = self._support_below(held, snap) if destination == "here" else snap.table_z
-        _, release = targets.place_table(kin.fk(), held, support)
+        support = self._support_below(held.object_id, held.box, snap) if destination == "here" else snap.table_z
+        first, *around = targets.place_table(kin.fk(), held, support)
         where = "here" if destination == "here" else "on the table"
-        with kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):
-            self._go(arm, self._line(kin, release, wording.sentence(f"I can't lower my {arm} hand to put it down {where}")))
-        return self._release(arm, held)
+        # right below first, landing on a plate's rim allowed; then only free spots of the table around it
+        pairs = [first] + [(hover, release) for hover, release in around if self._free_spot(held, release, snap)]
+        done = self._place(arm, kin, snap, held, pairs, wording.sentence(
+            f"I can't find a clear path to put it down {where}"))
+        if done is None:
+            raise StepFailed(wording.sentence(f"I can't lower my {arm} hand to put it down {where}"))
+        return done
+
+    @staticmethod
+    def _free_spot(held: Held, release: np.ndarray, snap: SceneSnapshot) -> bool:
+        """Whether the held object released at ``release`` would stand clear of every other object's footprint."""
+        center = held.center_at(release)
+        return all(oid == held.object_id or np.any(np.abs(Box.of(obj).center[:2] - center[:2]) >=
+                                                   Box.of(obj).half[:2] + held.box.half[:2] + geo.PLACE_SHIFT / 2)
+                   for oid, obj in snap.objects.items())
 
     @staticmethod
     def _flat_below(held: Held, release: np.ndarray, snap: SceneSnapshot) -> list[str]:
@@ -536,15 +549,16 @@ class Procedures:
         return [oid for oid, obj in snap.objects.items()
                 if oid != held.object_id and Box.of(obj).top <= bottom + FLAT_MARGIN]
 
-    def _support_below(self, held: Held, snap: SceneSnapshot) -> float:
-        """Top of whatever is under the held object: another object's top, else the table."""
+    @staticmethod
+    def _support_below(object_id: str, above: Box, snap: SceneSnapshot) -> float:
+        """Top of whatever is under the box of object ``object_id``: another object's top, else the table."""
         top = snap.table_z
         for oid, obj in snap.objects.items():
-            if oid == held.object_id:
+            if oid == object_id:
                 continue
             box = Box.of(obj)
-            overlap = np.all(np.abs(box.center[:2] - held.box.center[:2]) < (box.half[:2] + held.box.half[:2]))
-            if overlap and box.top < held.box.bottom + 0.01:
+            overlap = np.all(np.abs(box.center[:2] - above.center[:2]) < (box.half[:2] + above.half[:2]))
+            if overlap and box.top < above.bottom + 0.01:
                 top = max(top, box.top)
         return top
 
@@ -556,25 +570,39 @@ class Procedures:
         if object == held.object_id:
             raise StepFailed(wording.sentence(f"I can't place {words} relative to itself"))
         box = Box.of(obj)
-        for hover, release in targets.place_relation(relation, box, kin.fk(), held, snap.table_z):
+        pairs = targets.place_relation(relation, box, kin.fk(), held, snap.table_z)
+        done = self._place(arm, kin, snap, held, pairs, wording.sentence(
+            f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}"))
+        if done is None:
+            raise StepFailed(wording.cannot_reach(arm, relation, words))
+        done.landmark = self._landmark(obj)
+        return done
+
+    def _place(self, arm: str, kin: ArmKinematics, snap: SceneSnapshot, held: Held,
+               pairs: list[tuple[np.ndarray, np.ndarray]], no_path: str) -> Done | None:
+        """Carry the held object to the first (hover, release) pair it can be lowered from, lower it, let go.
+
+        None when no pair can be lowered from (checked before the arm moves);
+        a pair whose descent turns out blocked once the hand is there (the
+        view changed on the way) passes on to the next.
+        """
+        for hover, release in pairs:
             hover_q = self._lowerable(kin, snap, held, hover, release)
             if hover_q is None:
                 continue
-            self._go(arm, self._plan(kin, hover_q, wording.sentence(
-                f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}")))
-            kin, snap = self._ready(arm)
+            if np.max(np.abs(hover_q - kin.arm_q)) > 1e-3:
+                self._go(arm, self._plan(kin, hover_q, no_path))
+                kin, snap = self._ready(arm)
             with kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):
                 descent = kin.straight_line(release)
-            if descent is None:  # the view changed on the way there: on to the next release point
+            if descent is None:
                 log.info("the way down to %s is blocked now; objects seen: %s", np.round(release[:3], 3),
                          {k: (np.round(o["position"], 3).tolist(), np.round(o["size"], 3).tolist(), o.get("type"))
                           for k, o in snap.objects.items()})
                 continue
             self._go(arm, descent)
-            done = self._release(arm, held)
-            done.landmark = self._landmark(obj)
-            return done
-        raise StepFailed(wording.cannot_reach(arm, relation, words))
+            return self._release(arm, held)
+        return None
 
     def _lowerable(self, kin: ArmKinematics, snap: SceneSnapshot, held: Held, hover: np.ndarray,
                    release: np.ndarray) -> np.ndarray | None:
@@ -584,7 +612,7 @@ class Procedures:
         pose whose descent would be blocked is passed over for the next
         candidate instead of ending the step once the arm is there.
         """
-        hover_q = kin.ik(hover)
+        hover_q = kin.ik(hover, seeds=[kin.arm_q])
         if hover_q is None:
             return None
         with kin.posed(hover_q), kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):

@@ -32,10 +32,28 @@ def sync(kin: ArmKinematics, snap: SceneSnapshot, held: Held | None) -> None:
     """Bring one arm's planning model up to the measured joints, the objects and the held object."""
     kin.set_joints(snap.joints())
     kin.detach()
-    skip = {held.object_id} if held else set()
-    kin.set_obstacles(snap.obstacles(skip=skip))
+    kin.set_obstacles(snap.obstacles(skip=_in_hand(kin.arm, snap, held)))
     if held is not None:
         kin.attach(held.object_id, held.box, kin.fk())
+
+
+def _in_hand(arm: str, snap: SceneSnapshot, held: Held | None) -> set[str]:
+    """Objects that are the held object itself: its id, what perception sees in this hand, a sighting inside it.
+
+    The carried box is attached to the gripper; perception's view of the
+    same cup (under its own id, or a fresh one when tracking lost it while
+    the hand moved) must not stand in the planning world as an obstacle
+    overlapping it, or every start state is "in collision".
+    """
+    if held is None:
+        return set()
+    skip = {held.object_id}
+    for oid, obj in snap.objects.items():
+        box = Box.of(obj)
+        inside = np.all(np.abs(box.center - held.box.center) <= held.box.half)
+        if obj.get("held_by") == arm or inside:
+            skip.add(oid)
+    return skip
 
 
 Interruption = Callable[[], bool]
