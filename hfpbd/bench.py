@@ -12,6 +12,7 @@ BENCHMARKS: dict[str, str] = {
     "sim": "services.sim.bench",
     "perception": "services.perception.bench",
     "executor": "services.executor.bench",
+    "manipulation": "hfpbd.bench_manipulation",
     "tasks": "hfpbd.tasks.bench",
     "speech": "services.speech.bench",
 }

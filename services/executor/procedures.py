@@ -49,7 +49,7 @@ CLOSE_WIDTH = 0.0
 GRIP_FORCE = 30.0
 RETREAT = 0.08          # after releasing, the hand backs off this far
 STATE_WAIT = 1.0        # seconds to wait for a robot state newer than a finished motion
-PICK_ATTEMPTS = 2
+PICK_ATTEMPTS = 3       # grasps tried in turn (an approach found blocked on arrival counts as one)
 FLAT_MARGIN = 0.01      # metres: how far a "flat" object's top may reach above a released object's bottom
 PRESS_KEPT = 0.03       # metres between the measured and the commanded tool position of a hand still pressing
 AWAY = -0.5             # cosine between a move and the press direction below which the move leaves the object
@@ -384,10 +384,20 @@ class Procedures:
             self._open_on_the_way(arm, kin, snap, pre_q, wording.cannot_pick(arm, words, "I can't find a clear path to it"))
             kin, snap = self._ready(arm)
             if isinstance(grasp, EdgeGrasp):
-                self._go(arm, self._line(kin, grasp.pregrasp, wording.cannot_pick(arm, words, "I can't reach down to its edge")))
+                down = kin.straight_line(grasp.pregrasp)
+                if down is None:
+                    reason = "I can't reach down to its edge"
+                    continue
+                self._go(arm, down)
                 kin, snap = self._ready(arm)
-            self._go(arm, self._line(kin, grasp.grasp, wording.cannot_pick(arm, words, "I can't reach down to it"),
-                                     ignore=(object,)))
+            approach = kin.straight_line(grasp.grasp, ignore=(object,))
+            if approach is None:
+                # checked clear from the planned pre-grasp, but not from where the arm stopped or with what the
+                # camera sees now (a hand beside an object changes its outline): on to the next grasp
+                log.info("the approach to grasp %s is blocked from where the arm is", np.round(grasp.grasp[:3], 3))
+                reason = "I can't reach down to it"
+                continue
+            self._go(arm, approach)
             self._grip(arm, CLOSE_WIDTH)
             snap = self._snapshot()
             if snap.gripper_state(arm) != "holding":
