@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from services.executor import geometry as geo
-from services.executor import targets, wording
+from services.executor import reach, targets, wording
 from services.executor.geometry import Box
 from services.executor.grounding import descriptor
 from services.executor.kinematics import ArmKinematics, Trajectory
@@ -378,7 +378,8 @@ class Procedures:
             box = Box.of(obj)
             if thin_and_wide(box) and overhang(box) < targets.MIN_OVERHANG:
                 raise StepFailed(wording.sentence(f"{words} is too wide to grasp; push it over the table edge first"))
-            raise StepFailed(wording.cannot_pick(arm, words, "I can't reach around it"))
+            raise StepFailed(self._out_of_reach(arm, kin, obj, words) or wording.cannot_pick(
+                arm, words, self._in_the_way(kin, snap, obj) or "I can't reach around it"))
         reason = "it slipped out of my fingers"
         for attempt, (grasp, pre_q) in enumerate(itertools.islice(itertools.chain([first], plans), PICK_ATTEMPTS)):
             self._open_on_the_way(arm, kin, snap, pre_q, wording.cannot_pick(arm, words, "I can't find a clear path to it"))
@@ -423,6 +424,36 @@ class Procedures:
             reason = "it slipped out of my fingers when I lifted it"
             self._release_and_back_off(arm)
         raise StepFailed(wording.cannot_pick(arm, words, reason))
+
+    def _out_of_reach(self, arm: str, kin: ArmKinematics, obj: dict[str, Any], words: str) -> str | None:
+        """When no grasp of ``obj`` is within the arm's length at all: how far out it is, and whether the other hand can.
+
+        None when some grasp is within reach (something is in the way instead).
+        """
+        if reach.graspable_at(kin, obj, np.zeros(3)):
+            return None
+        short = reach.shortfall(kin, lambda offset: reach.graspable_at(kin, obj, offset), np.asarray(obj["position"]))
+        where = f"{max(1, round(100 * short))} cm beyond my {arm} hand" if short is not None else \
+            f"out of my {arm} hand's reach"
+        other = "left" if arm == "right" else "right"
+        other_kin = self.arms.get(other)
+        if other_kin is not None and self.held()[other] is None:
+            snap = self._snapshot()
+            sync(other_kin, snap, None)
+            if next(self._grasp_plans(other_kin, obj), None) is not None:
+                return wording.sentence(f"{words} is {where}; my {other} hand can reach it")
+        return wording.sentence(f"{words} is {where}")
+
+    @staticmethod
+    def _in_the_way(kin: ArmKinematics, snap: SceneSnapshot, obj: dict[str, Any]) -> str | None:
+        """What the grasps of ``obj`` would hit (other objects, the other arm), as words; None if nothing is named."""
+        poses = [grasp.pregrasp for grasp in targets.grasps(obj)]
+        blockers = (kin.blockers(poses) or set()) - {obj["id"]}
+        names = sorted(refer(snap.objects, b) if b in snap.objects else ("the table" if b == "table" else f"my {b}")
+                       for b in blockers)
+        if not names:
+            return None
+        return f"{' and '.join(names)} {'is' if len(names) == 1 else 'are'} in the way"
 
     @staticmethod
     def _lift(kin: ArmKinematics, height: float) -> Trajectory | None:
@@ -584,9 +615,26 @@ class Procedures:
         done = self._place(arm, kin, snap, held, pairs, wording.sentence(
             f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}"))
         if done is None:
-            raise StepFailed(wording.cannot_reach(arm, relation, words))
+            raise StepFailed(self._beyond(kin, held, relation, box, words, snap.table_z, arm)
+                             or wording.cannot_reach(arm, relation, words))
         done.landmark = self._landmark(obj)
         return done
+
+    @staticmethod
+    def _beyond(kin: ArmKinematics, held: Held, relation: str, box: Box, words: str, table_z: float,
+                arm: str) -> str | None:
+        """When no release ``relation`` the landmark is within the arm's length at all: how far out it is."""
+        def reachable(offset: np.ndarray) -> bool:
+            moved = Box(box.center + offset, box.size)
+            return any(kin.ik(hover, check_collisions=False) is not None
+                       for hover, _ in targets.place_relation(relation, moved, kin.fk(), held, table_z))
+
+        if reachable(np.zeros(3)):
+            return None
+        short = reach.shortfall(kin, reachable, box.center)
+        where = f"{max(1, round(100 * short))} cm beyond my {arm} hand" if short is not None else \
+            f"out of my {arm} hand's reach"
+        return wording.sentence(f"I can't put it {wording.RELATION_WORDS[relation]} {words}: {words} is {where}")
 
     def _place(self, arm: str, kin: ArmKinematics, snap: SceneSnapshot, held: Held,
                pairs: list[tuple[np.ndarray, np.ndarray]], no_path: str) -> Done | None:

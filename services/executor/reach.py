@@ -147,3 +147,37 @@ def reach_map(arms: dict[str, ArmKinematics], snap: SceneSnapshot, held: dict[st
     except _GaveWay:
         return None
     return reach, moves
+
+
+SHORTFALL_MAX = 0.5      # metres: farther out than this is just "out of reach"
+SHORTFALL_STEPS = 6      # halvings of the search (a centimetre or so)
+
+
+def shortfall(kin: ArmKinematics, reachable: Callable[[np.ndarray], bool], center: np.ndarray) -> float | None:
+    """How far an object at ``center`` would have to come towards this arm's shoulder to be in reach.
+
+    ``reachable(offset)`` answers for the object moved by ``offset``
+    (ignoring collisions: this is about the arm's length and joint limits).
+    A refusal can then say how far out it is ("12 cm beyond my right hand")
+    instead of only that it is. None when not even ``SHORTFALL_MAX`` closer
+    would do.
+    """
+    towards = (kin.shoulder() - np.asarray(center, float)) * [1.0, 1.0, 0.0]
+    towards /= max(float(np.linalg.norm(towards)), 1e-9)
+    if not reachable(SHORTFALL_MAX * towards):
+        return None
+    low, high = 0.0, SHORTFALL_MAX
+    for _ in range(SHORTFALL_STEPS):
+        middle = (low + high) / 2
+        low, high = (low, middle) if reachable(middle * towards) else (middle, high)
+    return high
+
+
+def graspable_at(kin: ArmKinematics, obj: dict[str, Any], offset: np.ndarray) -> bool:
+    """Whether some grasp of ``obj`` moved by ``offset`` has IK solutions for its pre-grasp and grasp (no collisions)."""
+    moved = {**obj, "position": (np.asarray(obj["position"], float) + offset).tolist()}
+    for grasp in targets.grasps(moved):
+        pre = kin.ik(grasp.pregrasp, check_collisions=False)
+        if pre is not None and kin.ik(grasp.grasp, seeds=[pre], check_collisions=False) is not None:
+            return True
+    return False

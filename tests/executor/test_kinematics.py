@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import threading
 import time
 
@@ -11,7 +12,14 @@ import pytest
 from services.executor import geometry as geo
 from services.executor import targets
 from services.executor.geometry import Box
-from services.executor.kinematics import CONTACT_STEP, MIN_LEAD, PLANNING_SLICE, PLANNING_TRIES, ArmKinematics
+from services.executor.kinematics import (
+    CONTACT_STEP,
+    MIN_LEAD,
+    PLANNING_SLICE,
+    PLANNING_TRIES,
+    ArmKinematics,
+)
+from services.executor.procedures import Procedures, StepFailed
 from services.executor.reach import REACH_KEYS, reach_map, sync
 from services.executor.scene import Scene
 from services.executor.targets import Held
@@ -225,3 +233,15 @@ def test_perceptions_sighting_of_the_held_cup_is_no_obstacle(arms: dict[str, Arm
     assert kin.collisions(kin.arm_q) != []   # as an obstacle it would hold the hand fast
     sync(kin, snap, held)
     assert kin.collisions(kin.arm_q) == []
+
+
+def test_a_cup_out_of_one_hands_reach_is_refused_with_how_far_and_the_other_hand(
+        arms: dict[str, ArmKinematics]) -> None:
+    scene = scene_with(cup("c", 0.85, 0.45), pose="side")
+    procedures = Procedures(scene, None, arms, list)  # type: ignore[arg-type]
+    with pytest.raises(StepFailed) as refused:
+        procedures.pick_up("right", "c")
+    words = str(refused.value)
+    assert re.fullmatch(r"The cup is \d+ cm beyond my right hand; my left hand can reach it\.", words), words
+    far = int(re.search(r"(\d+) cm", words).group(1))
+    assert 5 <= far <= 30
