@@ -491,13 +491,13 @@ class ArmKinematics:
         (see :attr:`cancelled`).
         """
         with self._tolerating_start_contacts():
-            if self.collisions(self.arm_q):
-                lift = self._out_of_contact()
-                if lift is not None:
-                    with self.posed(lift[-1]):
-                        rest = self.plan_to(arm_q)
-                    return None if rest is None else self.timed(np.vstack([lift, rest.points[1:]]))
-            else:
+            lift = self._out_of_contact() if self.collisions(self.arm_q) else None
+        if lift is not None:   # planned from where the lift ends, the start's contacts no longer allowed
+            with self.posed(lift[-1]):
+                rest = self.plan_to(arm_q)
+            return None if rest is None else self.timed(np.vstack([lift, rest.points[1:]]))
+        with self._tolerating_start_contacts():
+            if not self.collisions(self.arm_q):
                 straight = self._joint_line(self.arm_q, arm_q)
                 if straight is not None:
                     return self.timed(straight)
