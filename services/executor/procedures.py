@@ -573,9 +573,12 @@ class Procedures:
 
     @staticmethod
     def _free_spot(held: Held, release: np.ndarray, snap: SceneSnapshot) -> bool:
-        """Whether the held object released at ``release`` would stand clear of every other object's footprint."""
+        """Whether the held object released at ``release`` would stand clear of every other object's footprint.
+
+        Perception's own sighting of what a hand holds is no footprint on the table.
+        """
         center = held.center_at(release)
-        return all(oid == held.object_id or np.any(np.abs(Box.of(obj).center[:2] - center[:2]) >=
+        return all(oid == held.object_id or obj.get("held_by") or np.any(np.abs(Box.of(obj).center[:2] - center[:2]) >=
                                                    Box.of(obj).half[:2] + held.box.half[:2] + geo.PLACE_SHIFT / 2)
                    for oid, obj in snap.objects.items())
 
