@@ -222,12 +222,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     with Bus(loopback_options(namespace, port, listen=True)) as bus, tempfile.TemporaryDirectory() as data:
         session = loopback_options(namespace, port, listen=False).to_argv()
         stack = LocalStack(bus, args.logs or Path(data) / "logs")
+        outcomes: list[Outcome] = []
         try:
             for name in ("sim", "perception"):
                 stack.start(name, session)
             stack.start("executor", session, "--data-dir", data)
             driver = Driver(bus)
-            outcomes = []
             for seed in range(args.seed, args.seed + args.tasks):
                 try:
                     outcome = run_task(driver, seed)
