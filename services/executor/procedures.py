@@ -49,6 +49,7 @@ CLOSE_WIDTH = 0.0
 GRIP_FORCE = 30.0
 RETREAT = 0.08          # after releasing, the hand backs off this far
 STATE_WAIT = 1.0        # seconds to wait for a robot state newer than a finished motion
+PLACE_PLANS = 3         # release candidates a placement may fail to plan a path to before it gives up
 PICK_ATTEMPTS = 3       # grasps tried in turn (an approach found blocked on arrival counts as one)
 FLAT_MARGIN = 0.01      # metres: how far a "flat" object's top may reach above a released object's bottom
 PRESS_KEPT = 0.03       # metres between the measured and the commanded tool position of a hand still pressing
@@ -448,7 +449,7 @@ class Procedures:
     def _in_the_way(kin: ArmKinematics, snap: SceneSnapshot, obj: dict[str, Any]) -> str | None:
         """What the grasps of ``obj`` would hit (other objects, the other arm), as words; None if nothing is named."""
         poses = [grasp.pregrasp for grasp in targets.grasps(obj)]
-        blockers = (kin.blockers(poses) or set()) - {obj["id"]}
+        blockers = (kin.blockers(poses) or set()) - {obj["id"], "table"}   # the table is always near a grasp
         names = sorted(refer(snap.objects, b) if b in snap.objects else ("the table" if b == "table" else f"my {b}")
                        for b in blockers)
         if not names:
@@ -644,15 +645,25 @@ class Procedures:
         """Carry the held object to the first (hover, release) pair it can be lowered from, lower it, let go.
 
         None when no pair can be lowered from (checked before the arm moves);
-        a pair whose descent turns out blocked once the hand is there (the
-        view changed on the way) passes on to the next.
+        a pair no clear path leads to, or whose descent turns out blocked
+        once the hand is there (the view changed on the way), passes on to
+        the next; after ``PLACE_PLANS`` pairs without a path the step fails.
         """
+        unplanned = 0
         for hover, release in pairs:
             hover_q = self._lowerable(kin, snap, held, hover, release)
             if hover_q is None:
                 continue
             if np.max(np.abs(hover_q - kin.arm_q)) > 1e-3:
-                self._go(arm, self._plan(kin, hover_q, no_path))
+                trajectory = kin.plan_to(hover_q)
+                if trajectory is None:
+                    if kin.cancelled:
+                        raise Stopped()
+                    unplanned += 1
+                    if unplanned >= PLACE_PLANS:   # each failure costs seconds of planning: say so instead
+                        raise StepFailed(no_path)
+                    continue
+                self._go(arm, trajectory)
                 kin, snap = self._ready(arm)
             with kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):
                 descent = kin.straight_line(release)
