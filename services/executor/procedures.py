@@ -573,13 +573,14 @@ class Procedures:
         return done
 
     @staticmethod
-    def _free_spot(held: Held, release: np.ndarray, snap: SceneSnapshot) -> bool:
+    def _free_spot(held: Held, release: np.ndarray, snap: SceneSnapshot, on: str | None = None) -> bool:
         """Whether the held object released at ``release`` would stand clear of every other object's footprint.
 
+        ``on``: the object it is put on (its footprint is where it goes).
         Perception's own sighting of what a hand holds is no footprint on the table.
         """
         center = held.center_at(release)
-        return all(oid == held.object_id or obj.get("held_by") or np.any(np.abs(Box.of(obj).center[:2] - center[:2]) >=
+        return all(oid in (held.object_id, on) or obj.get("held_by") or np.any(np.abs(Box.of(obj).center[:2] - center[:2]) >=
                                                    Box.of(obj).half[:2] + held.box.half[:2] + geo.PLACE_SHIFT / 2)
                    for oid, obj in snap.objects.items())
 
@@ -615,7 +616,10 @@ class Procedures:
         if object == held.object_id:
             raise StepFailed(wording.sentence(f"I can't place {words} relative to itself"))
         box = Box.of(obj)
-        pairs = targets.place_relation(relation, box, kin.fk(), held, snap.table_z)
+        # only where it stands clear of everything else (next to a cup, not half on the plate beside it)
+        pairs = [(hover, release) for hover, release in targets.place_relation(relation, box, kin.fk(), held,
+                                                                               snap.table_z)
+                 if self._free_spot(held, release, snap, on=object if relation in ("above", "on_top_of") else None)]
         done = self._place(arm, kin, snap, held, pairs, wording.sentence(
             f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}"))
         if done is None:
