@@ -21,7 +21,7 @@ pytestmark = pytest.mark.slow
 CUPS = {"red": ("obj0", "obj1", "right"), "blue": ("obj1", "obj0", "left")}
 PLATE, BOX = "obj3", "obj2"
 LIFTED = 0.06   # metres above where it stood: the pick-up lifted it
-SEEN_WITHIN = 0.04
+SEEN_WITHIN = 0.08   # metres: perception places a cup standing on a plate or box a few centimetres off
 
 
 def seen(stack: Stack, truth_id: str) -> str:
