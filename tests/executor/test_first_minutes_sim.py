@@ -34,7 +34,7 @@ def seen(stack: Stack, truth_id: str) -> str:
 
     def found() -> str | None:
         where = stack.position(truth_id)
-        close = [k for k, o in stack.objects.items() if o.get("type") == kind and o.get("visible", True)
+        close = [k for k, o in stack.objects.items() if o.get("type") == kind   # hidden under the hand: still kept
                  and np.linalg.norm(np.asarray(o["position"]) - where) < SEEN_WITHIN]
         return close[0] if close else None
 
