@@ -572,15 +572,15 @@ class Procedures:
             raise StepFailed(wording.sentence(f"I can't lower my {arm} hand to put it down {where}"))
         return done
 
-    @staticmethod
-    def _free_spot(held: Held, release: np.ndarray, snap: SceneSnapshot, on: str | None = None) -> bool:
+    def _free_spot(self, held: Held, release: np.ndarray, snap: SceneSnapshot, on: str | None = None) -> bool:
         """Whether the held object released at ``release`` would stand clear of every other object's footprint.
 
         ``on``: the object it is put on (its footprint is where it goes).
         Perception's own sighting of what a hand holds is no footprint on the table.
         """
         center = held.center_at(release)
-        return all(oid in (held.object_id, on) or obj.get("held_by") or np.any(np.abs(Box.of(obj).center[:2] - center[:2]) >=
+        arm = next((a for a, h in self.held().items() if h is not None and h.object_id == held.object_id), "")
+        return all(oid in (held.object_id, on) or reach.is_held_sighting(obj, arm, held) or np.any(np.abs(Box.of(obj).center[:2] - center[:2]) >=
                                                    Box.of(obj).half[:2] + held.box.half[:2] + geo.PLACE_SHIFT / 2)
                    for oid, obj in snap.objects.items())
 

@@ -23,6 +23,7 @@ from services.executor.kinematics import ArmKinematics
 from services.executor.scene import SceneSnapshot
 from services.executor.targets import Held
 
+HELD_MARGIN = 0.03   # metres around the carried box within which a sighting marked held may lie
 RELATION_KEYS = ("above", "next_to", "left_of", "right_of", "in_front_of", "behind", "on_top_of", "near")
 REACH_KEYS = ("pick_up", "place", *RELATION_KEYS, "towards", "away_from")
 SIDES = ("left_of", "right_of", "in_front_of", "behind")
@@ -38,7 +39,7 @@ def sync(kin: ArmKinematics, snap: SceneSnapshot, held: Held | None) -> None:
 
 
 def _in_hand(arm: str, snap: SceneSnapshot, held: Held | None) -> set[str]:
-    """Objects that are the held object itself: its id, what perception sees in this hand, a sighting inside it.
+    """Objects that are the held object itself: its id, or a sighting of it (see :func:`is_held_sighting`).
 
     The carried box is attached to the gripper; perception's view of the
     same cup (under its own id, or a fresh one when tracking lost it while
@@ -47,13 +48,21 @@ def _in_hand(arm: str, snap: SceneSnapshot, held: Held | None) -> set[str]:
     """
     if held is None:
         return set()
-    skip = {held.object_id}
-    for oid, obj in snap.objects.items():
-        box = Box.of(obj)
-        inside = np.all(np.abs(box.center - held.box.center) <= held.box.half)
-        if obj.get("held_by") == arm or inside:
-            skip.add(oid)
-    return skip
+    return {held.object_id} | {oid for oid, obj in snap.objects.items() if is_held_sighting(obj, arm, held)}
+
+
+def is_held_sighting(obj: dict[str, Any], arm: str, held: Held) -> bool:
+    """Whether perception's object ``obj`` is the one ``arm`` holds: centred in the carried box, or marked
+    held by this hand *and* reaching up into the carried box over its footprint.
+
+    The mark alone is not enough: tracking marks the nearest object when a
+    hand starts holding, which can be the box a cup was lifted from.
+    """
+    box = Box.of(obj)
+    if np.all(np.abs(box.center - held.box.center) <= held.box.half):
+        return True
+    over = np.all(np.abs(box.center[:2] - held.box.center[:2]) <= held.box.half[:2] + HELD_MARGIN)
+    return obj.get("held_by") == arm and bool(over) and box.top >= held.box.bottom
 
 
 Interruption = Callable[[], bool]
