@@ -12,6 +12,7 @@ BENCHMARKS: dict[str, str] = {
     "sim": "services.sim.bench",
     "perception": "hfpbd.bench_perception",
     "executor": "hfpbd.bench_executor",
+    "manipulation": "hfpbd.bench_manipulation",
     "tasks": "hfpbd.tasks.bench",
     "speech": "services.speech.bench",
     "fuzz": "hfpbd.fuzz",

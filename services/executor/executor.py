@@ -220,7 +220,7 @@ class Executor:
         elif procedure == "switch_action":
             self._switch(args["target"])
         elif procedure == "execute":
-            self._execute(context.get("action"), context.get("from_step", 1))
+            self._execute(args.get("action"), args.get("from_step", 1))
         elif procedure == "record":
             self._step(procedure, args, _context(steps[0], utterance), keep=False)
         elif procedure == "undo":
@@ -453,8 +453,7 @@ class Executor:
 
     def _execute_from(self, number: int, start: int) -> tuple[bool, str]:
         """Start replaying action ``number`` from step ``start``, as the "execute" command would."""
-        return self.submit("execute", {}, {"phrases": {}, "text": "", "utterance": "", "action": number,
-                                           "from_step": start})
+        return self.submit([Step("execute", {"action": number, "from_step": start}, {}, "")], "")
 
     # -- situated state ---------------------------------------------------------------------------------
     def _reach_loop(self) -> None:

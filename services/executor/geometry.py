@@ -32,11 +32,14 @@ ON_TOP = 0.05
 POINT_DISTANCE = 0.14
 RELEASE_CLEARANCE = 0.015  # a placed object's bottom is released this far above its support
 PLACE_SHIFT = 0.02  # metres a release point may move off the exact one when that is out of reach
+DOWN_RINGS = (0.04, 0.08, 0.12)  # metres: "put it down" may move the object this far when right below is taken
 TOP_MARGIN = 0.01   # a held object released on a top stays this far inside its edges
 ROTATE_STEP = 1.6  # rad, the paper's wrist-roll increment
 MAX_GRIP_WIDTH = 0.085  # widest object the open gripper can close around, with margin
 SIDE_GRASP_HEIGHT = 0.7  # share of an object's height at which a side grasp squeezes it
 SIDE_GRASP_PITCH = 0.35  # rad: the tilted-down variant of each side grasp
+ANGLED_PITCH = 0.8       # rad: the angled grasps, between a side grasp and a top-down one
+AROUND_YAWS = (0.8, -0.8, 1.4, -1.4)   # rad off the robot's direction: side grasps from around the object
 
 RELATIONS = ("above", "next_to", "left_of", "right_of", "in_front_of", "behind", "on_top_of", "near")
 DIRECTIONS = {
@@ -251,6 +254,21 @@ def table_release_center(held_center: np.ndarray, held_size: np.ndarray, table_z
     return np.array([held_center[0], held_center[1], table_z + RELEASE_CLEARANCE + held_size[2] / 2])
 
 
+def table_release_centers(held_center: np.ndarray, held_size: np.ndarray, table_z: float) -> list[np.ndarray]:
+    """Straight below the held object first, then on rings around that spot (nearest first).
+
+    "Put it down" means about here: when the spot below is taken (the hand
+    was moved over a plate) or cannot be reached straight down, a free spot
+    a few centimetres away is as good.
+    """
+    below = table_release_center(held_center, held_size, table_z)
+    out = [below]
+    for radius in DOWN_RINGS:
+        for angle in np.linspace(0.0, 2 * np.pi, 8, endpoint=False):
+            out.append(below + radius * np.array([np.cos(angle), np.sin(angle), 0.0]))
+    return out
+
+
 # -- directions, pointing, grasping ---------------------------------------------
 
 def shifted(pose: np.ndarray, offset: np.ndarray) -> np.ndarray:
@@ -326,8 +344,12 @@ def grasp_candidates(box: Box, *, round_shape: bool = False, approach_distance: 
     z = box.bottom + min(max(SIDE_GRASP_HEIGHT * height, 0.025), height - 0.015)
     directions = [outward, np.array([1.0, 0.0, 0.0])]
     directions += [Rotation.from_euler("z", a).apply(outward) for a in (0.35, -0.35)]
-    for pitch in (0.0, SIDE_GRASP_PITCH):  # level, then tilted down: lifts the forearm off the table
-        for direction in directions:
+    # then around the object (an object behind another is reached from its side), and steeper, over what
+    # stands in front of it: tried only when all of the above fail
+    around = [Rotation.from_euler("z", a).apply(outward) for a in AROUND_YAWS]
+    for pitch, headings in ((0.0, directions), (SIDE_GRASP_PITCH, directions), (0.0, around),
+                            (SIDE_GRASP_PITCH, around), (ANGLED_PITCH, directions + around)):
+        for direction in headings:
             if _across(box, direction, round_shape) > MAX_GRIP_WIDTH:
                 continue
             depth = _across(box, np.array([-direction[1], direction[0], 0.0]), round_shape) / 2
@@ -338,7 +360,7 @@ def grasp_candidates(box: Box, *, round_shape: bool = False, approach_distance: 
             grasps.append(Grasp(make_pose(grasp_point - approach_distance * approach, rot), grasp, shifted(grasp, up)))
     top_point = np.array([box.center[0], box.center[1], box.top - min(0.035, 0.6 * height)])
     yaw_robot = float(np.arctan2(outward[1], outward[0]))
-    for yaw in (yaw_robot, yaw_robot + np.pi / 2):
+    for yaw in (yaw_robot, yaw_robot + np.pi / 2, yaw_robot + np.pi / 4, yaw_robot - np.pi / 4):
         fingers = np.array([-np.sin(yaw), np.cos(yaw), 0.0])
         if _across(box, np.array([fingers[1], -fingers[0], 0.0]), round_shape) > MAX_GRIP_WIDTH:
             continue

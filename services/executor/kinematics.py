@@ -436,13 +436,35 @@ class ArmKinematics:
         touched = sorted({name for pair in self.collisions(self.arm_q) if any(n.startswith(mine) for n in pair)
                           for name in pair if name in self._obstacles} - {"table"})
         acm = self.planner.planning_world.get_allowed_collision_matrix()
+        leaving = self._robot_links + ([self.held_body] if self.held_body else [])   # what it holds may leave too
         for name in touched:
-            acm.set_entry(name, self._robot_links, True)
+            acm.set_entry(name, leaving, True)
         try:
             yield
         finally:
             for name in touched:
-                acm.set_entry(name, self._robot_links, False)
+                acm.set_entry(name, leaving, False)
+
+    def _out_of_contact(self) -> np.ndarray | None:
+        """A straight lift from the current joints to the first pose clear of everything (first row: now).
+
+        For a start the model calls in collision although the robot is
+        there: the carried box resting on the table it was just lifted from,
+        or a grasp the table's padding reaches. Only contacts present at the
+        start are allowed on the way, and only until they end; None when the
+        hand cannot get clear within ``VIA_LIFT``.
+        """
+        at_start = set(self.collisions(self.arm_q))
+        up = self._cartesian_path(shifted(self.fk(), [0.0, 0.0, VIA_LIFT]))
+        if up is None:
+            return None
+        for i, q in enumerate(up[1:], start=1):
+            hits = set(self.collisions(q))
+            if not hits:
+                return np.asarray(up[:i + 1])
+            if not hits <= at_start:
+                return None
+        return None
 
     @property
     def cancelled(self) -> bool:
@@ -458,6 +480,12 @@ class ArmKinematics:
         one. None when no path was found or the user said stop meanwhile
         (see :attr:`cancelled`).
         """
+        with self._tolerating_start_contacts():
+            lift = self._out_of_contact() if self.collisions(self.arm_q) else None
+        if lift is not None:   # planned from where the lift ends, the start's contacts no longer allowed
+            with self.posed(lift[-1]):
+                rest = self.plan_to(arm_q)
+            return None if rest is None else self.timed(np.vstack([lift, rest.points[1:]]))
         with self._tolerating_start_contacts():
             if not self.collisions(self.arm_q):
                 straight = self._joint_line(self.arm_q, arm_q)

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from services.executor import geometry as geo
-from services.executor import targets, wording
+from services.executor import reach, targets, wording
 from services.executor.bimanual import first_clash, timed_together
 from services.executor.commands import BOTH
 from services.executor.geometry import Box
@@ -52,7 +52,8 @@ CLOSE_WIDTH = 0.0
 GRIP_FORCE = ROBOT.gripper.default_effort
 RETREAT = 0.08          # after releasing, the hand backs off this far
 STATE_WAIT = 1.0        # seconds to wait for a robot state newer than a finished motion
-PICK_ATTEMPTS = 2
+PLACE_PLANS = 3         # release candidates a placement may fail to plan a path to before it gives up
+PICK_ATTEMPTS = 3       # grasps tried in turn (an approach found blocked on arrival counts as one)
 FLAT_MARGIN = 0.01      # metres: how far a "flat" object's top may reach above a released object's bottom
 PRESS_KEPT = 0.03       # metres between the measured and the commanded tool position of a hand still pressing
 AWAY = -0.5             # cosine between a move and the press direction below which the move leaves the object
@@ -311,7 +312,7 @@ class Procedures:
     # -- p1 ----------------------------------------------------------------------------------
     def move_abs_dest(self, arm: str, destination: str = "side") -> Done:
         if arm == BOTH:
-            self.return_to({hand: arm_pose("side", hand) for hand in ARMS}, "to the side")
+            self.return_to({hand: ROBOT.arm_pose("side", hand) for hand in ARMS}, "to the side")
             return Done()
         kin, _ = self._ready(arm)
         goal = np.asarray(ROBOT.arm_pose("side", arm), float)
@@ -527,16 +528,27 @@ class Procedures:
             box = Box.of(obj)
             if thin_and_wide(box) and overhang(box, self._snapshot().near_edge) < targets.MIN_OVERHANG:
                 raise StepFailed(wording.sentence(f"{words} is too wide to grasp; push it over the table edge first"))
-            raise StepFailed(wording.cannot_pick(arm, words, "I can't reach around it"))
+            raise StepFailed(self._out_of_reach(arm, kin, obj, words) or wording.cannot_pick(
+                arm, words, self._in_the_way(kin, snap, obj) or "I can't reach around it"))
         reason = "it slipped out of my fingers"
         for attempt, (grasp, pre_q) in enumerate(itertools.islice(itertools.chain([first], plans), PICK_ATTEMPTS)):
             self._open_on_the_way(arm, kin, snap, pre_q, wording.cannot_pick(arm, words, "I can't find a clear path to it"))
             kin, snap = self._ready(arm)
             if isinstance(grasp, EdgeGrasp):
-                self._go(arm, self._line(kin, grasp.pregrasp, wording.cannot_pick(arm, words, "I can't reach down to its edge")))
+                down = kin.straight_line(grasp.pregrasp)
+                if down is None:
+                    reason = "I can't reach down to its edge"
+                    continue
+                self._go(arm, down)
                 kin, snap = self._ready(arm)
-            self._go(arm, self._line(kin, grasp.grasp, wording.cannot_pick(arm, words, "I can't reach down to it"),
-                                     ignore=(object,)))
+            approach = kin.straight_line(grasp.grasp, ignore=(object,))
+            if approach is None:
+                # checked clear from the planned pre-grasp, but not from where the arm stopped or with what the
+                # camera sees now (a hand beside an object changes its outline): on to the next grasp
+                log.info("the approach to grasp %s is blocked from where the arm is", np.round(grasp.grasp[:3], 3))
+                reason = "I can't reach down to it"
+                continue
+            self._go(arm, approach)
             self._grip(arm, CLOSE_WIDTH)
             snap = self._snapshot()
             if snap.gripper_state(arm) != "holding":
@@ -545,7 +557,8 @@ class Procedures:
                 continue
             kin.set_joints(snap.joints())
             tool = kin.fk()
-            self._set_held(arm, Held(object, Box.of(obj), tool))
+            box = Box.of(obj)
+            self._set_held(arm, targets.held_in_hand(object, box, tool, self._support_below(object, box, snap)))
             kin, snap = self._ready(arm)
             trajectory = self._lift(kin, grasp.lift[2] - grasp.grasp[2])
             if trajectory is None:
@@ -561,6 +574,36 @@ class Procedures:
             reason = "it slipped out of my fingers when I lifted it"
             self._release_and_back_off(arm)
         raise StepFailed(wording.cannot_pick(arm, words, reason))
+
+    def _out_of_reach(self, arm: str, kin: ArmKinematics, obj: dict[str, Any], words: str) -> str | None:
+        """When no grasp of ``obj`` is within the arm's length at all: how far out it is, and whether the other hand can.
+
+        None when some grasp is within reach (something is in the way instead).
+        """
+        if reach.graspable_at(kin, obj, np.zeros(3)):
+            return None
+        short = reach.shortfall(kin, lambda offset: reach.graspable_at(kin, obj, offset), np.asarray(obj["position"]))
+        where = f"{max(1, round(100 * short))} cm beyond my {arm} hand" if short is not None else \
+            f"out of my {arm} hand's reach"
+        other = "left" if arm == "right" else "right"
+        other_kin = self.arms.get(other)
+        if other_kin is not None and self.held()[other] is None:
+            snap = self._snapshot()
+            sync(other_kin, snap, None)
+            if next(self._grasp_plans(other_kin, obj), None) is not None:
+                return wording.sentence(f"{words} is {where}; my {other} hand can reach it")
+        return wording.sentence(f"{words} is {where}")
+
+    @staticmethod
+    def _in_the_way(kin: ArmKinematics, snap: SceneSnapshot, obj: dict[str, Any]) -> str | None:
+        """What the grasps of ``obj`` would hit (other objects, the other arm), as words; None if nothing is named."""
+        poses = [grasp.pregrasp for grasp in targets.grasps(obj)]
+        blockers = (kin.blockers(poses) or set()) - {obj["id"], "table"}   # the table is always near a grasp
+        names = sorted(refer(snap.objects, b) if b in snap.objects else ("the table" if b == "table" else f"my {b}")
+                       for b in blockers)
+        if not names:
+            return None
+        return f"{' and '.join(names)} {'is' if len(names) == 1 else 'are'} in the way"
 
     @staticmethod
     def _lift(kin: ArmKinematics, height: float) -> Trajectory | None:
@@ -667,12 +710,28 @@ class Procedures:
     def place_abs(self, arm: str, destination: str) -> Done:
         kin, snap = self._ready(arm)
         held = self._refresh_held(self._holding(arm, snap), snap, kin)
-        support = self._support_below(held, snap) if destination == "here" else snap.table_z
-        _, release = targets.place_table(kin.fk(), held, support)
+        support = self._support_below(held.object_id, held.box, snap) if destination == "here" else snap.table_z
+        first, *around = targets.place_table(kin.fk(), held, support)
         where = "here" if destination == "here" else "on the table"
-        with kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):
-            self._go(arm, self._line(kin, release, wording.sentence(f"I can't lower my {arm} hand to put it down {where}")))
-        return self._release(arm, held)
+        # right below first, landing on a plate's rim allowed; then only free spots of the table around it
+        pairs = [first] + [(hover, release) for hover, release in around if self._free_spot(held, release, snap)]
+        done = self._place(arm, kin, snap, held, pairs, wording.sentence(
+            f"I can't find a clear path to put it down {where}"))
+        if done is None:
+            raise StepFailed(wording.sentence(f"I can't lower my {arm} hand to put it down {where}"))
+        return done
+
+    def _free_spot(self, held: Held, release: np.ndarray, snap: SceneSnapshot, on: str | None = None) -> bool:
+        """Whether the held object released at ``release`` would stand clear of every other object's footprint.
+
+        ``on``: the object it is put on (its footprint is where it goes).
+        Perception's own sighting of what a hand holds is no footprint on the table.
+        """
+        center = held.center_at(release)
+        arm = next((a for a, h in self.held().items() if h is not None and h.object_id == held.object_id), "")
+        return all(oid in (held.object_id, on) or reach.is_held_sighting(obj, arm, held) or np.any(np.abs(Box.of(obj).center[:2] - center[:2]) >=
+                                                   Box.of(obj).half[:2] + held.box.half[:2] + geo.PLACE_SHIFT / 2)
+                   for oid, obj in snap.objects.items())
 
     @staticmethod
     def _flat_below(held: Held, release: np.ndarray, snap: SceneSnapshot) -> list[str]:
@@ -685,15 +744,16 @@ class Procedures:
         return [oid for oid, obj in snap.objects.items()
                 if oid != held.object_id and Box.of(obj).top <= bottom + FLAT_MARGIN]
 
-    def _support_below(self, held: Held, snap: SceneSnapshot) -> float:
-        """Top of whatever is under the held object: another object's top, else the table."""
+    @staticmethod
+    def _support_below(object_id: str, above: Box, snap: SceneSnapshot) -> float:
+        """Top of whatever is under the box of object ``object_id``: another object's top, else the table."""
         top = snap.table_z
         for oid, obj in snap.objects.items():
-            if oid == held.object_id:
+            if oid == object_id:
                 continue
             box = Box.of(obj)
-            overlap = np.all(np.abs(box.center[:2] - held.box.center[:2]) < (box.half[:2] + held.box.half[:2]))
-            if overlap and box.top < held.box.bottom + 0.01:
+            overlap = np.all(np.abs(box.center[:2] - above.center[:2]) < (box.half[:2] + above.half[:2]))
+            if overlap and box.top < above.bottom + 0.01:
                 top = max(top, box.top)
         return top
 
@@ -705,28 +765,74 @@ class Procedures:
         if object == held.object_id:
             raise StepFailed(wording.sentence(f"I can't place {words} relative to itself"))
         box = Box.of(obj)
-        for hover, release in targets.place_relation(relation, box, kin.fk(), held, snap.table_z):
+        # only where it stands clear of everything else (next to a cup, not half on the plate beside it)
+        pairs = [(hover, release) for hover, release in targets.place_relation(relation, box, kin.fk(), held,
+                                                                               snap.table_z)
+                 if self._free_spot(held, release, snap, on=object if relation in ("above", "on_top_of") else None)]
+        done = self._place(arm, kin, snap, held, pairs, wording.sentence(
+            f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}"), (object, box))
+        if done is None:
+            raise StepFailed(self._beyond(kin, held, relation, box, words, snap.table_z, arm)
+                             or wording.cannot_reach(arm, relation, words))
+        done.landmark = self._landmark(obj)
+        return done
+
+    @staticmethod
+    def _beyond(kin: ArmKinematics, held: Held, relation: str, box: Box, words: str, table_z: float,
+                arm: str) -> str | None:
+        """When no release ``relation`` the landmark is within the arm's length at all: how far out it is."""
+        def reachable(offset: np.ndarray) -> bool:
+            moved = Box(box.center + offset, box.size)
+            return any(kin.ik(hover, check_collisions=False) is not None
+                       for hover, _ in targets.place_relation(relation, moved, kin.fk(), held, table_z))
+
+        if reachable(np.zeros(3)):
+            return None
+        short = reach.shortfall(kin, reachable, box.center)
+        where = f"{max(1, round(100 * short))} cm beyond my {arm} hand" if short is not None else \
+            f"out of my {arm} hand's reach"
+        return wording.sentence(f"I can't put it {wording.RELATION_WORDS[relation]} {words}: {words} is {where}")
+
+    def _place(self, arm: str, kin: ArmKinematics, snap: SceneSnapshot, held: Held,
+               pairs: list[tuple[np.ndarray, np.ndarray]], no_path: str,
+               landmark: tuple[str, Box] | None = None) -> Done | None:
+        """Carry the held object to the first (hover, release) pair it can be lowered from, lower it, let go.
+
+        None when no pair can be lowered from (checked before the arm moves);
+        a pair no clear path leads to, or whose descent turns out blocked
+        once the hand is there (the view changed on the way), passes on to
+        the next; after ``PLACE_PLANS`` pairs without a path the step fails.
+        """
+        unplanned = 0
+        for hover, release in pairs:
             hover_q = self._lowerable(kin, snap, held, hover, release)
             if hover_q is None:
                 continue
-            self._go(arm, self._plan(kin, hover_q, wording.sentence(
-                f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}")))
-            kin, snap = self._ready(arm)
-            # the landmark as seen before the held object hung over it: from above, the camera sees little of a
-            # plate under a cup, and perception may then place the plate up at the cup's bottom
-            kin.set_obstacles({**snap.obstacles(skip={held.object_id}), object: box})
+            if np.max(np.abs(hover_q - kin.arm_q)) > 1e-3:
+                trajectory = kin.plan_to(hover_q)
+                if trajectory is None:
+                    if kin.cancelled:
+                        raise Stopped()
+                    unplanned += 1
+                    if unplanned >= PLACE_PLANS:   # each failure costs seconds of planning: say so instead
+                        raise StepFailed(no_path)
+                    continue
+                self._go(arm, trajectory)
+                kin, snap = self._ready(arm)
+            if landmark is not None:
+                # the landmark as seen before the held object hung over it: from above, the camera sees little
+                # of a plate under a cup, and perception may then place the plate up at the cup's bottom
+                kin.set_obstacles({**snap.obstacles(skip={held.object_id}), landmark[0]: landmark[1]})
             with kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):
                 descent = kin.straight_line(release)
-            if descent is None:  # the view changed on the way there: on to the next release point
+            if descent is None:
                 log.info("the way down to %s is blocked now; objects seen: %s", np.round(release[:3], 3),
                          {k: (np.round(o["position"], 3).tolist(), np.round(o["size"], 3).tolist(), o.get("type"))
                           for k, o in snap.objects.items()})
                 continue
             self._go(arm, descent)
-            done = self._release(arm, held)
-            done.landmark = self._landmark(obj)
-            return done
-        raise StepFailed(wording.cannot_reach(arm, relation, words))
+            return self._release(arm, held)
+        return None
 
     def put_back(self, arm: str, center: np.ndarray) -> Done:
         """Set the held object down with its centre where ``center`` was (taking back a pick-up).
@@ -762,7 +868,7 @@ class Procedures:
         pose whose descent would be blocked is passed over for the next
         candidate instead of ending the step once the arm is there.
         """
-        hover_q = kin.ik(hover)
+        hover_q = kin.ik(hover, seeds=[kin.arm_q])
         if hover_q is None:
             return None
         with kin.posed(hover_q), kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):

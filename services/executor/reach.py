@@ -23,6 +23,7 @@ from services.executor.kinematics import ArmKinematics
 from services.executor.scene import SceneSnapshot
 from services.executor.targets import Held
 
+HELD_MARGIN = 0.03   # metres around the carried box within which a sighting marked held may lie
 RELATION_KEYS = ("above", "next_to", "left_of", "right_of", "in_front_of", "behind", "on_top_of", "near")
 REACH_KEYS = ("pick_up", "place", *RELATION_KEYS, "towards", "away_from")
 SIDES = ("left_of", "right_of", "in_front_of", "behind")
@@ -32,10 +33,36 @@ def sync(kin: ArmKinematics, snap: SceneSnapshot, held: Held | None) -> None:
     """Bring one arm's planning model up to the measured joints, the objects and the held object."""
     kin.set_joints(snap.joints())
     kin.detach()
-    skip = {held.object_id} if held else set()
-    kin.set_obstacles(snap.obstacles(skip=skip))
+    kin.set_obstacles(snap.obstacles(skip=_in_hand(kin.arm, snap, held)))
     if held is not None:
         kin.attach(held.object_id, held.box, kin.fk())
+
+
+def _in_hand(arm: str, snap: SceneSnapshot, held: Held | None) -> set[str]:
+    """Objects that are the held object itself: its id, or a sighting of it (see :func:`is_held_sighting`).
+
+    The carried box is attached to the gripper; perception's view of the
+    same cup (under its own id, or a fresh one when tracking lost it while
+    the hand moved) must not stand in the planning world as an obstacle
+    overlapping it, or every start state is "in collision".
+    """
+    if held is None:
+        return set()
+    return {held.object_id} | {oid for oid, obj in snap.objects.items() if is_held_sighting(obj, arm, held)}
+
+
+def is_held_sighting(obj: dict[str, Any], arm: str, held: Held) -> bool:
+    """Whether perception's object ``obj`` is the one ``arm`` holds: centred in the carried box, or marked
+    held by this hand *and* reaching up into the carried box over its footprint.
+
+    The mark alone is not enough: tracking marks the nearest object when a
+    hand starts holding, which can be the box a cup was lifted from.
+    """
+    box = Box.of(obj)
+    if np.all(np.abs(box.center - held.box.center) <= held.box.half):
+        return True
+    over = np.all(np.abs(box.center[:2] - held.box.center[:2]) <= held.box.half[:2] + HELD_MARGIN)
+    return obj.get("held_by") == arm and bool(over) and box.top >= held.box.bottom
 
 
 Interruption = Callable[[], bool]
@@ -129,3 +156,37 @@ def reach_map(arms: dict[str, ArmKinematics], snap: SceneSnapshot, held: dict[st
     except _GaveWay:
         return None
     return reach, moves
+
+
+SHORTFALL_MAX = 0.5      # metres: farther out than this is just "out of reach"
+SHORTFALL_STEPS = 6      # halvings of the search (a centimetre or so)
+
+
+def shortfall(kin: ArmKinematics, reachable: Callable[[np.ndarray], bool], center: np.ndarray) -> float | None:
+    """How far an object at ``center`` would have to come towards this arm's shoulder to be in reach.
+
+    ``reachable(offset)`` answers for the object moved by ``offset``
+    (ignoring collisions: this is about the arm's length and joint limits).
+    A refusal can then say how far out it is ("12 cm beyond my right hand")
+    instead of only that it is. None when not even ``SHORTFALL_MAX`` closer
+    would do.
+    """
+    towards = (kin.shoulder() - np.asarray(center, float)) * [1.0, 1.0, 0.0]
+    towards /= max(float(np.linalg.norm(towards)), 1e-9)
+    if not reachable(SHORTFALL_MAX * towards):
+        return None
+    low, high = 0.0, SHORTFALL_MAX
+    for _ in range(SHORTFALL_STEPS):
+        middle = (low + high) / 2
+        low, high = (low, middle) if reachable(middle * towards) else (middle, high)
+    return high
+
+
+def graspable_at(kin: ArmKinematics, obj: dict[str, Any], offset: np.ndarray) -> bool:
+    """Whether some grasp of ``obj`` moved by ``offset`` has IK solutions for its pre-grasp and grasp (no collisions)."""
+    moved = {**obj, "position": (np.asarray(obj["position"], float) + offset).tolist()}
+    for grasp in targets.grasps(moved):
+        pre = kin.ik(grasp.pregrasp, check_collisions=False)
+        if pre is not None and kin.ik(grasp.grasp, seeds=[pre], check_collisions=False) is not None:
+            return True
+    return False

@@ -55,6 +55,23 @@ class Held:
         return np.asarray(tool_pose[:3], float) + turn.apply(self.offset)
 
 
+def held_in_hand(object_id: str, box: Box, tool_pose: np.ndarray, support_top: float) -> Held:
+    """The held object as the grasp achieved it: between the pads, standing no lower than it stood.
+
+    The closed fingers centre the object on the line between the pads, so
+    its perceived centre is moved onto that line (perception can be a
+    centimetre or two off sideways), and its bottom is kept no lower than
+    the top it was picked from. Modelled anywhere else, the carried box
+    would overlap the table or the plate beside it and make every start
+    state "in collision", or be put down a centimetre too low.
+    """
+    fingers = geo.rotation_of(tool_pose).apply([0.0, 1.0, 0.0])
+    center = np.array(box.center, float)
+    center -= float(np.dot(center - np.asarray(tool_pose[:3], float), fingers)) * fingers
+    center[2] = max(center[2], support_top + box.size[2] / 2)
+    return Held(object_id, Box(center, np.array(box.size, float)), np.asarray(tool_pose, float))
+
+
 def _carry(tool_pose: np.ndarray, held: Held, centers: list[np.ndarray], lift: float = 0.0) -> list[np.ndarray]:
     """Tool poses putting the held object at each centre, at each heading of ``CARRY_YAWS`` in turn."""
     return geo.carry_poses(tool_pose, held.center_at(tool_pose), [c + [0.0, 0.0, lift] for c in centers], CARRY_YAWS)
@@ -75,11 +92,19 @@ def place_relation(relation: str, landmark: Box, tool_pose: np.ndarray, held: He
     return [(geo.shifted(r, [0.0, 0.0, HOVER]), r) for r in releases]
 
 
-def place_table(tool_pose: np.ndarray, held: Held, table_z: float) -> tuple[np.ndarray, np.ndarray]:
-    """(current pose, release pose): straight down until the held object's bottom is just above the table."""
+def place_table(tool_pose: np.ndarray, held: Held, table_z: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(hover pose, release pose) pairs for putting the held object down about where it is.
+
+    First straight down from the pose it is at (the hover is the current
+    pose), then on free spots around it, hovered over and at each heading
+    of ``CARRY_YAWS``.
+    """
     current_center = held.center_at(tool_pose)
-    center = geo.table_release_center(current_center, held.box.size, table_z)
-    return np.asarray(tool_pose, float), geo.carry_pose(tool_pose, current_center, center)
+    below, *around = geo.table_release_centers(current_center, held.box.size, table_z)
+    pairs = [(np.asarray(tool_pose, float), geo.carry_pose(tool_pose, current_center, below))]
+    for release in _carry(tool_pose, held, around):
+        pairs.append((geo.shifted(release, [0.0, 0.0, HOVER]), release))
+    return pairs
 
 
 def grasps(obj: dict, near_edge: float | None) -> list[geo.Grasp]:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import threading
 import time
 
@@ -11,7 +12,14 @@ import pytest
 from services.executor import geometry as geo
 from services.executor import targets
 from services.executor.geometry import Box
-from services.executor.kinematics import CONTACT_STEP, MIN_LEAD, PLANNING_SLICE, PLANNING_TRIES, ArmKinematics
+from services.executor.kinematics import (
+    CONTACT_STEP,
+    MIN_LEAD,
+    PLANNING_SLICE,
+    PLANNING_TRIES,
+    ArmKinematics,
+)
+from services.executor.procedures import Procedures, StepFailed
 from services.executor.reach import REACH_KEYS, reach_map, sync
 from services.executor.scene import Scene
 from services.executor.targets import Held
@@ -180,3 +188,63 @@ def test_a_hand_above_what_it_released_lifts_before_swinging_away(arms: dict[str
     assert np.array_equal(path[0], kin.arm_q) and np.array_equal(path[-1], side)
     assert kin.fk(path[1])[2] > kin.fk()[2]
     assert all(kin.collisions(q) == [] for q in path)
+
+
+def test_a_cup_just_grasped_beside_the_plate_is_carried_away(arms: dict[str, ArmKinematics]) -> None:
+    """The carried box overlaps the padded table and plate at the grasp: the plan still leaves, then stays clear."""
+    kin = arms["right"]
+    plate = {"id": "plate", "color": "white", "type": "plate", "position": [0.63, 0.0, TABLE_TOP_Z + 0.008],
+             "size": [0.16, 0.16, 0.015]}
+    scene = scene_with(plate, cup("red", 0.55, -0.12), cup("blue", 0.55, 0.12, color="blue"), pose="side")
+    snap = scene.snapshot()
+    sync(kin, snap, None)
+    grasp = targets.grasps(snap.objects["red"])[0]
+    kin.allow_touching("red", True)
+    grasp_q = kin.ik(grasp.grasp, seeds=[kin.ik(grasp.pregrasp)])
+    kin.allow_touching("red", False)
+    assert grasp_q is not None
+    scene.update_robot({"joints": {**snap.joints(), **dict(zip([kin.names[i] for i in kin.arm_idx], grasp_q))}})
+    snap = scene.snapshot()
+    kin.set_arm(grasp_q)
+    held = targets.held_in_hand("red", snap.box("red"), kin.fk(), snap.table_z)
+    sync(kin, snap, held)
+    assert {"plate", "table"} <= {name for pair in kin.collisions(kin.arm_q) for name in pair}
+    goal = targets.move_relation("above", snap.box("blue"), kin.fk(), held, snap.table_z)
+    found = kin.first_reachable(goal)
+    assert found is not None
+    trajectory = kin.plan_to(found[1])
+    assert trajectory is not None
+    lifted = next(i for i, q in enumerate(trajectory.points) if not kin.collisions(q))
+    assert kin.fk(trajectory.points[lifted])[2] - kin.fk(grasp_q)[2] < 0.05   # it only lifted clear of the contacts
+    assert all(kin.collisions(q) == [] for q in trajectory.points[lifted:])
+
+
+def test_perceptions_sighting_of_the_held_cup_is_no_obstacle(arms: dict[str, ArmKinematics]) -> None:
+    """The cup perception sees in the hand (a blob of hand and cup reaching down to the table) is not an obstacle."""
+    kin = arms["left"]
+    scene = scene_with(pose="untucked")
+    kin.set_joints(scene.snapshot().joints())
+    tool = kin.fk()
+    held = Held("cup", Box(tool[:3] + [0.01, 0.0, -0.01], np.array([0.07, 0.07, 0.10])), tool)
+    height = float(tool[2] - TABLE_TOP_Z)
+    sighting = {"id": "again", "color": "red", "type": "cup", "held_by": "left",
+                "position": [tool[0], tool[1], TABLE_TOP_Z + height / 2], "size": [0.08, 0.08, height]}
+    scene.update_objects([sighting])
+    snap = scene.snapshot()
+    assert snap.supported("again")
+    sync(kin, snap, None)
+    assert kin.collisions(kin.arm_q) != []   # as an obstacle it would hold the hand fast
+    sync(kin, snap, held)
+    assert kin.collisions(kin.arm_q) == []
+
+
+def test_a_cup_out_of_one_hands_reach_is_refused_with_how_far_and_the_other_hand(
+        arms: dict[str, ArmKinematics]) -> None:
+    scene = scene_with(cup("c", 0.85, 0.45), pose="side")
+    procedures = Procedures(scene, None, arms, list)  # type: ignore[arg-type]
+    with pytest.raises(StepFailed) as refused:
+        procedures.pick_up("right", "c")
+    words = str(refused.value)
+    assert re.fullmatch(r"The cup is \d+ cm beyond my right hand; my left hand can reach it\.", words), words
+    far = int(re.search(r"(\d+) cm", words).group(1))
+    assert 5 <= far <= 30

@@ -85,3 +85,26 @@ def test_a_turned_heading_reaches_where_the_grasp_heading_does_not() -> None:
     reachable = [i for i, (hover, _) in enumerate(pairs) if kin.ik(hover) is not None]
     assert reachable, "no heading or release point behind the blue cup is reachable"
     assert 0 not in reachable, "the grasp's own heading became reachable: this case no longer shows why turning helps"
+
+
+def test_the_held_object_is_modelled_between_the_pads_and_not_below_its_support() -> None:
+    """Perception saw the cup 2 cm off to the side and 1 cm low: the model sits where the closed fingers hold it."""
+    seen = Box(SIDE_GRASP[:3] + [0.01, 0.02, -0.05], CUP)
+    support = seen.bottom + 0.01
+    held = targets.held_in_hand("cup", seen, SIDE_GRASP, support)
+    fingers = geo.rotation_of(SIDE_GRASP).apply([0.0, 1.0, 0.0])
+    assert abs(float(np.dot(held.box.center - SIDE_GRASP[:3], fingers))) < 1e-9
+    assert held.box.bottom == pytest.approx(support)
+    np.testing.assert_allclose(held.box.size, CUP)
+
+
+def test_putting_down_tries_straight_below_first_then_spots_around() -> None:
+    held = held_cup()
+    pairs = targets.place_table(SIDE_GRASP, held, TABLE_TOP_Z)
+    below = held.center_at(pairs[0][1])
+    np.testing.assert_allclose(pairs[0][0], SIDE_GRASP)
+    np.testing.assert_allclose(below[:2], held.box.center[:2], atol=1e-9)
+    assert below[2] - CUP[2] / 2 == pytest.approx(TABLE_TOP_Z + geo.RELEASE_CLEARANCE)
+    moved = [float(np.linalg.norm(held.center_at(release)[:2] - below[:2])) for _, release in pairs[1:]]
+    assert np.all(np.diff(moved) > -1e-9) and max(moved) == pytest.approx(max(geo.DOWN_RINGS))
+    assert all(hover[2] - release[2] == pytest.approx(targets.HOVER) for hover, release in pairs[1:])

@@ -1,0 +1,242 @@
+"""``hfpbd bench manipulation``: seeded random tables and tasks through the running services, judged from truth.
+
+Each task gets a scene of its own: 2–6 objects (every type and colour,
+4–12 cm) anywhere on the table, from the seed. The task is programmed by
+commands as the NLU sends them (``nlu/result``: pick up, then put on, next
+to, left or right of, in front of, behind, or down on the table, or a move
+while holding and then down) into a fresh action, judged from ``sim/truth``;
+then the scene is loaded again with every object moved a few centimetres,
+the action is executed, and it is judged again. A task the executor refuses
+with a sentence of its own is counted as refused (with the sentence); one
+that fails after moving, or one that "worked" with the wrong outcome on the
+table, is a failure. Figures go to standard output: success per task kind,
+every failure's and refusal's reason.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import tempfile
+import time
+import uuid
+from collections import Counter, defaultdict
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from hfpbd.manipulation_judge import Verdict, placed
+from hfpbd.tasks.observer import Observer, WaitTimeout
+from hfpbd.tasks.stack import LocalStack
+from services.sim.scene_file import COLOURS
+from shared.bus import Bus
+from shared.config import free_port, loopback_options
+
+TABLE_AREA = ((0.42, 0.78), (-0.42, 0.42))   # metres: x, y where the random objects stand
+GAP = 0.04                 # metres between two objects' outlines
+JITTER = 0.04              # metres each object moves (at most, per axis) before the replay
+STEP_TIMEOUT = 180.0
+KINDS = ("pick_up", "on_top_of", "next_to", "left_of", "right_of", "in_front_of", "behind", "down", "move_down")
+MOVES = ("up", "left", "right", "forward", "backward")
+INTERNAL_ID = re.compile(r"\bobj\d+\b|replaced by")
+
+
+@dataclass
+class Outcome:
+    kind: str
+    result: str          # "achieved", "refused", "failed"
+    reason: str
+    replay: str = ""     # "achieved", "failed", "" (not replayed)
+    replay_reason: str = ""
+
+
+def random_object(rng: np.random.Generator, index: int) -> dict[str, Any]:
+    """One object; the first (the one the task moves) is a cup or box small enough for the open gripper."""
+    kind = str(rng.choice(["cup", "box"] if index == 0 else ["cup", "box", "bowl", "plate"]))
+    width = float(rng.uniform(0.05, 0.075) if index == 0 else rng.uniform(0.04, 0.12))
+    height = float(rng.uniform(0.05, 0.12))
+    if kind == "plate":
+        width, height = float(rng.uniform(0.10, 0.16)), 0.015
+    elif kind == "bowl":
+        height = float(rng.uniform(0.04, 0.07))
+    return {"id": f"obj{index}", "type": kind, "size": [round(width, 3), round(width, 3), round(height, 3)],
+            "mass": 0.15 if kind == "plate" else 0.12, "color": str(rng.choice(sorted(COLOURS)))}
+
+
+def random_scene(rng: np.random.Generator) -> dict[str, Any]:
+    """2–6 objects placed without overlap anywhere in ``TABLE_AREA``; the first one is small enough to grasp."""
+    count = int(rng.integers(2, 7))
+    objects: list[dict[str, Any]] = []
+    for index in range(count):
+        obj = random_object(rng, index)
+        for _ in range(200):
+            x, y = rng.uniform(*TABLE_AREA[0]), rng.uniform(*TABLE_AREA[1])
+            if all(max(abs(x - o["position"][0]), abs(y - o["position"][1])) > (obj["size"][0] + o["size"][0]) / 2 + GAP
+                   for o in objects):
+                obj["position"] = [round(float(x), 3), round(float(y), 3)]
+                objects.append(obj)
+                break
+    return {"name": "bench", "description": "random manipulation bench table", "objects": objects}
+
+
+def jittered(scene: dict[str, Any], rng: np.random.Generator) -> dict[str, list[float]]:
+    """New positions for the replay: every object moved up to ``JITTER`` per axis (overlaps left to the sim)."""
+    return {o["id"]: [round(o["position"][0] + float(rng.uniform(-JITTER, JITTER)), 3),
+                      round(o["position"][1] + float(rng.uniform(-JITTER, JITTER)), 3)] for o in scene["objects"]}
+
+
+class Driver:
+    """Commands to the executor as the NLU sends them, and what the robot says and does about them."""
+
+    def __init__(self, bus: Bus) -> None:
+        self.bus = bus
+        self.watch = Observer(bus)
+
+    def load(self, scene: dict[str, Any], poses: dict[str, list[float]] | None = None) -> None:
+        request: dict[str, Any] = {"scene": scene}
+        if poses:
+            request["poses"] = poses
+        self.watch.wait_for(lambda: not self.watch.busy(), STEP_TIMEOUT, "the executor to be idle")
+        self.bus.request(self.bus.keys.sim_control("scene"), request, timeout=60)
+        loaded = time.time()
+        self.bus.request(self.bus.keys.record, {}, timeout=60)
+        expected = len(scene["objects"])
+        self.watch.wait_for(lambda: self.watch.objects_stamp > loaded and sum(
+            o.get("visible", True) and o.get("type") != "unknown" for o in self.watch.objects.values()) >= expected
+            and all(o.get("visible", True) for o in self.watch.objects.values()), 60, "perception to see the table")
+
+    def pid(self, truth_id: str) -> str:
+        """Perception's id of the simulator's object ``truth_id`` (nearest seen object)."""
+        where = np.asarray(self.watch.truth[truth_id]["position"], float)
+        seen = {k: o for k, o in self.watch.objects.items() if o.get("visible", True)}
+        return min(seen, key=lambda k: float(np.linalg.norm(np.asarray(seen[k]["position"]) - where)))
+
+    def command(self, procedure: str, args: dict[str, Any] | None = None) -> tuple[list[str], list[str]]:
+        """Send one command and wait for its end: (everything said, the error lines)."""
+        since, busy = time.time(), self.watch.busy_states
+        self.bus.publish(self.bus.keys.nlu_result, {"kind": "command", "procedure": procedure, "args": args or {},
+                                                    "phrases": {}, "text": procedure, "utterance": procedure})
+        self.watch.wait_for(lambda: self.watch.busy_states > busy or any(
+            line.kind == "error" for line in self.watch.lines_since(since)), 10, f"{procedure} to start")
+        self.watch.wait_for(lambda: not self.watch.busy(), STEP_TIMEOUT, f"{procedure} to end")
+        time.sleep(0.5)
+        lines = self.watch.lines_since(since)
+        return [line.text for line in lines], [line.text for line in lines if line.kind == "error"]
+
+
+def _task(rng: np.random.Generator, scene: dict[str, Any]) -> tuple[str, str | None]:
+    """A task kind and its landmark (another object of the scene), from the seed."""
+    kind = str(rng.choice(KINDS))
+    others = [o["id"] for o in scene["objects"][1:]]
+    if kind in ("pick_up", "down", "move_down"):
+        return kind, None
+    if kind == "on_top_of":
+        tops = [o["id"] for o in scene["objects"][1:] if o["type"] in ("box", "plate")
+                and o["size"][0] >= scene["objects"][0]["size"][0]]
+        return (kind, str(rng.choice(tops))) if tops else ("next_to", str(rng.choice(others)))
+    return kind, str(rng.choice(others))
+
+
+def run_task(driver: Driver, seed: int) -> Outcome:
+    rng = np.random.default_rng(seed)
+    scene = random_scene(rng)
+    kind, landmark = _task(rng, scene)
+    moved = scene["objects"][0]["id"]
+    arm = "right" if scene["objects"][0]["position"][1] <= 0 else "left"
+    driver.load(scene)
+    driver.command("create_action")
+    steps: list[tuple[str, dict[str, Any]]] = [("pick_up", {"arm": arm, "object": moved})]
+    if kind == "move_down":
+        steps += [("move_abs_dir", {"arm": arm, "direction": str(rng.choice(MOVES))}),
+                  ("place_abs", {"arm": arm, "destination": "table"})]
+    elif kind == "down":
+        steps.append(("place_abs", {"arm": arm, "destination": "table"}))
+    elif kind != "pick_up":
+        steps.append(("place_rel", {"arm": arm, "relation": kind, "object": landmark}))
+    for index, (procedure, args) in enumerate(steps):
+        sent = {k: driver.pid(v) if k == "object" else v for k, v in args.items()}
+        said, errors = driver.command(procedure, sent)
+        leaked = [text for text in said if INTERNAL_ID.search(text)]
+        if leaked:
+            return Outcome(kind, "failed", f"an internal name in what the robot said: {leaked[0]!r}")
+        if errors:
+            result = "refused" if index == 0 else "failed"
+            return Outcome(kind, result, f"{procedure}: {errors[0]}")
+    time.sleep(1.0)
+    verdict = _judge(driver, kind, moved, landmark, arm)
+    outcome = Outcome(kind, "achieved" if verdict.success else "failed", verdict.reason)
+    if not verdict.success:
+        return outcome
+    driver.load(scene, jittered(scene, rng))
+    _, errors = driver.command("execute")
+    time.sleep(1.0)
+    replay = Verdict(False, f"execute: {errors[0]}") if errors else _judge(driver, kind, moved, landmark, arm)
+    outcome.replay, outcome.replay_reason = ("achieved" if replay.success else "failed"), replay.reason
+    return outcome
+
+
+def _judge(driver: Driver, kind: str, moved: str, landmark: str | None, arm: str) -> Verdict:
+    truth = driver.watch.truth
+    if kind == "pick_up":
+        holding = (driver.watch.sim or {}).get("grippers", {}).get(arm, {})
+        low = float(truth[moved]["aabb"][0][2])
+        lifted = holding.get("holding") == moved and low > 0.72 + 0.05
+        return Verdict(lifted, f"{moved} {'is' if lifted else 'is not'} held up in the {arm} hand ({low:.3f} m)")
+    return placed(truth, moved, "down" if kind in ("down", "move_down") else kind,
+                  None if kind in ("down", "move_down") else landmark)
+
+
+def report(outcomes: list[Outcome]) -> None:
+    by_kind: dict[str, Counter] = defaultdict(Counter)
+    for o in outcomes:
+        by_kind[o.kind][o.result] += 1
+        by_kind[o.kind]["replayed"] += o.replay == "achieved"
+    print(f"{'kind':<12} {'tasks':>5} {'achieved':>8} {'replayed':>8} {'refused':>7} {'failed':>6}")
+    for kind in KINDS:
+        c = by_kind.get(kind)
+        if c:
+            total = c["achieved"] + c["refused"] + c["failed"]
+            print(f"{kind:<12} {total:>5} {c['achieved']:>8} {c['replayed']:>8} {c['refused']:>7} {c['failed']:>6}")
+    achieved = sum(o.result == "achieved" for o in outcomes)
+    replayed = sum(o.replay == "achieved" for o in outcomes)
+    attempted = sum(o.result != "refused" for o in outcomes)
+    print(f"all: {len(outcomes)} tasks, {achieved}/{attempted} attempted achieved, {replayed} replayed, "
+          f"{len(outcomes) - attempted} refused")
+    for o in outcomes:
+        if o.result != "achieved":
+            print(f"  {o.result} ({o.kind}): {o.reason}")
+        elif o.replay == "failed":
+            print(f"  replay failed ({o.kind}): {o.replay_reason}")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="hfpbd bench manipulation", description=__doc__.splitlines()[0])
+    parser.add_argument("--tasks", type=int, default=100, help="how many seeded tasks (default: %(default)s)")
+    parser.add_argument("--seed", type=int, default=0, help="first seed (default: %(default)s)")
+    parser.add_argument("--logs", type=Path, default=None, help="where the services' logs go (default: a temp dir)")
+    args = parser.parse_args(argv)
+    namespace, port = "manip" + uuid.uuid4().hex[:8], free_port()
+    with Bus(loopback_options(namespace, port, listen=True)) as bus, tempfile.TemporaryDirectory() as data:
+        session = loopback_options(namespace, port, listen=False).to_argv()
+        stack = LocalStack(bus, args.logs or Path(data) / "logs")
+        outcomes: list[Outcome] = []
+        try:
+            for name in ("sim", "perception"):
+                stack.start(name, session)
+            stack.start("executor", session, "--data-dir", data)
+            driver = Driver(bus)
+            for seed in range(args.seed, args.seed + args.tasks):
+                try:
+                    outcome = run_task(driver, seed)
+                except WaitTimeout as exc:
+                    outcome = Outcome("?", "failed", f"seed {seed}: {exc}")
+                print(f"seed {seed}: {outcome.kind} {outcome.result} / replay {outcome.replay or '-'}: "
+                      f"{outcome.reason}", flush=True)
+                outcomes.append(outcome)
+        finally:
+            stack.stop()
+    report(outcomes)
+    return 0

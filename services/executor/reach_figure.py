@@ -1,0 +1,123 @@
+"""``python -m services.executor.reach_figure [OUT]``: draw where each arm can pick up and place a cup and a box.
+
+The same checks as the reachability map (IK with collisions, the table in
+the world, the torso at its working height) over a grid of the table, for
+an object alone on it: "pick" is some grasp whose pre-grasp and grasp have
+solutions; "place" is some release of that object held in the hand (as
+the pick-up at the middle of its side of the table grasped it) straight down
+there, at any of the headings the hand may turn it to.
+Written to ``docs/reach.png`` by default.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+from services.executor import geometry as geo
+from services.executor import targets
+from services.executor.geometry import Box
+from services.executor.kinematics import ArmKinematics
+from services.executor.reach import can_pick, sync
+from services.executor.scene import Scene
+from services.sim.layout import (
+    TABLE_TOP_Z,
+    TABLE_X,
+    TABLE_Y,
+    TORSO_HEIGHT,
+    arm_pose_map,
+)
+
+OBJECTS = {"cup": (0.07, 0.07, 0.10), "box": (0.06, 0.06, 0.06)}
+STEP = 0.04
+OUT = Path(__file__).resolve().parents[2] / "docs" / "reach.png"
+
+
+def _object(kind: str, x: float, y: float) -> dict:
+    size = OBJECTS[kind]
+    return {"id": "o", "color": "red", "type": kind, "position": [x, y, TABLE_TOP_Z + size[2] / 2], "size": list(size)}
+
+
+def _snapshot(*objects: dict):
+    scene = Scene()
+    scene.update_objects(list(objects))
+    scene.update_robot({"joints": {"torso_lift_joint": TORSO_HEIGHT, **arm_pose_map("side")}})
+    return scene.snapshot()
+
+
+def _held(kin: ArmKinematics, kind: str) -> targets.Held | None:
+    """The object as held after a pick-up at the middle of this arm's side of the table."""
+    obj = _object(kind, 0.55, -0.15 if kin.arm == "right" else 0.15)
+    snap = _snapshot(obj)
+    sync(kin, snap, None)
+    kin.allow_touching("o", True)
+    try:
+        for grasp in targets.grasps(obj):
+            q = kin.ik(grasp.grasp)
+            if q is not None:
+                held = targets.held_in_hand("o", snap.box("o"), kin.fk(q), snap.table_z)
+                return _moved(held, grasp.lift[:3] - grasp.grasp[:3])
+    finally:
+        kin.allow_touching("o", False)
+    return None
+
+
+def _moved(held: targets.Held, shift: np.ndarray) -> targets.Held:
+    """The held object and the hand holding it, both moved by ``shift``."""
+    tool = np.concatenate([held.tool_pose[:3] + shift, held.tool_pose[3:]])
+    return targets.Held(held.object_id, Box(held.box.center + shift, held.box.size), tool)
+
+
+def grids(kin: ArmKinematics, kind: str, xs: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    pick, place = np.zeros((len(xs), len(ys)), bool), np.zeros((len(xs), len(ys)), bool)
+    held = _held(kin, kind)
+    for i, x in enumerate(xs):
+        for j, y in enumerate(ys):
+            obj = _object(kind, x, y)
+            sync(kin, _snapshot(obj), None)
+            pick[i, j] = can_pick(kin, obj)
+            if held is not None:
+                sync(kin, _snapshot(), None)
+                moved = _moved(held, np.array([x - held.box.center[0], y - held.box.center[1], 0.0]))
+                below = geo.table_release_center(moved.box.center, moved.box.size, TABLE_TOP_Z)
+                releases = geo.carry_poses(moved.tool_pose, moved.box.center, [below], targets.CARRY_YAWS)
+                place[i, j] = kin.first_reachable(releases) is not None
+    return pick, place
+
+
+def main(argv: list[str] | None = None) -> int:
+    out = Path((argv or sys.argv[1:] or [str(OUT)])[0])
+    xs = np.arange(TABLE_X[0] + STEP / 2, 1.0, STEP)
+    ys = np.arange(-0.6, 0.6 + 1e-9, STEP)
+    arms = {arm: ArmKinematics(arm) for arm in ("right", "left")}
+    figure, axes = plt.subplots(len(OBJECTS), 2, figsize=(10, 8), sharex=True, sharey=True)
+    for row, kind in enumerate(OBJECTS):
+        for col, what in enumerate(("pick up", "place")):
+            ax = axes[row][col]
+            picture = np.zeros((len(xs), len(ys), 3))
+            for arm, channel in (("right", 0), ("left", 2)):
+                grid = grids(arms[arm], kind, xs, ys)[col]
+                picture[..., channel] = grid
+            picture[..., 1] = picture[..., 0] * picture[..., 2]   # both arms: white
+            ax.imshow(picture, origin="lower", extent=(ys[0] - STEP / 2, ys[-1] + STEP / 2,
+                                                       xs[0] - STEP / 2, xs[-1] + STEP / 2))
+            ax.set_title(f"{what} a {kind} (red: right arm, blue: left, white: both)", fontsize=9)
+            ax.invert_xaxis()
+            ax.set_xlabel("y (m, left is +)")
+            ax.set_ylabel("x (m, forward)")
+    figure.suptitle(f"Reach on the table, torso at {TORSO_HEIGHT:.2f} m (table y {TABLE_Y[0]}–{TABLE_Y[1]} m)")
+    figure.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(out, dpi=90)
+    print(f"wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
