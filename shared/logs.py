@@ -35,9 +35,18 @@ def init_zenoh_log() -> None:
     """
     if not _zenoh_log_started.acquire(blocking=False):
         return
+    # Zenoh reads NO_COLOR once, here; the variable is put back so that nothing else in this process (a
+    # terminal UI) loses its colours
+    before = os.environ.get("NO_COLOR")
     if not sys.stderr.isatty():
-        os.environ.setdefault("NO_COLOR", "1")
-    zenoh.init_log_from_env_or(f"{'info' if _level() == 'DEBUG' else 'warn'},{ACL_TARGET}=trace")
+        os.environ["NO_COLOR"] = "1"
+    try:
+        zenoh.init_log_from_env_or(f"{'info' if _level() == 'DEBUG' else 'warn'},{ACL_TARGET}=trace")
+    finally:
+        if before is None:
+            os.environ.pop("NO_COLOR", None)
+        else:
+            os.environ["NO_COLOR"] = before
 
 
 def setup_logging(service: str) -> None:

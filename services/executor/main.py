@@ -7,9 +7,9 @@ import sys
 import threading
 from collections.abc import Sequence
 
+from services.executor.store import ActionStore, StoreError, default_data_dir, hold_store, namespace_dir
 from shared.bus import Bus
 from shared.service import run_service, wait_until_stopped
-from services.executor.store import ActionStore, StoreError, default_data_dir, hold_store, namespace_dir
 
 DESCRIPTION = ("Carries out commands on the simulated PR2, publishes what is possible (reachability, "
                "gripper states), and records and replays programmed actions.")

@@ -580,9 +580,11 @@ class Procedures:
 
         None when some grasp is within reach (something is in the way instead).
         """
-        if reach.graspable_at(kin, obj, np.zeros(3)):
+        near_edge = self._snapshot().near_edge
+        if reach.graspable_at(kin, obj, np.zeros(3), near_edge):
             return None
-        short = reach.shortfall(kin, lambda offset: reach.graspable_at(kin, obj, offset), np.asarray(obj["position"]))
+        short = reach.shortfall(kin, lambda offset: reach.graspable_at(kin, obj, offset, near_edge),
+                                np.asarray(obj["position"]))
         where = f"{max(1, round(100 * short))} cm beyond my {arm} hand" if short is not None else \
             f"out of my {arm} hand's reach"
         other = "left" if arm == "right" else "right"
@@ -597,7 +599,7 @@ class Procedures:
     @staticmethod
     def _in_the_way(kin: ArmKinematics, snap: SceneSnapshot, obj: dict[str, Any]) -> str | None:
         """What the grasps of ``obj`` would hit (other objects, the other arm), as words; None if nothing is named."""
-        poses = [grasp.pregrasp for grasp in targets.grasps(obj)]
+        poses = [grasp.pregrasp for grasp in targets.grasps(obj, snap.near_edge)]
         blockers = (kin.blockers(poses) or set()) - {obj["id"], "table"}   # the table is always near a grasp
         names = sorted(refer(snap.objects, b) if b in snap.objects else ("the table" if b == "table" else f"my {b}")
                        for b in blockers)

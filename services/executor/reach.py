@@ -182,10 +182,13 @@ def shortfall(kin: ArmKinematics, reachable: Callable[[np.ndarray], bool], cente
     return high
 
 
-def graspable_at(kin: ArmKinematics, obj: dict[str, Any], offset: np.ndarray) -> bool:
-    """Whether some grasp of ``obj`` moved by ``offset`` has IK solutions for its pre-grasp and grasp (no collisions)."""
+def graspable_at(kin: ArmKinematics, obj: dict[str, Any], offset: np.ndarray, near_edge: float | None) -> bool:
+    """Whether some grasp of ``obj`` moved by ``offset`` has IK solutions for its pre-grasp and grasp (no collisions).
+
+    ``near_edge``: the table's near edge, for the overhang grasps of a flat object (None: not seen).
+    """
     moved = {**obj, "position": (np.asarray(obj["position"], float) + offset).tolist()}
-    for grasp in targets.grasps(moved):
+    for grasp in targets.grasps(moved, near_edge):
         pre = kin.ik(grasp.pregrasp, check_collisions=False)
         if pre is not None and kin.ik(grasp.grasp, seeds=[pre], check_collisions=False) is not None:
             return True

@@ -198,7 +198,7 @@ def test_a_cup_just_grasped_beside_the_plate_is_carried_away(arms: dict[str, Arm
     scene = scene_with(plate, cup("red", 0.55, -0.12), cup("blue", 0.55, 0.12, color="blue"), pose="side")
     snap = scene.snapshot()
     sync(kin, snap, None)
-    grasp = targets.grasps(snap.objects["red"])[0]
+    grasp = targets.grasps(snap.objects["red"], snap.near_edge)[0]
     kin.allow_touching("red", True)
     grasp_q = kin.ik(grasp.grasp, seeds=[kin.ik(grasp.pregrasp)])
     kin.allow_touching("red", False)

@@ -1,4 +1,4 @@
-"""``python -m services.executor.reach_figure [OUT]``: draw where each arm can pick up and place a cup and a box.
+"""``python -m hfpbd.reach_figure [OUT]``: draw where each arm can pick up and place a cup and a box.
 
 The same checks as the reachability map (IK with collisions, the table in
 the world, the torso at its working height) over a grid of the table, for
@@ -26,17 +26,13 @@ from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics
 from services.executor.reach import can_pick, sync
 from services.executor.scene import Scene
-from services.sim.layout import (
-    TABLE_TOP_Z,
-    TABLE_X,
-    TABLE_Y,
-    TORSO_HEIGHT,
-    arm_pose_map,
-)
+from services.sim.layout import TABLE_TOP_Z, TABLE_X, TABLE_Y, table_truth
+from shared.contract import ARMS
+from shared.robot import ROBOT
 
 OBJECTS = {"cup": (0.07, 0.07, 0.10), "box": (0.06, 0.06, 0.06)}
 STEP = 0.04
-OUT = Path(__file__).resolve().parents[2] / "docs" / "reach.png"
+OUT = Path(__file__).resolve().parents[1] / "docs" / "reach.png"
 
 
 def _object(kind: str, x: float, y: float) -> dict:
@@ -46,8 +42,8 @@ def _object(kind: str, x: float, y: float) -> dict:
 
 def _snapshot(*objects: dict):
     scene = Scene()
-    scene.update_objects(list(objects))
-    scene.update_robot({"joints": {"torso_lift_joint": TORSO_HEIGHT, **arm_pose_map("side")}})
+    scene.update_objects(list(objects), table_truth())
+    scene.update_robot({"joints": {ROBOT.torso_joint: ROBOT.working_torso, **ROBOT.arm_pose_map("side")}})
     return scene.snapshot()
 
 
@@ -58,7 +54,7 @@ def _held(kin: ArmKinematics, kind: str) -> targets.Held | None:
     sync(kin, snap, None)
     kin.allow_touching("o", True)
     try:
-        for grasp in targets.grasps(obj):
+        for grasp in targets.grasps(obj, snap.near_edge):
             q = kin.ik(grasp.grasp)
             if q is not None:
                 held = targets.held_in_hand("o", snap.box("o"), kin.fk(q), snap.table_z)
@@ -95,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
     out = Path((argv or sys.argv[1:] or [str(OUT)])[0])
     xs = np.arange(TABLE_X[0] + STEP / 2, 1.0, STEP)
     ys = np.arange(-0.6, 0.6 + 1e-9, STEP)
-    arms = {arm: ArmKinematics(arm) for arm in ("right", "left")}
+    arms = {arm: ArmKinematics(arm) for arm in ARMS}
     figure, axes = plt.subplots(len(OBJECTS), 2, figsize=(10, 8), sharex=True, sharey=True)
     for row, kind in enumerate(OBJECTS):
         for col, what in enumerate(("pick up", "place")):
@@ -111,7 +107,7 @@ def main(argv: list[str] | None = None) -> int:
             ax.invert_xaxis()
             ax.set_xlabel("y (m, left is +)")
             ax.set_ylabel("x (m, forward)")
-    figure.suptitle(f"Reach on the table, torso at {TORSO_HEIGHT:.2f} m (table y {TABLE_Y[0]}–{TABLE_Y[1]} m)")
+    figure.suptitle(f"Reach on the table, torso at {ROBOT.working_torso:.2f} m (table y {TABLE_Y[0]}–{TABLE_Y[1]} m)")
     figure.tight_layout()
     out.parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(out, dpi=90)
