@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 PYTEST := $(BIN)/pytest -p no:cacheprovider
 
-.PHONY: setup run test test-slow bench
+.PHONY: setup run lint test test-unit test-slow bench
 
 setup:
 	@bash scripts/setup.sh
@@ -13,12 +13,22 @@ setup:
 run: setup
 	$(BIN)/hfpbd up
 
-test: setup
+# ruff (lint and format) and mypy (the config in pyproject.toml names what it checks)
+lint: setup
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+	$(BIN)/mypy
+
+test: lint
 	$(PYTEST) -m "not slow"
+
+# The tests that start no process, no simulator and no terminal app: under a minute.
+test-unit: setup
+	$(PYTEST) -m unit
 
 # End-to-end runs of the whole system; CI runs them after `make test`.
 test-slow: setup
 	$(PYTEST) -m slow; status=$$?; [ $$status -eq 0 ] || [ $$status -eq 5 ]
 
 bench: setup
-	@for what in bus nlu sim perception executor speech tasks; do echo "== hfpbd bench $$what"; $(BIN)/hfpbd bench $$what || exit 1; done
+	@for what in bus nlu sim perception executor manipulation fuzz speech tasks; do echo "== hfpbd bench $$what"; $(BIN)/hfpbd bench $$what || exit 1; done

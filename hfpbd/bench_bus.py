@@ -33,9 +33,14 @@ CLOUDS = 60
 
 
 def _cloud(rng: np.random.Generator) -> dict:
-    return {"stamp": time.time(), "xyz": rng.normal(size=(480, 640, 3)).astype(np.float32),
-            "rgb": rng.integers(0, 256, size=(480, 640, 3), dtype=np.uint8),
-            "camera_pose": [0.0, 0.0, 1.5, 1.0, 0.0, 0.0, 0.0], "width": 640, "height": 480}
+    return {
+        "stamp": time.time(),
+        "xyz": rng.normal(size=(480, 640, 3)).astype(np.float32),
+        "rgb": rng.integers(0, 256, size=(480, 640, 3), dtype=np.uint8),
+        "camera_pose": [0.0, 0.0, 1.5, 1.0, 0.0, 0.0, 0.0],
+        "width": 640,
+        "height": 480,
+    }
 
 
 # -- the other process ------------------------------------------------------
@@ -70,7 +75,9 @@ def _raw_peer(options: SessionOptions, namespace: str) -> None:
     rng = np.random.default_rng(0)
     with zenoh.open(zenoh_config(options)) as session:
         pong = session.declare_publisher(f"{prefix}/pong")
-        clouds = session.declare_publisher(f"pbd/{namespace}/sim/cloud", congestion_control=zenoh.CongestionControl.BLOCK)
+        clouds = session.declare_publisher(
+            f"pbd/{namespace}/sim/cloud", congestion_control=zenoh.CongestionControl.BLOCK
+        )
         pings = session.declare_subscriber(f"{prefix}/ping", zenoh.handlers.FifoChannel(4096))
         go = session.declare_subscriber(f"{prefix}/go", zenoh.handlers.FifoChannel(4))
         token = session.liveliness().declare_token(f"pbd/{namespace}/alive/bench-peer")
@@ -91,8 +98,9 @@ def _raw_peer(options: SessionOptions, namespace: str) -> None:
 
 # -- the measuring process ----------------------------------------------------
 def _start_peer(namespace: str, port: int, impl: str) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "hfpbd.bench_bus", "--peer", impl, "--namespace", namespace,
-                             "--port", str(port)])
+    return subprocess.Popen(
+        [sys.executable, "-m", "hfpbd.bench_bus", "--peer", impl, "--namespace", namespace, "--port", str(port)]
+    )
 
 
 def _wait_peer(bus: Bus) -> None:

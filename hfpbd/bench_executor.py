@@ -29,6 +29,7 @@ import statistics
 import sys
 import time
 from collections.abc import Callable, Sequence
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -45,11 +46,12 @@ from shared.stats import markdown_table
 
 OBJECT_COUNTS = (1, 2, 5, 10, 15)
 MOTION_LIMIT = 30.0  # simulated seconds before a motion counts as hung
-LIFTED = 0.05       # metres a cup must rise (off the table, in the hand) for a pick-up to count
+LIFTED = 0.05  # metres a cup must rise (off the table, in the hand) for a pick-up to count
 STATE_PERIOD = 0.02  # simulated seconds between the simulator's state messages
 
 
 # -- reachability ---------------------------------------------------------------------------
+
 
 def synthetic_scene(count: int, rng: np.random.Generator) -> Scene:
     """``count`` cups and boxes at random, non-overlapping places on the table in front of the robot."""
@@ -59,8 +61,15 @@ def synthetic_scene(count: int, rng: np.random.Generator) -> Scene:
         xy = np.array([rng.uniform(0.42, 0.85), rng.uniform(-0.45, 0.45)])
         if any(np.all(np.abs(xy - o["position"][:2]) < (size[:2] + o["size"][:2]) / 2 + 0.03) for o in objects):
             continue
-        objects.append({"id": f"obj{len(objects)}", "color": "red", "type": "cup" if len(objects) % 2 else "box",
-                        "position": [*xy, TABLE_TOP_Z + size[2] / 2], "size": size.tolist()})
+        objects.append(
+            {
+                "id": f"obj{len(objects)}",
+                "color": "red",
+                "type": "cup" if len(objects) % 2 else "box",
+                "position": [*xy, TABLE_TOP_Z + size[2] / 2],
+                "size": size.tolist(),
+            }
+        )
     scene = Scene()
     scene.update_objects(objects, table_truth())
     scene.update_robot({"joints": {ROBOT.torso_joint: ROBOT.working_torso, **ROBOT.arm_pose_map("untucked")}})
@@ -79,8 +88,14 @@ def bench_reach(repeats: int) -> list[list[object]]:
             reach_map(arms, snap, {})
             times.append(time.perf_counter() - start)
         mean = statistics.mean(times)
-        rows.append([count, f"{1000 * mean:.0f}", f"{1000 * max(times):.0f}",
-                     "meets" if count != 10 or max(times) <= 1.0 else "MISSES"])
+        rows.append(
+            [
+                count,
+                f"{1000 * mean:.0f}",
+                f"{1000 * max(times):.0f}",
+                "meets" if count != 10 or max(times) <= 1.0 else "MISSES",
+            ]
+        )
     return rows
 
 
@@ -93,25 +108,30 @@ def bench_ik_against_mplib(queries: int) -> tuple[float, float, float]:
     rng = np.random.default_rng(11)
     poses = []
     for _ in range(queries):
-        box = geo.Box(np.array([rng.uniform(0.42, 0.85), rng.uniform(-0.45, 0.3), TABLE_TOP_Z + 0.05]),
-                      np.array([0.07, 0.07, 0.10]))
+        box = geo.Box(
+            np.array([rng.uniform(0.42, 0.85), rng.uniform(-0.45, 0.3), TABLE_TOP_Z + 0.05]),
+            np.array([0.07, 0.07, 0.10]),
+        )
         relation = str(rng.choice(["above", "left_of", "right_of", "in_front_of", "behind", "on_top_of"]))
         poses.append(geo.relation_candidates(relation, box)[0])
     start = time.perf_counter()
     ours = [kin.ik(p) is not None for p in poses]
     ours_ms = 1000 * (time.perf_counter() - start) / queries
     from mplib import Pose
+
     mask = np.ones(len(kin.names), bool)
     mask[kin.arm_idx] = False
     start = time.perf_counter()
-    theirs = [kin.planner.IK(Pose(p[:3], p[3:]), kin.qpos.copy(), mask=mask, n_init_qpos=20)[0] == "Success"
-              for p in poses]
+    theirs = [
+        kin.planner.IK(Pose(p[:3], p[3:]), kin.qpos.copy(), mask=mask, n_init_qpos=20)[0] == "Success" for p in poses
+    ]
     theirs_ms = 1000 * (time.perf_counter() - start) / queries
     agree = float(np.mean(np.equal(ours, theirs)))
     return ours_ms, theirs_ms, agree
 
 
 # -- the simulator in process ---------------------------------------------------------------------
+
 
 class WorldRobot:
     """The executor's robot interface on an in-process SAPIEN world: each motion is stepped to its end."""
@@ -120,7 +140,7 @@ class WorldRobot:
         self.world = world
         self.scene = scene
         self.motion_seconds = 0.0
-        self._reports: dict[str, Outcome] = {}   # motions that ended while another one was being stepped
+        self._reports: dict[str, Outcome] = {}  # motions that ended while another one was being stepped
 
     def publish(self) -> None:
         self.scene.update_robot(self.world.state())
@@ -144,8 +164,9 @@ class WorldRobot:
 
     def move_arm(self, arm: str, points: np.ndarray, times: np.ndarray, contact: bool = False) -> Outcome:
         motion_id = self.world.new_motion_id()
-        self.world.follow_waypoints(arm, joint_names(arm), np.asarray(times, float), np.asarray(points, float),
-                                    motion_id, contact)
+        self.world.follow_waypoints(
+            arm, joint_names(arm), np.asarray(times, float), np.asarray(points, float), motion_id, contact
+        )
         return self._finish(motion_id)
 
     def start_gripper(self, arm: str, width: float, force: float) -> Started:
@@ -202,8 +223,10 @@ def bench_pick_up(trials: int) -> tuple[int, int, list[str], list[float]]:
         if after[2] > before[2] + LIFTED and np.linalg.norm(after[:2] - tool[:2]) < 0.1:
             successes += 1
         else:
-            failures.append(f"seed {seed}: the cup is not in the hand after the lift "
-                            f"(rose {after[2] - before[2]:.3f} m, {np.linalg.norm(after[:2] - tool[:2]):.3f} m from the hand)")
+            failures.append(
+                f"seed {seed}: the cup is not in the hand after the lift "
+                f"(rose {after[2] - before[2]:.3f} m, {np.linalg.norm(after[:2] - tool[:2]):.3f} m from the hand)"
+            )
         procedures.open(arm)
     return successes, trials, failures, attempts
 
@@ -239,7 +262,9 @@ def bench_procedures(rounds: int) -> list[list[object]]:
                     return original(*args)
                 finally:
                     spent[0] += time.perf_counter() - t0
+
             return wrapper
+
         robot._finish, scene.wait_robot = clocked(robot._finish), clocked(scene.wait_robot)  # type: ignore[method-assign]
         robot.move_arm = first_motion  # type: ignore[method-assign, assignment]
         try:
@@ -254,28 +279,39 @@ def bench_procedures(rounds: int) -> list[list[object]]:
         load(world, robot, 100 + round_number)
         red, blue, box = "obj0", "obj1", "obj2"
         arm = "right" if scene.snapshot().objects[red]["position"][1] <= 0 else "left"
-        timed("move_rel_dest (above)", lambda: procedures.move_rel_dest(arm, "above", box))
-        timed("move_abs_dir (up)", lambda: procedures.move_abs_dir(arm, "up"))
-        timed("move_rel_dir (towards)", lambda: procedures.move_rel_dir(arm, "towards", box))
-        timed("point_to", lambda: procedures.point_to(arm, blue))
-        timed("rotate", lambda: procedures.rotate(arm, "cw"))
-        timed("pick_up", lambda: procedures.pick_up(arm, red))
-        timed("place_rel (next_to)", lambda: procedures.place_rel(arm, "next_to", box))
-        timed("close", lambda: procedures.close(arm))
-        timed("open", lambda: procedures.open(arm))
-        timed("move_abs_dest (side)", lambda: procedures.move_abs_dest(arm))
+        timed("move_rel_dest (above)", partial(procedures.move_rel_dest, arm, "above", box))
+        timed("move_abs_dir (up)", partial(procedures.move_abs_dir, arm, "up"))
+        timed("move_rel_dir (towards)", partial(procedures.move_rel_dir, arm, "towards", box))
+        timed("point_to", partial(procedures.point_to, arm, blue))
+        timed("rotate", partial(procedures.rotate, arm, "cw"))
+        timed("pick_up", partial(procedures.pick_up, arm, red))
+        timed("place_rel (next_to)", partial(procedures.place_rel, arm, "next_to", box))
+        timed("close", partial(procedures.close, arm))
+        timed("open", partial(procedures.open, arm))
+        timed("move_abs_dest (side)", partial(procedures.move_abs_dest, arm))
         contact_round(world, robot, procedures, round_number, timed)
     rows = []
     for name, values in samples.items():
         firsts = [v[2] for v in values if v[2] is not None]
-        rows.append([name, len(values), f"{1000 * statistics.mean(v[0] for v in values):.0f}",
-                     f"{1000 * statistics.median(firsts):.0f}" if firsts else "–",
-                     f"{statistics.mean(v[1] for v in values):.1f}"])
+        rows.append(
+            [
+                name,
+                len(values),
+                f"{1000 * statistics.mean(v[0] for v in values):.0f}",
+                f"{1000 * statistics.median(firsts):.0f}" if firsts else "–",
+                f"{statistics.mean(v[1] for v in values):.1f}",
+            ]
+        )
     return rows
 
 
-def contact_round(world: Any, robot: WorldRobot, procedures: Procedures, round_number: int,
-                  timed: Callable[[str, Callable[[], object]], None]) -> None:
+def contact_round(
+    world: Any,
+    robot: WorldRobot,
+    procedures: Procedures,
+    round_number: int,
+    timed: Callable[[str, Callable[[], object]], None],
+) -> None:
     """Task 5's contact moves on a randomised plate: press it, push it over the edge, pick it up by its overhang."""
     from services.sim.scene_file import load_scene, randomized
 
@@ -305,22 +341,30 @@ def main(argv: Sequence[str] | None = None) -> int:
     print("## Reachability map (both arms, 12 keys per object)")
     print(markdown_table(["objects", "mean ms", "max ms", "≤ 1 s at 10"], bench_reach(args.repeats)))
     ours, theirs, agree = bench_ik_against_mplib(100)
-    print(f"\nIK per pose: seeded table {ours:.2f} ms vs mplib Planner.IK (20 restarts) {theirs:.2f} ms "
-          f"({theirs / ours:.0f}× faster), same answer on {100 * agree:.0f}% of 100 poses")
+    print(
+        f"\nIK per pose: seeded table {ours:.2f} ms vs mplib Planner.IK (20 restarts) {theirs:.2f} ms "
+        f"({theirs / ours:.0f}× faster), same answer on {100 * agree:.0f}% of 100 poses"
+    )
     if args.skip_physics:
         return 0
 
     print(f"\n## Pick-up success over {args.trials} randomised default scenes (physics, ground-truth descriptors)")
     successes, trials, failures, attempts = bench_pick_up(args.trials)
     rate = successes / trials
-    print(f"{successes}/{trials} = {100 * rate:.0f}% (target ≥ 95%: {'meets' if rate >= 0.95 else 'MISSES'}); "
-          f"mean grasp attempts {statistics.mean(attempts or [0]):.2f}")
+    print(
+        f"{successes}/{trials} = {100 * rate:.0f}% (target ≥ 95%: {'meets' if rate >= 0.95 else 'MISSES'}); "
+        f"mean grasp attempts {statistics.mean(attempts or [0]):.2f}"
+    )
     for line in failures:
         print(f"  - {line}")
 
     print(f"\n## Time per procedure ({args.rounds} randomised scenes)")
-    print(markdown_table(["procedure", "runs", "compute ms", "ms to first motion (median)", "motion s (simulated)"],
-                         bench_procedures(args.rounds)))
+    print(
+        markdown_table(
+            ["procedure", "runs", "compute ms", "ms to first motion (median)", "motion s (simulated)"],
+            bench_procedures(args.rounds),
+        )
+    )
     return 0
 
 

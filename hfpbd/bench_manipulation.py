@@ -35,9 +35,9 @@ from services.sim.scene_file import COLOURS
 from shared.bus import Bus
 from shared.config import free_port, loopback_options
 
-TABLE_AREA = ((0.42, 0.78), (-0.42, 0.42))   # metres: x, y where the random objects stand
-GAP = 0.04                 # metres between two objects' outlines
-JITTER = 0.04              # metres each object moves (at most, per axis) before the replay
+TABLE_AREA = ((0.42, 0.78), (-0.42, 0.42))  # metres: x, y where the random objects stand
+GAP = 0.04  # metres between two objects' outlines
+JITTER = 0.04  # metres each object moves (at most, per axis) before the replay
 STEP_TIMEOUT = 180.0
 KINDS = ("pick_up", "on_top_of", "next_to", "left_of", "right_of", "in_front_of", "behind", "down", "move_down")
 MOVES = ("up", "left", "right", "forward", "backward")
@@ -47,9 +47,9 @@ INTERNAL_ID = re.compile(r"\bobj\d+\b|replaced by")
 @dataclass
 class Outcome:
     kind: str
-    result: str          # "achieved", "refused", "failed"
+    result: str  # "achieved", "refused", "failed"
     reason: str
-    replay: str = ""     # "achieved", "failed", "" (not replayed)
+    replay: str = ""  # "achieved", "failed", "" (not replayed)
     replay_reason: str = ""
 
 
@@ -62,8 +62,13 @@ def random_object(rng: np.random.Generator, index: int) -> dict[str, Any]:
         width, height = float(rng.uniform(0.10, 0.16)), 0.015
     elif kind == "bowl":
         height = float(rng.uniform(0.04, 0.07))
-    return {"id": f"obj{index}", "type": kind, "size": [round(width, 3), round(width, 3), round(height, 3)],
-            "mass": 0.15 if kind == "plate" else 0.12, "color": str(rng.choice(sorted(COLOURS)))}
+    return {
+        "id": f"obj{index}",
+        "type": kind,
+        "size": [round(width, 3), round(width, 3), round(height, 3)],
+        "mass": 0.15 if kind == "plate" else 0.12,
+        "color": str(rng.choice(sorted(COLOURS))),
+    }
 
 
 def random_scene(rng: np.random.Generator) -> dict[str, Any]:
@@ -74,8 +79,10 @@ def random_scene(rng: np.random.Generator) -> dict[str, Any]:
         obj = random_object(rng, index)
         for _ in range(200):
             x, y = rng.uniform(*TABLE_AREA[0]), rng.uniform(*TABLE_AREA[1])
-            if all(max(abs(x - o["position"][0]), abs(y - o["position"][1])) > (obj["size"][0] + o["size"][0]) / 2 + GAP
-                   for o in objects):
+            if all(
+                max(abs(x - o["position"][0]), abs(y - o["position"][1])) > (obj["size"][0] + o["size"][0]) / 2 + GAP
+                for o in objects
+            ):
                 obj["position"] = [round(float(x), 3), round(float(y), 3)]
                 objects.append(obj)
                 break
@@ -84,8 +91,13 @@ def random_scene(rng: np.random.Generator) -> dict[str, Any]:
 
 def jittered(scene: dict[str, Any], rng: np.random.Generator) -> dict[str, list[float]]:
     """New positions for the replay: every object moved up to ``JITTER`` per axis (overlaps left to the sim)."""
-    return {o["id"]: [round(o["position"][0] + float(rng.uniform(-JITTER, JITTER)), 3),
-                      round(o["position"][1] + float(rng.uniform(-JITTER, JITTER)), 3)] for o in scene["objects"]}
+    return {
+        o["id"]: [
+            round(o["position"][0] + float(rng.uniform(-JITTER, JITTER)), 3),
+            round(o["position"][1] + float(rng.uniform(-JITTER, JITTER)), 3),
+        ]
+        for o in scene["objects"]
+    }
 
 
 class Driver:
@@ -104,9 +116,16 @@ class Driver:
         loaded = time.time()
         self.bus.request(self.bus.keys.record, {}, timeout=60)
         expected = len(scene["objects"])
-        self.watch.wait_for(lambda: self.watch.objects_stamp > loaded and sum(
-            o.get("visible", True) and o.get("type") != "unknown" for o in self.watch.objects.values()) >= expected
-            and all(o.get("visible", True) for o in self.watch.objects.values()), 60, "perception to see the table")
+        self.watch.wait_for(
+            lambda: (
+                self.watch.objects_stamp > loaded
+                and sum(o.get("visible", True) and o.get("type") != "unknown" for o in self.watch.objects.values())
+                >= expected
+                and all(o.get("visible", True) for o in self.watch.objects.values())
+            ),
+            60,
+            "perception to see the table",
+        )
 
     def pid(self, truth_id: str) -> str:
         """Perception's id of the simulator's object ``truth_id`` (nearest seen object)."""
@@ -117,10 +136,24 @@ class Driver:
     def command(self, procedure: str, args: dict[str, Any] | None = None) -> tuple[list[str], list[str]]:
         """Send one command and wait for its end: (everything said, the error lines)."""
         since, busy = time.time(), self.watch.busy_states
-        self.bus.publish(self.bus.keys.nlu_result, {"kind": "command", "procedure": procedure, "args": args or {},
-                                                    "phrases": {}, "text": procedure, "utterance": procedure})
-        self.watch.wait_for(lambda: self.watch.busy_states > busy or any(
-            line.kind == "error" for line in self.watch.lines_since(since)), 10, f"{procedure} to start")
+        self.bus.publish(
+            self.bus.keys.nlu_result,
+            {
+                "kind": "command",
+                "procedure": procedure,
+                "args": args or {},
+                "phrases": {},
+                "text": procedure,
+                "utterance": procedure,
+            },
+        )
+        self.watch.wait_for(
+            lambda: (
+                self.watch.busy_states > busy or any(line.kind == "error" for line in self.watch.lines_since(since))
+            ),
+            10,
+            f"{procedure} to start",
+        )
         self.watch.wait_for(lambda: not self.watch.busy(), STEP_TIMEOUT, f"{procedure} to end")
         time.sleep(0.5)
         lines = self.watch.lines_since(since)
@@ -134,8 +167,11 @@ def _task(rng: np.random.Generator, scene: dict[str, Any]) -> tuple[str, str | N
     if kind in ("pick_up", "down", "move_down"):
         return kind, None
     if kind == "on_top_of":
-        tops = [o["id"] for o in scene["objects"][1:] if o["type"] in ("box", "plate")
-                and o["size"][0] >= scene["objects"][0]["size"][0]]
+        tops = [
+            o["id"]
+            for o in scene["objects"][1:]
+            if o["type"] in ("box", "plate") and o["size"][0] >= scene["objects"][0]["size"][0]
+        ]
         return (kind, str(rng.choice(tops))) if tops else ("next_to", str(rng.choice(others)))
     return kind, str(rng.choice(others))
 
@@ -150,8 +186,10 @@ def run_task(driver: Driver, seed: int) -> Outcome:
     driver.command("create_action")
     steps: list[tuple[str, dict[str, Any]]] = [("pick_up", {"arm": arm, "object": moved})]
     if kind == "move_down":
-        steps += [("move_abs_dir", {"arm": arm, "direction": str(rng.choice(MOVES))}),
-                  ("place_abs", {"arm": arm, "destination": "table"})]
+        steps += [
+            ("move_abs_dir", {"arm": arm, "direction": str(rng.choice(MOVES))}),
+            ("place_abs", {"arm": arm, "destination": "table"}),
+        ]
     elif kind == "down":
         steps.append(("place_abs", {"arm": arm, "destination": "table"}))
     elif kind != "pick_up":
@@ -185,8 +223,12 @@ def _judge(driver: Driver, kind: str, moved: str, landmark: str | None, arm: str
         low = float(truth[moved]["aabb"][0][2])
         lifted = holding.get("holding") == moved and low > 0.72 + 0.05
         return Verdict(lifted, f"{moved} {'is' if lifted else 'is not'} held up in the {arm} hand ({low:.3f} m)")
-    return placed(truth, moved, "down" if kind in ("down", "move_down") else kind,
-                  None if kind in ("down", "move_down") else landmark)
+    return placed(
+        truth,
+        moved,
+        "down" if kind in ("down", "move_down") else kind,
+        None if kind in ("down", "move_down") else landmark,
+    )
 
 
 def report(outcomes: list[Outcome]) -> None:
@@ -203,8 +245,10 @@ def report(outcomes: list[Outcome]) -> None:
     achieved = sum(o.result == "achieved" for o in outcomes)
     replayed = sum(o.replay == "achieved" for o in outcomes)
     attempted = sum(o.result != "refused" for o in outcomes)
-    print(f"all: {len(outcomes)} tasks, {achieved}/{attempted} attempted achieved, {replayed} replayed, "
-          f"{len(outcomes) - attempted} refused")
+    print(
+        f"all: {len(outcomes)} tasks, {achieved}/{attempted} attempted achieved, {replayed} replayed, "
+        f"{len(outcomes) - attempted} refused"
+    )
     for o in outcomes:
         if o.result != "achieved":
             print(f"  {o.result} ({o.kind}): {o.reason}")
@@ -233,8 +277,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                     outcome = run_task(driver, seed)
                 except WaitTimeout as exc:
                     outcome = Outcome("?", "failed", f"seed {seed}: {exc}")
-                print(f"seed {seed}: {outcome.kind} {outcome.result} / replay {outcome.replay or '-'}: "
-                      f"{outcome.reason}", flush=True)
+                print(
+                    f"seed {seed}: {outcome.kind} {outcome.result} / replay {outcome.replay or '-'}: {outcome.reason}",
+                    flush=True,
+                )
                 outcomes.append(outcome)
         finally:
             stack.stop()

@@ -46,8 +46,11 @@ def latency(frames: int) -> list[list[object]]:
             detect(message, state)
             durations.append(time.perf_counter() - start)
         p50, p99 = percentiles_ms(durations)
-        verdict = ("meets" if p50 <= TARGET_P50_MS else "misses") + f" p50 ≤ {TARGET_P50_MS:g} ms" \
-            if (width, height) == (640, 480) else ""
+        verdict = (
+            ("meets" if p50 <= TARGET_P50_MS else "misses") + f" p50 ≤ {TARGET_P50_MS:g} ms"
+            if (width, height) == (640, 480)
+            else ""
+        )
         rows.append([f"{width}x{height}", frames, f"{p50:.1f}", f"{p99:.1f}", verdict])
     return rows
 
@@ -62,10 +65,16 @@ def accuracy(scenes: Sequence[str]) -> tuple[list[list[object]], Score]:
         message, state, truth = _frame(world, name)
         result = score(detect(message, state).objects, truth)
         total.add(result)
-        rows.append([name, f"{result.found}/{len(truth)}", result.phantoms,
-                     f"{100 * max(result.centre_errors, default=0.0):.2f}",
-                     f"{100 * max(result.size_errors, default=0.0):.2f}",
-                     "; ".join(result.wrong_words) or "all right"])
+        rows.append(
+            [
+                name,
+                f"{result.found}/{len(truth)}",
+                result.phantoms,
+                f"{100 * max(result.centre_errors, default=0.0):.2f}",
+                f"{100 * max(result.size_errors, default=0.0):.2f}",
+                "; ".join(result.wrong_words) or "all right",
+            ]
+        )
     return rows, total
 
 
@@ -83,8 +92,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     print("\n## Perception accuracy against ground truth (640x480)\n")
     print(markdown_table(["scene", "found", "phantoms", "max centre err cm", "max size err cm", "words"], rows))
     objects = total.found + len(total.missed)
-    print(f"\noverall: {total.found}/{objects} found, {total.phantoms} phantoms, "
-          f"centre error p95 {100 * total.p95(total.centre_errors):.2f} cm (target ≤ 1), "
-          f"size error p95 {100 * total.p95(total.size_errors):.2f} cm (target ≤ 1.5), "
-          f"{objects - len(total.wrong_words) - len(total.missed)}/{objects} colour and type words right")
+    print(
+        f"\noverall: {total.found}/{objects} found, {total.phantoms} phantoms, "
+        f"centre error p95 {100 * total.p95(total.centre_errors):.2f} cm (target ≤ 1), "
+        f"size error p95 {100 * total.p95(total.size_errors):.2f} cm (target ≤ 1.5), "
+        f"{objects - len(total.wrong_words) - len(total.missed)}/{objects} colour and type words right"
+    )
     return 0

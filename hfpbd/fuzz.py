@@ -37,8 +37,13 @@ from shared.messages import TYPES
 
 # stream key (under pbd/<ns>/) -> the schema its readers hold it to
 STREAMS: dict[str, str] = {
-    "sim/cloud": "cloud", "sim/state": "sim_state", "sim/events": "sim_event", "perception/objects": "objects",
-    "dialog/utterance": "utterance", "nlu/result": "nlu_result", "executor/state": "executor_state",
+    "sim/cloud": "cloud",
+    "sim/state": "sim_state",
+    "sim/events": "sim_event",
+    "perception/objects": "objects",
+    "dialog/utterance": "utterance",
+    "nlu/result": "nlu_result",
+    "executor/state": "executor_state",
 }
 # queryable -> well-formed maps the service must refuse (beside payloads that are not messages at all)
 REFUSED: dict[str, list[dict[str, Any]]] = {
@@ -47,10 +52,19 @@ REFUSED: dict[str, list[dict[str, Any]]] = {
     "nlu/describe": [{"world": 5}, {"world": {"objects": [{"id": 1}]}}],
     "nlu/vocabulary": [],
     "perception/record": [],
-    "executor/control/command": [{"procedure": "teleport", "args": {}}, {"procedure": 3}, {"args": []},
-                                 {"procedure": "open", "args": {"arm": "third"}}],
-    "executor/control/actions": [{"op": "explode"}, {"op": "delete", "number": 0}, {"op": "show", "number": "one"},
-                                 {"op": "rename", "number": 1}, {}],
+    "executor/control/command": [
+        {"procedure": "teleport", "args": {}},
+        {"procedure": 3},
+        {"args": []},
+        {"procedure": "open", "args": {"arm": "third"}},
+    ],
+    "executor/control/actions": [
+        {"op": "explode"},
+        {"op": "delete", "number": 0},
+        {"op": "show", "number": "one"},
+        {"op": "rename", "number": 1},
+        {},
+    ],
 }
 SERVICES = ("nlu", "perception", "executor")
 PROBE_TEXT = "pick up the red cup"
@@ -78,16 +92,25 @@ def malformed(schema: str, rng: random.Random) -> bytes:
     fields = {info.name: info.type for info in msgspec.structs.fields(TYPES[schema]) if info.required}
     base: dict[str, Any] = {name: _plausible(kind) for name, kind in fields.items()}
     ways: list[Callable[[], bytes]] = [
-        lambda: rng.randbytes(rng.randrange(0, 64)),                       # not msgpack at all
+        lambda: rng.randbytes(rng.randrange(0, 64)),  # not msgpack at all
         lambda: b"",
-        lambda: encode({"text": "cut short", **base})[:-rng.randrange(1, 4)],  # truncated
+        lambda: encode({"text": "cut short", **base})[: -rng.randrange(1, 4)],  # truncated
         lambda: msgpack.packb(rng.choice([[1, 2], 7, "text", None, True])),  # not a map
         lambda: msgpack.packb({"text": "no version"}),
         lambda: msgpack.packb({"v": rng.choice([0, 2, "1", None, 1.5]), **base}),
-        lambda: b"\xc6\xff\xff\xff\xff",                                   # a 4 GiB bin header, no body
-        lambda: b"\x91" * 5000,                                            # nested far too deep
-        lambda: encode({"pcm": {"__ndarray__": True, "dtype": rng.choice(["O", "bogus", "<f4"]),
-                                "shape": [3, 5], "data": b"\x00" * 7}, **base}),
+        lambda: b"\xc6\xff\xff\xff\xff",  # a 4 GiB bin header, no body
+        lambda: b"\x91" * 5000,  # nested far too deep
+        lambda: encode(
+            {
+                "pcm": {
+                    "__ndarray__": True,
+                    "dtype": rng.choice(["O", "bogus", "<f4"]),
+                    "shape": [3, 5],
+                    "data": b"\x00" * 7,
+                },
+                **base,
+            }
+        ),
     ]
     if fields:
         missing = rng.choice(list(fields))
@@ -101,10 +124,10 @@ class Figures:
     """What one run sent, how fast, and what it found."""
 
     per_key: int
-    streams: dict[str, float] = field(default_factory=dict)      # key -> messages per second
-    queries: dict[str, float] = field(default_factory=dict)      # key -> requests per second
-    accepted: dict[str, int] = field(default_factory=dict)       # queryable -> bad requests answered "ok"
-    logged: dict[str, int] = field(default_factory=dict)         # key -> rejections the services logged
+    streams: dict[str, float] = field(default_factory=dict)  # key -> messages per second
+    queries: dict[str, float] = field(default_factory=dict)  # key -> requests per second
+    accepted: dict[str, int] = field(default_factory=dict)  # queryable -> bad requests answered "ok"
+    logged: dict[str, int] = field(default_factory=dict)  # key -> rejections the services logged
     problems: list[str] = field(default_factory=list)
 
     def lines(self) -> Iterator[str]:
@@ -113,8 +136,10 @@ class Figures:
         for key, rate in self.streams.items():
             yield f"  stream    {_suffix(key):<26} {rate:>8.0f} msg/s   logged {self.logged.get(key, 0):>6}"
         for key, rate in self.queries.items():
-            yield (f"  queryable {_suffix(key):<26} {rate:>8.0f} req/s   logged {self.logged.get(key, 0):>6}   "
-                   f"answered ok: {self.accepted.get(key, 0)}")
+            yield (
+                f"  queryable {_suffix(key):<26} {rate:>8.0f} req/s   logged {self.logged.get(key, 0):>6}   "
+                f"answered ok: {self.accepted.get(key, 0)}"
+            )
         yield "services alive, serving and unchanged" if not self.problems else "PROBLEMS:"
         yield from (f"  {problem}" for problem in self.problems)
 
@@ -172,8 +197,7 @@ def _flood_queryable(bus: Bus, key: str, count: int, rng: random.Random, window:
     accepted = 0
 
     def drain(handler: Any) -> int:
-        return sum(reply.ok is not None and decode(reply.ok.payload.to_bytes()).get("ok") is True
-                   for reply in handler)
+        return sum(reply.ok is not None and decode(reply.ok.payload.to_bytes()).get("ok") is True for reply in handler)
 
     started = time.perf_counter()
     for i in range(count):
@@ -196,8 +220,9 @@ def check_services(bus: Bus, children: Sequence[ServiceProcess], before: dict[st
             problems.append(f"{child.name} logged a traceback: see {child.log_path}")
     if not problems:
         after = _snapshot(bus)
-        problems += [f"{name} changed: {before[name]!r} -> {after[name]!r}" for name in before
-                     if after[name] != before[name]]
+        problems += [
+            f"{name} changed: {before[name]!r} -> {after[name]!r}" for name in before if after[name] != before[name]
+        ]
     return problems
 
 
@@ -221,8 +246,11 @@ def run(bus: Bus, children: Sequence[ServiceProcess], count: int, seed: int = 0)
         figures.queries[key], figures.accepted[key] = _flood_queryable(bus, key, count, rng)
     figures.logged = logged_rejections(children, bus.keys.cloud)
     figures.problems = check_services(bus, children, before)
-    figures.problems += [f"{_suffix(key)}: no service logged a rejection" for key in [*figures.streams,
-                         *figures.queries] if not figures.logged.get(key)]
+    figures.problems += [
+        f"{_suffix(key)}: no service logged a rejection"
+        for key in [*figures.streams, *figures.queries]
+        if not figures.logged.get(key)
+    ]
     figures.problems += [f"{key}: {n} bad requests were answered ok" for key, n in figures.accepted.items() if n]
     if made_up:
         figures.problems.append(f"perception published {len(made_up)} object lists from malformed clouds")

@@ -69,23 +69,32 @@ class Supervised:
 
 def _default_log_dir() -> Path:
     base = os.environ.get("HFPBD_DATA_DIR") or os.path.join(
-        os.environ.get("XDG_DATA_HOME", os.path.expanduser("~/.local/share")), "hfpbd")
+        os.environ.get("XDG_DATA_HOME", os.path.expanduser("~/.local/share")), "hfpbd"
+    )
     return Path(base) / "logs"
 
 
 def _parse(argv: list[str] | None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(prog="hfpbd up",
-                                     description="Start every service on this machine and supervise them.")
+    parser = argparse.ArgumentParser(
+        prog="hfpbd up", description="Start every service on this machine and supervise them."
+    )
     parser.add_argument("--headless", action="store_true", help="no terminal UI: run the services until Ctrl-C")
-    parser.add_argument("--listen", default=DEFAULT_LISTEN, metavar="ENDPOINT",
-                        help="where remote clients (a TUI on a laptop) connect: beyond loopback, tls/… with "
-                             "--secure, or --insecure (default: %(default)s)")
+    parser.add_argument(
+        "--listen",
+        default=DEFAULT_LISTEN,
+        metavar="ENDPOINT",
+        help="where remote clients (a TUI on a laptop) connect: beyond loopback, tls/… with "
+        "--secure, or --insecure (default: %(default)s)",
+    )
     parser.add_argument("--namespace", "-n", default=os.environ.get("HFPBD_NAMESPACE", DEFAULT_NAMESPACE))
     parser.add_argument("--scene", help="scene for the simulator (default: its default scene)")
     parser.add_argument("--log-dir", type=Path, default=None, help="service logs (default: <data dir>/logs)")
     parser.add_argument("--no-restart", action="store_true", help="report a crashed service but do not restart it")
-    parser.add_argument("--services", default=",".join(BACKGROUND_SERVICES),
-                        help="comma-separated services to run here, when others run elsewhere (default: %(default)s)")
+    parser.add_argument(
+        "--services",
+        default=",".join(BACKGROUND_SERVICES),
+        help="comma-separated services to run here, when others run elsewhere (default: %(default)s)",
+    )
     add_security_arguments(parser, default_identity=None)
     args = parser.parse_args(argv)
     args.service_names = _service_list(args.services)
@@ -100,8 +109,9 @@ def _service_list(raw: str) -> list[str]:
     names = [name.strip() for name in raw.split(",") if name.strip()]
     unknown = sorted(set(names) - set(BACKGROUND_SERVICES) - {"speech"})
     if unknown:
-        raise SystemExit(f"hfpbd up: unknown service(s) {', '.join(unknown)}; choose from "
-                         f"{', '.join(BACKGROUND_SERVICES)}, speech")
+        raise SystemExit(
+            f"hfpbd up: unknown service(s) {', '.join(unknown)}; choose from {', '.join(BACKGROUND_SERVICES)}, speech"
+        )
     return names
 
 
@@ -126,13 +136,25 @@ def hub_listen(listen: str) -> tuple[str, ...]:
 
 def hub_options(args: argparse.Namespace) -> SessionOptions:
     """The robot host's router session: the access control applies wherever it listens beyond loopback."""
-    return SessionOptions(namespace=args.namespace, mode="router", listen=hub_listen(args.listen),
-                          multicast_scouting=False, secure=args.secure, identity="robot", insecure=args.insecure)
+    return SessionOptions(
+        namespace=args.namespace,
+        mode="router",
+        listen=hub_listen(args.listen),
+        multicast_scouting=False,
+        secure=args.secure,
+        identity="robot",
+        insecure=args.insecure,
+    )
 
 
 def client_options(args: argparse.Namespace, identity: str) -> SessionOptions:
-    return SessionOptions(namespace=args.namespace, connect=(local_endpoint(args.listen),), multicast_scouting=False,
-                          secure=args.secure, identity=identity)
+    return SessionOptions(
+        namespace=args.namespace,
+        connect=(local_endpoint(args.listen),),
+        multicast_scouting=False,
+        secure=args.secure,
+        identity=identity,
+    )
 
 
 class Supervisor:
@@ -140,8 +162,9 @@ class Supervisor:
         self.args = args
         self.log_dir = args.log_dir or _default_log_dir()
         self.service_argv = client_options(args, "robot").to_argv()
-        self.children = [Supervised(name, self._argv(name), self.log_dir / f"{name}.log")
-                         for name in args.service_names]
+        self.children = [
+            Supervised(name, self._argv(name), self.log_dir / f"{name}.log") for name in args.service_names
+        ]
         self.stop = threading.Event()
 
     def _argv(self, name: str) -> list[str]:
@@ -164,18 +187,30 @@ class Supervisor:
             if code is None:
                 continue
             if code == ALREADY_RUNNING:
-                self._say(bus, f"The {child.name} service did not start: another one is already running on "
-                               f"namespace {self.args.namespace!r}.", "error")
+                self._say(
+                    bus,
+                    f"The {child.name} service did not start: another one is already running on "
+                    f"namespace {self.args.namespace!r}.",
+                    "error",
+                )
                 child.process = None
                 continue
             if self.args.no_restart or child.restarts >= MAX_RESTARTS:
-                self._say(bus, f"The {child.name} service stopped (exit code {code}) and will not be restarted; "
-                               f"see {child.log_path}.", "error")
+                self._say(
+                    bus,
+                    f"The {child.name} service stopped (exit code {code}) and will not be restarted; "
+                    f"see {child.log_path}.",
+                    "error",
+                )
                 child.process = None
                 continue
             child.restarts += 1
-            self._say(bus, f"The {child.name} service stopped (exit code {code}); restarting it "
-                           f"({child.restarts}/{MAX_RESTARTS}).", "error")
+            self._say(
+                bus,
+                f"The {child.name} service stopped (exit code {code}); restarting it "
+                f"({child.restarts}/{MAX_RESTARTS}).",
+                "error",
+            )
             child.start()
 
     def shutdown(self) -> None:
@@ -195,15 +230,18 @@ def _already_up(args: argparse.Namespace, error: Exception) -> str:
     except zenoh.ZError:  # nothing answers there: the port is held by something else
         pass
     if alive:
-        return (f"hfpbd up: a robot is already up on namespace {args.namespace!r} at {args.listen} "
-                f"({', '.join(alive)} alive); not starting a second one")
+        return (
+            f"hfpbd up: a robot is already up on namespace {args.namespace!r} at {args.listen} "
+            f"({', '.join(alive)} alive); not starting a second one"
+        )
     return f"hfpbd up: cannot listen on {args.listen}: {error}"
 
 
 def _run_tui(args: argparse.Namespace) -> subprocess.Popen[bytes]:
     """The terminal UI in the foreground (this terminal), as the operator."""
-    return subprocess.Popen(command("tui", *client_options(args, "operator").to_argv()), cwd=ROOT,
-                            stdout=unfiltered_stdout())  # the terminal, not the access-denial filter
+    return subprocess.Popen(
+        command("tui", *client_options(args, "operator").to_argv()), cwd=ROOT, stdout=unfiltered_stdout()
+    )  # the terminal, not the access-denial filter
 
 
 def main(argv: list[str] | None = None) -> int:

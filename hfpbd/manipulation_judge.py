@@ -13,10 +13,10 @@ from typing import Any
 from hfpbd.tasks.judge import ON_TABLE, Truth, Verdict
 from services.sim.layout import TABLE_TOP_Z
 
-UPRIGHT = 0.015   # metres: an upright object's bounding box is this close to its own height
+UPRIGHT = 0.015  # metres: an upright object's bounding box is this close to its own height
 SIDE_RELATIONS = ("left_of", "right_of", "in_front_of", "behind")
-ON_BASE = 0.008   # metres an object standing on a base may sink below its top (a plate's rim, a box's lid)
-BESIDE = 0.12     # metres edge to edge: "next to", "left of", ... at most this far apart
+ON_BASE = 0.008  # metres an object standing on a base may sink below its top (a plate's rim, a box's lid)
+BESIDE = 0.12  # metres edge to edge: "next to", "left of", ... at most this far apart
 
 
 def _low_high(obj: dict[str, Any]) -> tuple[list[float], list[float]]:
@@ -46,14 +46,20 @@ def beside(truth: Truth, moved: str, landmark: str, relation: str) -> Verdict:
     if not standing.success:
         return standing
     (mlo, mhi), (llo, lhi) = _low_high(truth[moved]), _low_high(truth[landmark])
-    gaps = {"left_of": mlo[1] - lhi[1], "right_of": llo[1] - mhi[1],
-            "behind": mlo[0] - lhi[0], "in_front_of": llo[0] - mhi[0]}
-    sides = ("left_of", "right_of") if relation == "next_to" else \
-        SIDE_RELATIONS if relation == "near" else (relation,)
+    gaps = {
+        "left_of": mlo[1] - lhi[1],
+        "right_of": llo[1] - mhi[1],
+        "behind": mlo[0] - lhi[0],
+        "in_front_of": llo[0] - mhi[0],
+    }
+    sides = ("left_of", "right_of") if relation == "next_to" else SIDE_RELATIONS if relation == "near" else (relation,)
     best = max(sides, key=lambda s: gaps[s])
     if not -0.005 <= gaps[best] <= BESIDE:
-        return Verdict(False, f"{moved} is not {relation.replace('_', ' ')} {landmark} "
-                              f"({gaps[best]:.3f} m from its {best.replace('_', ' ')} side)")
+        return Verdict(
+            False,
+            f"{moved} is not {relation.replace('_', ' ')} {landmark} "
+            f"({gaps[best]:.3f} m from its {best.replace('_', ' ')} side)",
+        )
     return Verdict(True, f"{moved} stands {best.replace('_', ' ')} {landmark}, {gaps[best]:.3f} m from it")
 
 

@@ -76,8 +76,9 @@ def grids(kin: ArmKinematics, kind: str, xs: np.ndarray, ys: np.ndarray) -> tupl
     for i, x in enumerate(xs):
         for j, y in enumerate(ys):
             obj = _object(kind, x, y)
-            sync(kin, _snapshot(obj), None)
-            pick[i, j] = can_pick(kin, obj)
+            snap = _snapshot(obj)
+            sync(kin, snap, None)
+            pick[i, j] = can_pick(kin, obj, snap.near_edge)
             if held is not None:
                 sync(kin, _snapshot(), None)
                 moved = _moved(held, np.array([x - held.box.center[0], y - held.box.center[1], 0.0]))
@@ -100,9 +101,12 @@ def main(argv: list[str] | None = None) -> int:
             for arm, channel in (("right", 0), ("left", 2)):
                 grid = grids(arms[arm], kind, xs, ys)[col]
                 picture[..., channel] = grid
-            picture[..., 1] = picture[..., 0] * picture[..., 2]   # both arms: white
-            ax.imshow(picture, origin="lower", extent=(ys[0] - STEP / 2, ys[-1] + STEP / 2,
-                                                       xs[0] - STEP / 2, xs[-1] + STEP / 2))
+            picture[..., 1] = picture[..., 0] * picture[..., 2]  # both arms: white
+            ax.imshow(
+                picture,
+                origin="lower",
+                extent=(ys[0] - STEP / 2, ys[-1] + STEP / 2, xs[0] - STEP / 2, xs[-1] + STEP / 2),
+            )
             ax.set_title(f"{what} a {kind} (red: right arm, blue: left, white: both)", fontsize=9)
             ax.invert_xaxis()
             ax.set_xlabel("y (m, left is +)")

@@ -32,14 +32,17 @@ CA_KEY_FILE = "ca-key.pem"
 
 
 def _name(common_name: str) -> x509.Name:
-    return x509.Name([x509.NameAttribute(NameOID.ORGANIZATION_NAME, "handsfree-pbd"),
-                      x509.NameAttribute(NameOID.COMMON_NAME, common_name)])
+    return x509.Name(
+        [
+            x509.NameAttribute(NameOID.ORGANIZATION_NAME, "handsfree-pbd"),
+            x509.NameAttribute(NameOID.COMMON_NAME, common_name),
+        ]
+    )
 
 
 def _write_key(path: Path, key: ec.EllipticCurvePrivateKey) -> None:
     """Write a private key readable by its owner only (0600 from the first byte, not chmod-ed later)."""
-    pem = key.private_bytes(serialization.Encoding.PEM, serialization.PrivateFormat.PKCS8,
-                            serialization.NoEncryption())
+    pem = key.private_bytes(serialization.Encoding.PEM, serialization.PrivateFormat.PKCS8, serialization.NoEncryption())
     path.unlink(missing_ok=True)
     fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
     with os.fdopen(fd, "wb") as handle:
@@ -51,27 +54,45 @@ def _write_certificate(path: Path, certificate: x509.Certificate) -> None:
     path.write_bytes(certificate.public_bytes(serialization.Encoding.PEM))
 
 
-def _builder(subject: x509.Name, issuer: x509.Name, public_key: ec.EllipticCurvePublicKey,
-             days: int) -> x509.CertificateBuilder:
+def _builder(
+    subject: x509.Name, issuer: x509.Name, public_key: ec.EllipticCurvePublicKey, days: int
+) -> x509.CertificateBuilder:
     now = datetime.datetime.now(datetime.UTC)
-    return (x509.CertificateBuilder().subject_name(subject).issuer_name(issuer).public_key(public_key)
-            .serial_number(x509.random_serial_number())
-            .not_valid_before(now - datetime.timedelta(minutes=5))  # tolerate clocks a little apart
-            .not_valid_after(now + datetime.timedelta(days=days)))
+    return (
+        x509.CertificateBuilder()
+        .subject_name(subject)
+        .issuer_name(issuer)
+        .public_key(public_key)
+        .serial_number(x509.random_serial_number())
+        .not_valid_before(now - datetime.timedelta(minutes=5))  # tolerate clocks a little apart
+        .not_valid_after(now + datetime.timedelta(days=days))
+    )
 
 
 def make_authority(directory: Path) -> tuple[ec.EllipticCurvePrivateKey, x509.Certificate]:
     """Create ``ca.pem`` and its key (``ca-key.pem``, 0600; keep it off the laptops)."""
     key = ec.generate_private_key(ec.SECP256R1())
     name = _name("handsfree-pbd authority")
-    certificate = (_builder(name, name, key.public_key(), CA_VALID_DAYS)
-                   .add_extension(x509.BasicConstraints(ca=True, path_length=0), critical=True)
-                   .add_extension(x509.KeyUsage(digital_signature=False, content_commitment=False,
-                                                key_encipherment=False, data_encipherment=False,
-                                                key_agreement=False, key_cert_sign=True, crl_sign=True,
-                                                encipher_only=False, decipher_only=False), critical=True)
-                   .add_extension(x509.SubjectKeyIdentifier.from_public_key(key.public_key()), critical=False)
-                   .sign(key, hashes.SHA256()))
+    certificate = (
+        _builder(name, name, key.public_key(), CA_VALID_DAYS)
+        .add_extension(x509.BasicConstraints(ca=True, path_length=0), critical=True)
+        .add_extension(
+            x509.KeyUsage(
+                digital_signature=False,
+                content_commitment=False,
+                key_encipherment=False,
+                data_encipherment=False,
+                key_agreement=False,
+                key_cert_sign=True,
+                crl_sign=True,
+                encipher_only=False,
+                decipher_only=False,
+            ),
+            critical=True,
+        )
+        .add_extension(x509.SubjectKeyIdentifier.from_public_key(key.public_key()), critical=False)
+        .sign(key, hashes.SHA256())
+    )
     _write_key(directory / CA_KEY_FILE, key)
     _write_certificate(directory / CA_FILE, certificate)
     return key, certificate
@@ -88,17 +109,20 @@ def robot_names(host: str) -> list[x509.GeneralName]:
     return names
 
 
-def make_identity(directory: Path, role: str, authority: tuple[ec.EllipticCurvePrivateKey, x509.Certificate],
-                  host: str) -> None:
+def make_identity(
+    directory: Path, role: str, authority: tuple[ec.EllipticCurvePrivateKey, x509.Certificate], host: str
+) -> None:
     """Create ``<role>.pem`` and ``<role>-key.pem`` signed by the authority, usable as TLS client and server."""
     ca_key, ca_certificate = authority
     key = ec.generate_private_key(ec.SECP256R1())
-    builder = (_builder(_name(role), ca_certificate.subject, key.public_key(), VALID_DAYS)
-               .add_extension(x509.BasicConstraints(ca=False, path_length=None), critical=True)
-               .add_extension(x509.ExtendedKeyUsage([ExtendedKeyUsageOID.SERVER_AUTH,
-                                                     ExtendedKeyUsageOID.CLIENT_AUTH]), critical=False)
-               .add_extension(x509.AuthorityKeyIdentifier.from_issuer_public_key(ca_key.public_key()),
-                              critical=False))
+    builder = (
+        _builder(_name(role), ca_certificate.subject, key.public_key(), VALID_DAYS)
+        .add_extension(x509.BasicConstraints(ca=False, path_length=None), critical=True)
+        .add_extension(
+            x509.ExtendedKeyUsage([ExtendedKeyUsageOID.SERVER_AUTH, ExtendedKeyUsageOID.CLIENT_AUTH]), critical=False
+        )
+        .add_extension(x509.AuthorityKeyIdentifier.from_issuer_public_key(ca_key.public_key()), critical=False)
+    )
     if role == "robot":  # the only identity that listens; the others connect in client mode
         builder = builder.add_extension(x509.SubjectAlternativeName(robot_names(host)), critical=False)
     _write_key(directory / key_file(role), key)
@@ -115,17 +139,20 @@ def init(directory: Path, host: str, force: bool = False) -> list[Path]:
     for role in IDENTITIES:
         make_identity(directory, role, authority, host)
     return [directory / CA_FILE, directory / CA_KEY_FILE] + [
-        directory / name for role in IDENTITIES for name in (certificate_file(role), key_file(role))]
+        directory / name for role in IDENTITIES for name in (certificate_file(role), key_file(role))
+    ]
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="hfpbd secure", description="Certificates for secure remote operation.")
     words = parser.add_subparsers(dest="word", required=True)
-    init_parser = words.add_parser("init", help="make a certificate authority and the robot, operator and "
-                                                "observer identities")
+    init_parser = words.add_parser(
+        "init", help="make a certificate authority and the robot, operator and observer identities"
+    )
     init_parser.add_argument("directory", type=Path, metavar="DIR")
-    init_parser.add_argument("--host", default=socket.gethostname(),
-                             help="the robot host's name as laptops dial it (default: %(default)s)")
+    init_parser.add_argument(
+        "--host", default=socket.gethostname(), help="the robot host's name as laptops dial it (default: %(default)s)"
+    )
     init_parser.add_argument("--force", action="store_true", help="replace an existing authority and identities")
     args = parser.parse_args(argv)
     try:
@@ -135,6 +162,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 1
     for path in written:
         print(path)
-    print(f"Copy {CA_FILE} and one identity's two files to each laptop; keep {CA_KEY_FILE} on this machine.",
-          file=sys.stderr)
+    print(
+        f"Copy {CA_FILE} and one identity's two files to each laptop; keep {CA_KEY_FILE} on this machine.",
+        file=sys.stderr,
+    )
     return 0

@@ -83,8 +83,9 @@ class ServiceProcess:
         return self.popen.returncode
 
 
-def spawn(name: str, argv: Sequence[str], log_path: Path, *, env: Mapping[str, str] | None = None,
-          append: bool = False) -> ServiceProcess:
+def spawn(
+    name: str, argv: Sequence[str], log_path: Path, *, env: Mapping[str, str] | None = None, append: bool = False
+) -> ServiceProcess:
     """Start ``argv`` in a new process group with stdout and stderr in ``log_path``, ending with this process.
 
     ``argv`` after the interpreter: e.g. ``["-m", "services.sim", "--namespace", "x"]``. Call it from
@@ -94,14 +95,27 @@ def spawn(name: str, argv: Sequence[str], log_path: Path, *, env: Mapping[str, s
         raise ValueError(f"spawn runs python -m MODULE …, not {list(argv)!r}")
     log_path.parent.mkdir(parents=True, exist_ok=True)
     log_file = open(log_path, "a" if append else "w")
-    popen = subprocess.Popen(command(*argv[1:]), cwd=ROOT, stdout=log_file, stderr=subprocess.STDOUT,
-                             stdin=subprocess.DEVNULL, env={**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})},
-                             start_new_session=True)
+    popen = subprocess.Popen(
+        command(*argv[1:]),
+        cwd=ROOT,
+        stdout=log_file,
+        stderr=subprocess.STDOUT,
+        stdin=subprocess.DEVNULL,
+        env={**os.environ, "PYTHONUNBUFFERED": "1", **(env or {})},
+        start_new_session=True,
+    )
     return ServiceProcess(name, popen, log_path, log_file)
 
 
-def spawn_service(name: str, session_argv: Sequence[str], log_path: Path, *extra: str, module: str | None = None,
-                  env: Mapping[str, str] | None = None, append: bool = False) -> ServiceProcess:
+def spawn_service(
+    name: str,
+    session_argv: Sequence[str],
+    log_path: Path,
+    *extra: str,
+    module: str | None = None,
+    env: Mapping[str, str] | None = None,
+    append: bool = False,
+) -> ServiceProcess:
     """Start ``python -m services.<name>`` (or ``module``) with the given session flags."""
     return spawn(name, ["-m", module or f"services.{name}", *session_argv, *extra], log_path, env=env, append=append)
 
@@ -123,8 +137,9 @@ class AliveWatcher:
         with self._changed:
             return service in self._alive
 
-    def wait(self, service: str, alive: bool = True, timeout: float = 60.0,
-             process: ServiceProcess | None = None) -> bool:
+    def wait(
+        self, service: str, alive: bool = True, timeout: float = 60.0, process: ServiceProcess | None = None
+    ) -> bool:
         """Wait until ``service``'s token is (or is no longer) there; give up early if ``process`` has exited."""
         deadline = time.monotonic() + timeout
         with self._changed:

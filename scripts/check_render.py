@@ -30,9 +30,12 @@ def main() -> int:
             print("render check: the camera saw nothing", file=sys.stderr)
             return 1
     except Exception as exc:  # the exact failure is what the person needs to see
-        print(f"render check failed: SAPIEN cannot render offscreen here ({exc}). "
-              "Install a Vulkan driver: Mesa >= 24.3 (mesa-vulkan-drivers from bookworm-backports) "
-              "or a GPU driver.", file=sys.stderr)
+        print(
+            f"render check failed: SAPIEN cannot render offscreen here ({exc}). "
+            "Install a Vulkan driver: Mesa >= 24.3 (mesa-vulkan-drivers from bookworm-backports) "
+            "or a GPU driver.",
+            file=sys.stderr,
+        )
         return 1
     print("render check: SAPIEN renders offscreen")
     return 0

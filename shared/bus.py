@@ -165,8 +165,12 @@ class Bus:
         raw: zenoh.Publisher | zext.AdvancedPublisher
         if cached:
             raw = zext.declare_advanced_publisher(
-                self.session, key, congestion_control=congestion,
-                cache=zext.CacheConfig(max_samples=1), publisher_detection=True)
+                self.session,
+                key,
+                congestion_control=congestion,
+                cache=zext.CacheConfig(max_samples=1),
+                publisher_detection=True,
+            )
         else:
             raw = self.session.declare_publisher(key, congestion_control=congestion)
         return Publisher(self._keep(raw), key)
@@ -176,14 +180,23 @@ class Bus:
         self.session.put(key, encode(message))
 
     # -- subscribe ---------------------------------------------------------
-    def subscribe(self, key: str, handler: Handler, *, schema: str | None = None,
-                  latest_only: bool = False, history: bool = False, capacity: int = 1024) -> None:
+    def subscribe(
+        self,
+        key: str,
+        handler: Handler,
+        *,
+        schema: str | None = None,
+        latest_only: bool = False,
+        history: bool = False,
+        capacity: int = 1024,
+    ) -> None:
         """Call ``handler(message)`` on a worker thread for each valid sample.
 
         ``latest_only`` keeps just the newest pending sample (streams where
         only the present matters); ``history`` also receives the last cached
         sample of each cached publisher, now and when one appears later.
         """
+
         def run(sample: zenoh.Sample) -> None:
             if sample.kind != zenoh.SampleKind.PUT:
                 return
@@ -203,8 +216,8 @@ class Bus:
         sub: zenoh.Subscriber[Any] | zext.AdvancedSubscriber[Any]
         if history:
             sub = zext.declare_advanced_subscriber(
-                self.session, key, channel,
-                history=zext.HistoryConfig(detect_late_publishers=True, max_samples=1))
+                self.session, key, channel, history=zext.HistoryConfig(detect_late_publishers=True, max_samples=1)
+            )
         else:
             sub = self.session.declare_subscriber(key, channel)
         self._drain(f"sub:{key}", sub, run)
@@ -219,6 +232,7 @@ class Bus:
         mean "refused" and are logged in one line; anything else is a bug and
         is logged with its traceback.
         """
+
         def run(query: zenoh.Query) -> None:
             try:
                 try:
@@ -266,10 +280,13 @@ class Bus:
 
     def watch_alive(self, handler: Callable[[str, bool], None]) -> None:
         """Call ``handler(service, alive)`` for every service appearing or vanishing."""
+
         def run(sample: zenoh.Sample) -> None:
             handler(self.keys.service_of(str(sample.key_expr)), sample.kind == zenoh.SampleKind.PUT)
 
-        subscriber = self.session.liveliness().declare_subscriber(self.keys.alive_all, _channel(False, 256), history=True)
+        subscriber = self.session.liveliness().declare_subscriber(
+            self.keys.alive_all, _channel(False, 256), history=True
+        )
         self._drain("alive", subscriber, run)
 
     def alive_services(self, timeout: float = 1.0) -> set[str]:

@@ -23,8 +23,12 @@ class MessageError(ValueError):
 def _pack_default(value: Any) -> Any:
     if isinstance(value, np.ndarray):
         wire = value.astype(value.dtype.newbyteorder("<"), copy=False) if value.dtype.byteorder == ">" else value
-        return {_ND_MARK: True, "dtype": wire.dtype.str, "shape": list(wire.shape),
-                "data": np.ascontiguousarray(wire).tobytes()}
+        return {
+            _ND_MARK: True,
+            "dtype": wire.dtype.str,
+            "shape": list(wire.shape),
+            "data": np.ascontiguousarray(wire).tobytes(),
+        }
     if isinstance(value, np.generic):
         return value.item()
     if isinstance(value, (tuple, set, frozenset)):

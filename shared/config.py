@@ -94,14 +94,24 @@ def add_security_arguments(parser: argparse.ArgumentParser, default_identity: st
     ``default_identity=None`` leaves ``--identity`` out, for ``hfpbd up``, which is always the robot.
     """
     group = parser.add_argument_group("security")
-    group.add_argument("--secure", default=os.environ.get(ENV_PREFIX + "SECURE") or None, metavar="DIR",
-                       help="mutual TLS on tls/ endpoints with the certificates in DIR (made by 'hfpbd secure init')")
+    group.add_argument(
+        "--secure",
+        default=os.environ.get(ENV_PREFIX + "SECURE") or None,
+        metavar="DIR",
+        help="mutual TLS on tls/ endpoints with the certificates in DIR (made by 'hfpbd secure init')",
+    )
     if default_identity is not None:
-        group.add_argument("--identity", choices=IDENTITIES,
-                           default=os.environ.get(ENV_PREFIX + "IDENTITY", default_identity),
-                           help="which certificate of DIR this session presents (default: %(default)s)")
-    group.add_argument("--insecure", action="store_true",
-                       help="allow a listener beyond loopback without authentication (warns on every start)")
+        group.add_argument(
+            "--identity",
+            choices=IDENTITIES,
+            default=os.environ.get(ENV_PREFIX + "IDENTITY", default_identity),
+            help="which certificate of DIR this session presents (default: %(default)s)",
+        )
+    group.add_argument(
+        "--insecure",
+        action="store_true",
+        help="allow a listener beyond loopback without authentication (warns on every start)",
+    )
 
 
 def add_session_arguments(parser: argparse.ArgumentParser, default_identity: str = "robot") -> None:
@@ -114,21 +124,50 @@ def add_session_arguments(parser: argparse.ArgumentParser, default_identity: str
     ``operator`` for the terminal UI.
     """
     group = parser.add_argument_group("zenoh session")
-    group.add_argument("--namespace", "-n", default=os.environ.get(ENV_PREFIX + "NAMESPACE", DEFAULT_NAMESPACE),
-                       help="key prefix pbd/<namespace>/ shared by one robot's services (default: %(default)s)")
-    group.add_argument("--mode", "-m", choices=MODES, default=os.environ.get(ENV_PREFIX + "MODE", "peer"),
-                       help="zenoh session mode (default: %(default)s)")
-    group.add_argument("--connect", "-e", action="append", default=None, metavar="ENDPOINT",
-                       help="endpoint to connect to, e.g. tcp/robot-host:7447 (repeatable)")
-    group.add_argument("--listen", "-l", action="append", default=None, metavar="ENDPOINT",
-                       help="endpoint to listen on (default: loopback only), e.g. tls/0.0.0.0:7447 (repeatable)")
-    group.add_argument("--no-multicast-scouting", action="store_true",
-                       help="do not discover peers by UDP multicast")
-    group.add_argument("--config", "-c", default=os.environ.get(ENV_PREFIX + "ZENOH_CONFIG"), metavar="FILE",
-                       help="zenoh JSON5 configuration file (TLS, authentication, access control, ...)")
-    group.add_argument("--cfg", action="append", default=[], metavar="KEY:VALUE",
-                       help="set one zenoh config key to a JSON5 value, "
-                            "e.g. --cfg 'transport/shared_memory/enabled:false'")
+    group.add_argument(
+        "--namespace",
+        "-n",
+        default=os.environ.get(ENV_PREFIX + "NAMESPACE", DEFAULT_NAMESPACE),
+        help="key prefix pbd/<namespace>/ shared by one robot's services (default: %(default)s)",
+    )
+    group.add_argument(
+        "--mode",
+        "-m",
+        choices=MODES,
+        default=os.environ.get(ENV_PREFIX + "MODE", "peer"),
+        help="zenoh session mode (default: %(default)s)",
+    )
+    group.add_argument(
+        "--connect",
+        "-e",
+        action="append",
+        default=None,
+        metavar="ENDPOINT",
+        help="endpoint to connect to, e.g. tcp/robot-host:7447 (repeatable)",
+    )
+    group.add_argument(
+        "--listen",
+        "-l",
+        action="append",
+        default=None,
+        metavar="ENDPOINT",
+        help="endpoint to listen on (default: loopback only), e.g. tls/0.0.0.0:7447 (repeatable)",
+    )
+    group.add_argument("--no-multicast-scouting", action="store_true", help="do not discover peers by UDP multicast")
+    group.add_argument(
+        "--config",
+        "-c",
+        default=os.environ.get(ENV_PREFIX + "ZENOH_CONFIG"),
+        metavar="FILE",
+        help="zenoh JSON5 configuration file (TLS, authentication, access control, ...)",
+    )
+    group.add_argument(
+        "--cfg",
+        action="append",
+        default=[],
+        metavar="KEY:VALUE",
+        help="set one zenoh config key to a JSON5 value, e.g. --cfg 'transport/shared_memory/enabled:false'",
+    )
     add_security_arguments(parser, default_identity)
 
 

@@ -108,27 +108,30 @@ def _procedure(name: str, paper: str | None, verb: str, *params: Parameter, arm:
     return Procedure(name, paper, verb, ((_arm(name),) if arm else ()) + params)
 
 
-PROCEDURES: dict[str, Procedure] = {p.name: p for p in (
-    _procedure("move_abs_dest", "p1", "move", Parameter("destination", "choice", MOVE_DESTINATIONS)),
-    _procedure("move_rel_dest", "p2", "move", Parameter("relation", "choice", RELATIONS), _OBJECT),
-    _procedure("move_abs_dir", "p3", "move", Parameter("direction", "choice", ABS_DIRECTIONS), _DISTANCE),
-    _procedure("move_rel_dir", "p4", "move", Parameter("direction", "choice", REL_DIRECTIONS), _OBJECT, _DISTANCE),
-    _procedure("pick_up", "p5", "pick up", _OBJECT),
-    _procedure("place_abs", "p6", "place", Parameter("destination", "choice", PLACE_DESTINATIONS)),
-    _procedure("place_rel", "p7", "place", Parameter("relation", "choice", RELATIONS), _OBJECT),
-    _procedure("point_to", "p8", "point at", _OBJECT),
-    _procedure("look_at", "p9", "look at", _OBJECT, arm=False),
-    _procedure("rotate", "p10", "rotate", Parameter("direction", "choice", ROTATE_DIRECTIONS)),
-    _procedure("open", "p11", "open"),
-    _procedure("close", "p12", "close"),
-    _procedure("record", "p13", "record", arm=False),
-    _procedure("create_action", "p14", "create", arm=False),
-    _procedure("switch_action", "p15", "switch to", Parameter("target", "action", SWITCH_TARGETS), arm=False),
-    _procedure("execute", "p16", "execute", arm=False),
-    _procedure("stop", "p17", "stop", arm=False),
-    _procedure("undo", None, "undo", arm=False),
-    _procedure("repeat", None, "repeat", arm=False),
-)}
+PROCEDURES: dict[str, Procedure] = {
+    p.name: p
+    for p in (
+        _procedure("move_abs_dest", "p1", "move", Parameter("destination", "choice", MOVE_DESTINATIONS)),
+        _procedure("move_rel_dest", "p2", "move", Parameter("relation", "choice", RELATIONS), _OBJECT),
+        _procedure("move_abs_dir", "p3", "move", Parameter("direction", "choice", ABS_DIRECTIONS), _DISTANCE),
+        _procedure("move_rel_dir", "p4", "move", Parameter("direction", "choice", REL_DIRECTIONS), _OBJECT, _DISTANCE),
+        _procedure("pick_up", "p5", "pick up", _OBJECT),
+        _procedure("place_abs", "p6", "place", Parameter("destination", "choice", PLACE_DESTINATIONS)),
+        _procedure("place_rel", "p7", "place", Parameter("relation", "choice", RELATIONS), _OBJECT),
+        _procedure("point_to", "p8", "point at", _OBJECT),
+        _procedure("look_at", "p9", "look at", _OBJECT, arm=False),
+        _procedure("rotate", "p10", "rotate", Parameter("direction", "choice", ROTATE_DIRECTIONS)),
+        _procedure("open", "p11", "open"),
+        _procedure("close", "p12", "close"),
+        _procedure("record", "p13", "record", arm=False),
+        _procedure("create_action", "p14", "create", arm=False),
+        _procedure("switch_action", "p15", "switch to", Parameter("target", "action", SWITCH_TARGETS), arm=False),
+        _procedure("execute", "p16", "execute", arm=False),
+        _procedure("stop", "p17", "stop", arm=False),
+        _procedure("undo", None, "undo", arm=False),
+        _procedure("repeat", None, "repeat", arm=False),
+    )
+}
 
 PAPER_PROCEDURES = tuple(name for name, p in PROCEDURES.items() if p.paper is not None)
 # procedures about the programme and the conversation rather than an arm or object
@@ -138,17 +141,34 @@ PLACES = frozenset({"place_abs", "place_rel"})
 
 # -- the words for argument values (narration, phrasing, questions) -------------------------
 VALUE_WORDS: dict[str, str] = {
-    "side": "to the side", "table": "on the table", "here": "here",
-    "above": "above", "next_to": "next to", "left_of": "to the left of", "right_of": "to the right of",
-    "in_front_of": "in front of", "behind": "behind", "on_top_of": "on top of", "near": "near",
-    "up": "up", "down": "down", "left": "to the left", "right": "to the right", "forward": "forward",
-    "backward": "backward", "towards": "towards", "away_from": "away from",
-    "cw": "clockwise", "ccw": "counter-clockwise", "next": "the next action", "previous": "the previous action",
+    "side": "to the side",
+    "table": "on the table",
+    "here": "here",
+    "above": "above",
+    "next_to": "next to",
+    "left_of": "to the left of",
+    "right_of": "to the right of",
+    "in_front_of": "in front of",
+    "behind": "behind",
+    "on_top_of": "on top of",
+    "near": "near",
+    "up": "up",
+    "down": "down",
+    "left": "to the left",
+    "right": "to the right",
+    "forward": "forward",
+    "backward": "backward",
+    "towards": "towards",
+    "away_from": "away from",
+    "cw": "clockwise",
+    "ccw": "counter-clockwise",
+    "next": "the next action",
+    "previous": "the previous action",
 }
 
 
 def arm_words(arm: str) -> str:
-    """"right hand", "left hand", "both hands"."""
+    """ "right hand", "left hand", "both hands"."""
     return "both hands" if arm == BOTH else f"{arm} hand"
 
 
@@ -160,5 +180,5 @@ def value_words(value: object) -> str:
 
 
 def distance_words(metres: float) -> str:
-    """"5 cm": how the robot says a distance back."""
+    """ "5 cm": how the robot says a distance back."""
     return f"{round(metres * 100, 1):g} cm"

@@ -24,8 +24,10 @@ from shared.logs import ACL_TARGET, init_zenoh_log
 log = logging.getLogger("hfpbd.access")
 
 REPEAT_S = 10.0  # a repeated denial is counted, and reported again at most this often
-_PERMISSION = re.compile(r"(?P<zid>[0-9a-f]{8,}) (?:on (?P<subject>\S+) )?is (?P<verdict>un)?authorized to "
-                         r"(?P<what>.+?) \((?P<flow>\w+)\) on (?P<key>\S+)")
+_PERMISSION = re.compile(
+    r"(?P<zid>[0-9a-f]{8,}) (?:on (?P<subject>\S+) )?is (?P<verdict>un)?authorized to "
+    r"(?P<what>.+?) \((?P<flow>\w+)\) on (?P<key>\S+)"
+)
 _COMMON_NAME = re.compile(r"CertCommonName\((?P<name>[^)]*)\)")
 _CACHING = re.compile(r"caching permissions for `(?P<key>[^`]+)`")
 _started = threading.Lock()

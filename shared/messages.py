@@ -150,7 +150,7 @@ class PerceivedObject(WorldObject):
 
 
 class TableExtent(msgspec.Struct, kw_only=True):
-    x: tuple[float, float]   # min, max
+    x: tuple[float, float]  # min, max
     y: tuple[float, float]
 
 
@@ -159,7 +159,7 @@ class Table(msgspec.Struct, kw_only=True):
     normal: Vector3 | None = None
     outline: list[tuple[float, float]] | None = None
     extent: TableExtent | None = None
-    edges: dict[Literal["near", "far", "right", "left"], float] = {}   # only the sides seen to end
+    edges: dict[Literal["near", "far", "right", "left"], float] = {}  # only the sides seen to end
 
 
 class Objects(Message):

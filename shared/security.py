@@ -19,8 +19,17 @@ IDENTITIES = ("robot", "operator", "observer")
 CA_FILE = "ca.pem"
 
 # Every message kind Zenoh 1.x's access control knows.
-_ALL_MESSAGES = ["put", "delete", "declare_subscriber", "query", "reply", "declare_queryable",
-                 "liveliness_token", "declare_liveliness_subscriber", "liveliness_query"]
+_ALL_MESSAGES = [
+    "put",
+    "delete",
+    "declare_subscriber",
+    "query",
+    "reply",
+    "declare_queryable",
+    "liveliness_token",
+    "declare_liveliness_subscriber",
+    "liveliness_query",
+]
 # What a session needs to receive: declare subscribers and ask for liveliness (ingress), then be sent anything.
 _DECLARE_TO_RECEIVE = ["declare_subscriber", "declare_liveliness_subscriber", "liveliness_query"]
 # Keys under pbd/<ns>/ an operator may publish, and the queryables it may ask.
@@ -78,10 +87,15 @@ def check_listen(listen: tuple[str, ...], secure: str | None, insecure: bool) ->
             raise SecurityError(f"with --secure, a listener beyond loopback must be tls/…, not {', '.join(plain)}")
         return []
     if remote and not insecure:
-        raise SecurityError(f"listening on {', '.join(remote)} reaches beyond this machine: add --secure DIR "
-                            "(see 'hfpbd secure init') or, on a trusted network only, --insecure")
-    return [f"--insecure: listening on {endpoint} with no authentication; anyone who can reach this machine "
-            "can move the robot" for endpoint in remote]
+        raise SecurityError(
+            f"listening on {', '.join(remote)} reaches beyond this machine: add --secure DIR "
+            "(see 'hfpbd secure init') or, on a trusted network only, --insecure"
+        )
+    return [
+        f"--insecure: listening on {endpoint} with no authentication; anyone who can reach this machine "
+        "can move the robot"
+        for endpoint in remote
+    ]
 
 
 def identity_files(directory: str, identity: str) -> dict[str, Path]:
@@ -92,8 +106,9 @@ def identity_files(directory: str, identity: str) -> dict[str, Path]:
     files = {"ca": base / CA_FILE, "certificate": base / certificate_file(identity), "key": base / key_file(identity)}
     missing = [str(path) for path in files.values() if not path.is_file()]
     if missing:
-        raise SecurityError(f"--secure {directory}: missing {', '.join(missing)} (make them with "
-                            f"'hfpbd secure init {directory}')")
+        raise SecurityError(
+            f"--secure {directory}: missing {', '.join(missing)} (make them with 'hfpbd secure init {directory}')"
+        )
     return files
 
 
@@ -136,8 +151,11 @@ def access_control(namespace: str) -> dict[str, Any]:
     subjects = [{"id": role, "cert_common_names": [role]} for role in IDENTITIES]
     policies = [
         {"id": "robot", "rules": ["robot-all"], "subjects": ["robot"]},
-        {"id": "operator", "rules": ["operator-put", "operator-query", "receive-declare", "receive-history",
-                                     "receive-all"], "subjects": ["operator"]},
+        {
+            "id": "operator",
+            "rules": ["operator-put", "operator-query", "receive-declare", "receive-history", "receive-all"],
+            "subjects": ["operator"],
+        },
         {"id": "observer", "rules": ["receive-declare", "receive-history", "receive-all"], "subjects": ["observer"]},
     ]
     return {"enabled": True, "default_permission": "deny", "rules": rules, "subjects": subjects, "policies": policies}

@@ -83,8 +83,7 @@ def run_service(
     try:
         with Bus(options) as bus:
             if already_alive(bus, name):
-                log.error("%s is already running on namespace %r; not starting a second one", name,
-                          options.namespace)
+                log.error("%s is already running on namespace %r; not starting a second one", name, options.namespace)
                 return ALREADY_RUNNING
             log.info("%s up on namespace %r", name, options.namespace)
             body(bus, args, stop)

@@ -51,15 +51,23 @@ class Launcher:
     def wait_alive(self, service: str, alive: bool = True, timeout: float = 60.0) -> bool:
         return self.alive.wait(service, alive, timeout)
 
-    def start(self, service: str, *extra: str, module: str | None = None, wait: bool = True,
-              timeout: float = 90.0, env: dict[str, str] | None = None) -> ServiceProcess:
+    def start(
+        self,
+        service: str,
+        *extra: str,
+        module: str | None = None,
+        wait: bool = True,
+        timeout: float = 90.0,
+        env: dict[str, str] | None = None,
+    ) -> ServiceProcess:
         """Start a service and (by default) wait for its liveliness token."""
         log_path = self.log_dir / f"{service}-{len(self.processes)}.log"
         proc = spawn_service(service, self.network.client_argv(), log_path, *extra, module=module, env=env)
         self.processes.append(proc)
         if wait and not self.alive.wait(service, timeout=timeout, process=proc):
-            raise RuntimeError(f"{service} did not come up within {timeout:g} s (exit code {proc.exited()}):\n"
-                               f"{proc.log_tail(4000)}")
+            raise RuntimeError(
+                f"{service} did not come up within {timeout:g} s (exit code {proc.exited()}):\n{proc.log_tail(4000)}"
+            )
         return proc
 
     def stop_all(self) -> None:

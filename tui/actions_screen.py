@@ -69,7 +69,7 @@ class ActionsScreen(Screen[None]):
         self.bridge = bridge
         self.namespace = namespace
         self.actions: list[dict[str, Any]] = []
-        self._armed: tuple[str, int, int] | None = None   # a delete waiting for its second key press
+        self._armed: tuple[str, int, int] | None = None  # a delete waiting for its second key press
         self._listed = False
 
     def compose(self) -> ComposeResult:
@@ -122,9 +122,14 @@ class ActionsScreen(Screen[None]):
         row = table.cursor_row
         table.clear()
         for action in actions:
-            table.add_row(Text("▶" if action.get("current") else "", style="bold yellow"),
-                          str(action["number"]), action.get("name") or Text("(unnamed)", style="dim"),
-                          str(action["steps"]), created_text(action.get("created")), key=str(action["number"]))
+            table.add_row(
+                Text("▶" if action.get("current") else "", style="bold yellow"),
+                str(action["number"]),
+                action.get("name") or Text("(unnamed)", style="dim"),
+                str(action["steps"]),
+                created_text(action.get("created")),
+                key=str(action["number"]),
+            )
         if actions:
             table.move_cursor(row=min(row, len(actions) - 1))
         self.show_steps()
@@ -185,8 +190,11 @@ class ActionsScreen(Screen[None]):
         if self._confirmed("action", action["number"], 0):
             self.ask({"op": "delete", "number": action["number"]})
             return
-        self.note(f"press d again to delete action {action['number']} ({_name(action)}, {action['steps']} steps); "
-                  "any other key keeps it", "bold yellow")
+        self.note(
+            f"press d again to delete action {action['number']} ({_name(action)}, {action['steps']} steps); "
+            "any other key keeps it",
+            "bold yellow",
+        )
 
     def action_delete_step(self) -> None:
         action = self.selected_action()
@@ -196,8 +204,11 @@ class ActionsScreen(Screen[None]):
         if self._confirmed("step", action["number"], step):
             self.ask({"op": "delete_step", "number": action["number"], "step": step})
             return
-        self.note(f"press x again to delete step {step} of action {action['number']} "
-                  f"(“{action['words'][step - 1]}”); any other key keeps it", "bold yellow")
+        self.note(
+            f"press x again to delete step {step} of action {action['number']} "
+            f"(“{action['words'][step - 1]}”); any other key keeps it",
+            "bold yellow",
+        )
 
     def action_move_step(self, by: int) -> None:
         action = self.selected_action()

@@ -46,9 +46,10 @@ from tui.world_panel import TableCanvas, WorldPanel
 log = logging.getLogger("hfpbd.tui")
 
 RECONNECT_SECONDS = 3.0
-CAMERA_LOG_EVERY = 50   # pictures between two lines in the log about the camera's refresh rate
-NO_SPEECH = ("push-to-talk needs the speech service, which is not running (start it: hfpbd speech); "
-             "typing works as always")
+CAMERA_LOG_EVERY = 50  # pictures between two lines in the log about the camera's refresh rate
+NO_SPEECH = (
+    "push-to-talk needs the speech service, which is not running (start it: hfpbd speech); typing works as always"
+)
 T = TypeVar("T")
 
 
@@ -87,13 +88,14 @@ class PbdApp(App[None]):
         Binding("ctrl+q", "quit", "Quit", priority=True),
     ]
 
-    def __init__(self, options: SessionOptions, *, probe_seconds: float | None = 2.0,
-                 camera_drawing: str = "auto") -> None:
+    def __init__(
+        self, options: SessionOptions, *, probe_seconds: float | None = 2.0, camera_drawing: str = "auto"
+    ) -> None:
         """``probe_seconds`` is how often latencies are measured (None: never); ``camera_drawing`` is
         how pictures are drawn (``tui.camera_view.DRAWINGS``: a graphics protocol or half-blocks)."""
         super().__init__()
         self.camera_drawing = camera_drawing
-        self._cloud: dict[str, Any] | None = None   # newest camera frame not yet composed
+        self._cloud: dict[str, Any] | None = None  # newest camera frame not yet composed
         self._last_cloud: dict[str, Any] | None = None
         self._composing = False
         self._pictures = 0
@@ -117,8 +119,9 @@ class PbdApp(App[None]):
                     yield RobotPanel(id="robot")
                     yield ActionPanel(id="action")
         yield prompt
-        yield CommandInput(prompt, id="input",
-                           placeholder="tell the robot, e.g. “move your right hand above the red cup”")
+        yield CommandInput(
+            prompt, id="input", placeholder="tell the robot, e.g. “move your right hand above the red cup”"
+        )
         yield StatusBar(id="status")
         yield Footer()
 
@@ -159,7 +162,8 @@ class PbdApp(App[None]):
     @while_running
     def on_bus_unavailable(self, event: events.BusUnavailable) -> None:
         self.main.query_one(StatusBar).set_connection(
-            False, f"cannot reach {self._where()}: {event.reason} — retrying every {RECONNECT_SECONDS:g} s")
+            False, f"cannot reach {self._where()}: {event.reason} — retrying every {RECONNECT_SECONDS:g} s"
+        )
         self.set_timer(RECONNECT_SECONDS, self.connect)
 
     @while_running
@@ -307,7 +311,8 @@ class PbdApp(App[None]):
         if prompt.is_open and line.isdigit():
             if not prompt.choose(int(line) - 1):
                 self.main.query_one(Conversation).add(
-                    "warning", f"there is no answer {line}: choose 1 to {len(prompt.candidates)}, or say what you mean")
+                    "warning", f"there is no answer {line}: choose 1 to {len(prompt.candidates)}, or say what you mean"
+                )
             return
         if not line:
             return
@@ -323,8 +328,9 @@ class PbdApp(App[None]):
         conversation = self.main.query_one(Conversation)
         conversation.add("user", shown)
         if not self.bridge.connected:
-            conversation.add("warning",
-                             "not connected to the robot yet: this was not sent, say it again once connected")
+            conversation.add(
+                "warning", "not connected to the robot yet: this was not sent, say it again once connected"
+            )
             return
         self.bridge.say(text, choice)
         if "nlu" not in self.main.query_one(StatusBar).alive:
@@ -352,7 +358,7 @@ class PbdApp(App[None]):
         elif view == "camera":
             self.main.query_one(Conversation).add("warning", "not connected yet: the camera shows once connected")
         if view != "map" and self._last_cloud is not None and not self._composing:
-            self._cloud = self._last_cloud   # redraw the frame in hand at once, not at the next one
+            self._cloud = self._last_cloud  # redraw the frame in hand at once, not at the next one
             self._composing = True
             self._compose_newest()
 
@@ -407,8 +413,9 @@ class PbdApp(App[None]):
             self.post_message(events.RequestFailed("push-to-talk", _reason(exc, "speech service")))
 
     @work(thread=True, group="camera")
-    def compose_camera(self, columns: int, rows: int, cell: tuple[int, int], per_cell: tuple[int, int],
-                       close_up: bool) -> None:
+    def compose_camera(
+        self, columns: int, rows: int, cell: tuple[int, int], per_cell: tuple[int, int], close_up: bool
+    ) -> None:
         """Compose the newest frame for the camera view (scaling and drawing stay off the UI thread)."""
         cloud, self._cloud = self._cloud, None
         if cloud is None:

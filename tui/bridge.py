@@ -50,8 +50,9 @@ class Bridge:
         bus.subscribe(keys.say, self._on_say, schema="say")
         bus.subscribe(keys.nlu_result, self._on_nlu_result, schema="nlu_result")
         bus.subscribe(keys.objects, self._on_objects, schema="objects", latest_only=True, history=True)
-        bus.subscribe(keys.executor_state, self._on_executor_state, schema="executor_state",
-                      latest_only=True, history=True)
+        bus.subscribe(
+            keys.executor_state, self._on_executor_state, schema="executor_state", latest_only=True, history=True
+        )
         bus.subscribe(keys.sim_state, self._on_sim_state, schema="sim_state", latest_only=True)
         bus.watch_alive(lambda service, alive: self._app.post_message(events.Presence(service, alive)))
         self.bus = bus
@@ -106,8 +107,9 @@ class Bridge:
     def command(self, procedure: str, args: dict[str, Any] | None = None, timeout: float = 3.0) -> str:
         """Ask the executor to run a direct command; returns its message."""
         bus = self._bus()
-        reply = bus.request(bus.keys.executor_control("command"),
-                            {"procedure": procedure, "args": args or {}}, timeout=timeout)
+        reply = bus.request(
+            bus.keys.executor_control("command"), {"procedure": procedure, "args": args or {}}, timeout=timeout
+        )
         return str(reply.get("message") or "")
 
     def stop(self) -> str:

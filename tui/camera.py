@@ -28,19 +28,19 @@ from textual_image.renderable.halfcell import Image as HalfBlocks
 
 from tui.world import ARMS, WorldView, hex_color, object_rgb
 
-SAMPLE_PIXELS = 600          # pixels used to fit the intrinsics (plenty for two unknowns per axis)
-NEAREST = 0.05               # m in front of the camera: anything nearer is not drawn
+SAMPLE_PIXELS = 600  # pixels used to fit the intrinsics (plenty for two unknowns per axis)
+NEAREST = 0.05  # m in front of the camera: anything nearer is not drawn
 OUTLINE = (255, 255, 255)
 HIGHLIGHT = (255, 215, 0)
-GRIPPER = {False: (0, 200, 255), True: (255, 0, 255)}   # empty hand, holding something
+GRIPPER = {False: (0, 200, 255), True: (255, 0, 255)}  # empty hand, holding something
 
 
 @dataclass(frozen=True)
 class Pinhole:
     """Where the camera is (base frame) and how it maps directions to pixels of its own picture."""
 
-    rotation: np.ndarray      # (3, 3) camera link axes in the base frame
-    origin: np.ndarray        # (3,)
+    rotation: np.ndarray  # (3, 3) camera link axes in the base frame
+    origin: np.ndarray  # (3,)
     fx: float
     cx: float
     fy: float
@@ -94,7 +94,7 @@ class Picture:
     rows: int
     labels: list[Label] = field(default_factory=list)
     stamp: float = 0.0
-    lines: list[Strip] | None = None   # the picture already drawn in half-blocks, one strip per row
+    lines: list[Strip] | None = None  # the picture already drawn in half-blocks, one strip per row
 
 
 def half_block_lines(image: Image.Image, columns: int, rows: int) -> list[Strip]:
@@ -120,8 +120,15 @@ def fit_cells(width: int, height: int, columns: int, rows: int, cell: tuple[int,
     return max(1, fitted_columns), fitted_rows
 
 
-def compose(cloud: dict[str, Any], world: WorldView, columns: int, rows: int, cell: tuple[int, int],
-            pixels_per_cell: tuple[int, int], close_up: bool = False) -> Picture:
+def compose(
+    cloud: dict[str, Any],
+    world: WorldView,
+    columns: int,
+    rows: int,
+    cell: tuple[int, int],
+    pixels_per_cell: tuple[int, int],
+    close_up: bool = False,
+) -> Picture:
     """The camera frame scaled to fit ``columns`` × ``rows`` cells, objects outlined, grippers marked.
 
     ``pixels_per_cell`` is how many image pixels one cell shows ((1, 2) for
@@ -136,8 +143,15 @@ def compose(cloud: dict[str, Any], world: WorldView, columns: int, rows: int, ce
     return picture
 
 
-def _marked(cloud: dict[str, Any], world: WorldView, columns: int, rows: int, cell: tuple[int, int],
-            pixels_per_cell: tuple[int, int], close_up: bool) -> Picture:
+def _marked(
+    cloud: dict[str, Any],
+    world: WorldView,
+    columns: int,
+    rows: int,
+    cell: tuple[int, int],
+    pixels_per_cell: tuple[int, int],
+    close_up: bool,
+) -> Picture:
     """The scaled frame with outlines and gripper marks drawn in, and the labels to lay over it."""
     rgb = np.asarray(cloud["rgb"], dtype=np.uint8)
     height, width = rgb.shape[:2]
@@ -166,8 +180,11 @@ def _marked(cloud: dict[str, Any], world: WorldView, columns: int, rows: int, ce
         column, top, _right, bottom = (np.array(box, float) * np.tile(to_cell, 2)).astype(int)
         name = world.descriptions.get(object_id) or f"a {obj.get('color', '')} {obj.get('type', 'object')}"
         style = f"bold black on {hex_color(HIGHLIGHT)}" if marked else f"black on {hex_color(object_rgb(obj))}"
-        column, row = places.take(int(column), [int(top) - 1, int(bottom) + 1, int(top) - 2, int(bottom) + 2,
-                                                int(top), int(bottom)], len(name))
+        column, row = places.take(
+            int(column),
+            [int(top) - 1, int(bottom) + 1, int(top) - 2, int(bottom) + 2, int(top), int(bottom)],
+            len(name),
+        )
         picture.labels.append(Label(column, row, name, style))
     for arm in ARMS:
         pose = world.ee.get(arm)
@@ -180,8 +197,11 @@ def _marked(cloud: dict[str, Any], world: WorldView, columns: int, rows: int, ce
         holding = bool((world.grippers.get(arm) or {}).get("holding"))
         colour = GRIPPER[holding]
         radius = max(2, 2 * pixels_per_cell[0])
-        draw.ellipse([point[0] - radius, point[1] - radius, point[0] + radius, point[1] + radius],
-                     outline=colour, width=thickness)
+        draw.ellipse(
+            [point[0] - radius, point[1] - radius, point[0] + radius, point[1] + radius],
+            outline=colour,
+            width=thickness,
+        )
         column, row = (point * to_cell).astype(int)
         column, row = places.take(int(column) + 1, [int(row), int(row) - 1, int(row) + 1], 1)
         picture.labels.append(Label(column, row, arm[0].upper(), f"bold white on {hex_color(colour)}"))
@@ -213,8 +233,9 @@ def _corners(camera: Pinhole, obj: dict[str, Any]) -> np.ndarray | None:
     if not position or not extent:
         return None
     half = np.asarray(extent, float) / 2
-    corners = np.asarray(position, float) + half * np.array([[sx, sy, sz] for sx in (-1, 1)
-                                                             for sy in (-1, 1) for sz in (-1, 1)])
+    corners = np.asarray(position, float) + half * np.array(
+        [[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
+    )
     uv, ahead = camera.project(corners)
     return uv if ahead.all() else None
 
@@ -238,8 +259,9 @@ def _region(camera: Pinhole, world: WorldView, width: int, height: int) -> tuple
     return int(left), int(top), int(round(left + 2 * half_w)), int(round(top + 2 * half_h))
 
 
-def _outline(camera: Pinhole, obj: dict[str, Any], offset: np.ndarray, scale: np.ndarray,
-             size: tuple[int, int]) -> tuple[int, int, int, int] | None:
+def _outline(
+    camera: Pinhole, obj: dict[str, Any], offset: np.ndarray, scale: np.ndarray, size: tuple[int, int]
+) -> tuple[int, int, int, int] | None:
     """The object's bounding box as a pixel rectangle of the scaled image, or None when it is out of view."""
     uv = _corners(camera, obj)
     if uv is None:

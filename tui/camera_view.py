@@ -97,7 +97,7 @@ class CameraView(Container):
         self.per_cell = pixels_per_cell(self.image_kind)
         self.picture: Picture | None = None
         self._labels: list[CameraLabel] = []
-        self.shown: deque[tuple[float, float]] = deque(maxlen=50)   # (when, UI seconds spent) per picture
+        self.shown: deque[tuple[float, float]] = deque(maxlen=50)  # (when, UI seconds spent) per picture
 
     def compose(self) -> ComposeResult:
         yield Static(WAITING, id="camera-waiting")
@@ -149,14 +149,14 @@ class CameraView(Container):
             label = CameraLabel(classes="camera-label")
             self._labels.append(label)
             self.mount(label)
-        for label, spec in zip(self._labels[:len(picture.labels)], picture.labels, strict=True):
+        for label, spec in zip(self._labels[: len(picture.labels)], picture.labels, strict=True):
             if label.spec == spec and label.display:
                 continue  # unchanged: updating it would lay the screen out again for nothing
             label.spec = spec
-            text = spec.text[:max(1, picture.columns - spec.column)]
+            text = spec.text[: max(1, picture.columns - spec.column)]
             label.update(Text(text, style=spec.style))
             label.styles.offset = (min(spec.column, picture.columns - 1), min(spec.row, picture.rows - 1))
             label.styles.width = len(text)
             label.display = True
-        for label in self._labels[len(picture.labels):]:
+        for label in self._labels[len(picture.labels) :]:
             label.display = False

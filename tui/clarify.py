@@ -43,11 +43,11 @@ class ClarifyPrompt(Vertical):
         self.question = question
         self.candidates = list(candidates)
         self.query_one("#clarify-question", Label).update(
-            f"{question}  [dim](number, ↑↓ Enter, click, or type your answer)[/dim]")
+            f"{question}  [dim](number, ↑↓ Enter, click, or type your answer)[/dim]"
+        )
         options = self.query_one("#clarify-options", OptionList)
         options.clear_options()
-        options.add_options([Option(f"{n}. {label}", id=str(n - 1))
-                             for n, label in enumerate(candidates, start=1)])
+        options.add_options([Option(f"{n}. {label}", id=str(n - 1)) for n, label in enumerate(candidates, start=1)])
         options.highlighted = 0 if candidates else None
         self.set_class(self.is_open, "-open")
 

@@ -32,8 +32,9 @@ class OverviewScreen(ModalScreen[None]):
     def on_mount(self) -> None:
         frame = self.query_one("#overview")
         frame.border_title = f"robot {self.namespace!r}, seen from the front left"
-        columns, rows = fit_cells(self.picture.width, self.picture.height, self.size.width - 4,
-                                  self.size.height - 4, cell_shape())
+        columns, rows = fit_cells(
+            self.picture.width, self.picture.height, self.size.width - 4, self.size.height - 4, cell_shape()
+        )
         per_cell = pixels_per_cell(self.kind)
         image = self.query_one("#overview-image", self.kind)
         image.styles.width, image.styles.height = columns, rows

@@ -73,8 +73,10 @@ class StatusBar(Static):
         missing = self.missing()
         if len(missing) == len(REQUIRED):
             line.append("\n")
-            line.append("⚠ no service is running: commands are neither understood nor carried out "
-                        "(start them: hfpbd up)", style="yellow")
+            line.append(
+                "⚠ no service is running: commands are neither understood nor carried out (start them: hfpbd up)",
+                style="yellow",
+            )
         elif missing:
             reasons = " · ".join(f"no {s}: {CONSEQUENCES[s]}" for s in missing)
             line.append("\n")

@@ -14,9 +14,15 @@ ARMS = ("right", "left")
 # Display colours for perception's colour words, used when an object carries
 # no measured ``rgb``.
 COLOR_WORDS: dict[str, tuple[int, int, int]] = {
-    "red": (220, 40, 40), "green": (40, 170, 60), "blue": (50, 90, 220),
-    "yellow": (230, 210, 40), "orange": (240, 140, 30), "purple": (140, 60, 180),
-    "white": (235, 235, 235), "black": (40, 40, 40), "grey": (128, 128, 128),
+    "red": (220, 40, 40),
+    "green": (40, 170, 60),
+    "blue": (50, 90, 220),
+    "yellow": (230, 210, 40),
+    "orange": (240, 140, 30),
+    "purple": (140, 60, 180),
+    "white": (235, 235, 235),
+    "black": (40, 40, 40),
+    "grey": (128, 128, 128),
     "unknown": (160, 160, 160),
 }
 

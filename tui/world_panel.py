@@ -160,7 +160,7 @@ class WorldPanel(Vertical):
         yield TableCanvas(id="canvas")
         yield CameraView(self.drawing, id="camera")
 
-    VIEWS = ("map", "camera", "close-up")    # what F2 steps through
+    VIEWS = ("map", "camera", "close-up")  # what F2 steps through
     TITLES = {"map": "world", "camera": "world · head camera", "close-up": "world · head camera, close-up"}
 
     @property
@@ -183,7 +183,7 @@ class WorldPanel(Vertical):
         on = view != "map"
         self.query_one(CameraView).display = on
         self.query_one(TableCanvas).display = not on
-        self.screen.set_class(on, "-camera")   # a short screen gives the picture the robot and action panels' rows
+        self.screen.set_class(on, "-camera")  # a short screen gives the picture the robot and action panels' rows
 
     def show(self, world: WorldView) -> None:
         self.query_one(ObjectTable).show(world)

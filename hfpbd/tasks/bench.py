@@ -20,15 +20,17 @@ import uuid
 from collections.abc import Sequence
 from pathlib import Path
 
-from shared.bus import Bus
-from shared.config import add_session_arguments, free_port, loopback_options, options_from_args
 from hfpbd.tasks import figures
 from hfpbd.tasks.runner import RunError, TaskRunner
 from hfpbd.tasks.scripts import STYLES, ScriptError, load_tasks
 from hfpbd.tasks.stack import LocalStack
+from shared.bus import Bus
+from shared.config import add_session_arguments, free_port, loopback_options, options_from_args
 
-DESCRIPTION = ("Program the paper's five tasks in full and minimal language through the real services, "
-               "judge them from ground truth, replay them on moved objects, and compare with the paper.")
+DESCRIPTION = (
+    "Program the paper's five tasks in full and minimal language through the real services, "
+    "judge them from ground truth, replay them on moved objects, and compare with the paper."
+)
 
 
 def _parse(argv: Sequence[str]) -> argparse.Namespace:
@@ -37,8 +39,11 @@ def _parse(argv: Sequence[str]) -> argparse.Namespace:
     parser.add_argument("--styles", default=",".join(STYLES), help="comma-separated styles (default: %(default)s)")
     parser.add_argument("--out", type=Path, default=Path("bench-results"), help="output folder (default: %(default)s)")
     parser.add_argument("--no-replay", action="store_true", help="program only; skip moving the objects and executing")
-    parser.add_argument("--attach", action="store_true",
-                        help="use services already running (session flags below) instead of starting private ones")
+    parser.add_argument(
+        "--attach",
+        action="store_true",
+        help="use services already running (session flags below) instead of starting private ones",
+    )
     add_session_arguments(parser)
     return parser.parse_args(list(argv))
 
@@ -90,8 +95,11 @@ def _run(runner: TaskRunner, tasks: list, styles: list[str], replay: bool) -> li
     for task in tasks:
         for style in styles:
             report = runner.run(task, style, replay=replay)
-            print(f"{task.id} {style}: success={report.success.success} ({report.success.reason}); "
-                  f"replay={report.replay.success} ({report.replay.reason})", flush=True)
+            print(
+                f"{task.id} {style}: success={report.success.success} ({report.success.reason}); "
+                f"replay={report.replay.success} ({report.replay.reason})",
+                flush=True,
+            )
             runs.append(report.as_dict())
     return runs
 
@@ -107,6 +115,8 @@ def _report(runs: list[dict], paper: dict, out: Path) -> None:
         print("  " + line)
     (out / "tasks.json").write_text(json.dumps(runs, indent=1, default=str))
     figures.write_csv(rows, out / "tasks.csv")
-    (out / "tasks.md").write_text(figures.markdown_table(rows) + "\n\n" + "\n".join(f"- {l}" for l in comparison) + "\n")
+    (out / "tasks.md").write_text(
+        figures.markdown_table(rows) + "\n\n" + "\n".join(f"- {line}" for line in comparison) + "\n"
+    )
     figures.chart(runs, out / "tasks.png")
     print(f"\nwrote {out / 'tasks.md'}, tasks.csv, tasks.json and tasks.png")

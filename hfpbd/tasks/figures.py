@@ -20,10 +20,18 @@ def table_rows(runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
     rows = []
     for run in runs:
         latencies = [s["motion_latency_s"] for s in run["steps"] if s.get("motion_latency_s") is not None]
-        rows.append({"task": f"{run['task']} {run['title']}", "style": run["style"], "utterances": run["utterances"],
-                     "words": run["words"], "success": "yes" if run["success"] else "no",
-                     "programming_s": f"{run['programming_s']:.1f}", "replay": "yes" if run["replay"] else "no",
-                     "median_latency_ms": f"{1000 * statistics.median(latencies):.0f}" if latencies else "-"})
+        rows.append(
+            {
+                "task": f"{run['task']} {run['title']}",
+                "style": run["style"],
+                "utterances": run["utterances"],
+                "words": run["words"],
+                "success": "yes" if run["success"] else "no",
+                "programming_s": f"{run['programming_s']:.1f}",
+                "replay": "yes" if run["replay"] else "no",
+                "median_latency_ms": f"{1000 * statistics.median(latencies):.0f}" if latencies else "-",
+            }
+        )
     return rows
 
 
@@ -71,24 +79,29 @@ def comparison(runs: list[dict[str, Any]], paper: dict[str, Any]) -> list[str]:
             claim = ""
         saved = full["programming_s"] - minimal["programming_s"]
         paper_saved = f"; paper saved ~{saved_paper[task]} s" if task in saved_paper else ""
-        lines.append(f"{task}: words {full['words']} -> {minimal['words']} ({ratio:.0%}); {claim}; "
-                     f"programming time {full['programming_s']:.1f} s -> {minimal['programming_s']:.1f} s "
-                     f"(saved {saved:.1f} s{paper_saved})")
+        lines.append(
+            f"{task}: words {full['words']} -> {minimal['words']} ({ratio:.0%}); {claim}; "
+            f"programming time {full['programming_s']:.1f} s -> {minimal['programming_s']:.1f} s "
+            f"(saved {saved:.1f} s{paper_saved})"
+        )
     latencies = [s["motion_latency_s"] for r in runs for s in r["steps"] if s.get("motion_latency_s") is not None]
     target = paper.get("motion_latency_target_s", 0.2)
     if latencies:
         ordered = sorted(latencies)
         p95 = ordered[min(len(ordered) - 1, int(round(0.95 * (len(ordered) - 1))))]
         within = sum(v <= target for v in latencies)
-        lines.append(f"utterance -> start of motion: median {1000 * statistics.median(latencies):.0f} ms, "
-                     f"95th percentile {1000 * p95:.0f} ms, max {1000 * ordered[-1]:.0f} ms over {len(latencies)} "
-                     f"moving steps; {within}/{len(latencies)} within the {1000 * target:.0f} ms target")
+        lines.append(
+            f"utterance -> start of motion: median {1000 * statistics.median(latencies):.0f} ms, "
+            f"95th percentile {1000 * p95:.0f} ms, max {1000 * ordered[-1]:.0f} ms over {len(latencies)} "
+            f"moving steps; {within}/{len(latencies)} within the {1000 * target:.0f} ms target"
+        )
     return lines
 
 
 def chart(runs: list[dict[str, Any]], path: Path) -> None:
     """Two panels like the paper's Fig. 6(b, c): programming time and words, full vs minimal, per task."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -100,7 +113,9 @@ def chart(runs: list[dict[str, Any]], path: Path) -> None:
         for offset, style, colour in ((-width / 2, "full", "#4c72b0"), (width / 2, "minimal", "#dd8452")):
             values = [pairs[t].get(style, {}).get(field, 0) for t in tasks]
             failed = [not (pairs[t].get(style, {}).get("success")) for t in tasks]
-            bars = ax.bar([i + offset for i in range(len(tasks))], values, width, label=f"{style} language", color=colour)
+            bars = ax.bar(
+                [i + offset for i in range(len(tasks))], values, width, label=f"{style} language", color=colour
+            )
             for bar, bad in zip(bars, failed):
                 if bad:
                     bar.set_hatch("//")

@@ -13,26 +13,30 @@ from typing import Any
 
 from services.sim.layout import TABLE_TOP_Z
 
-ON_TABLE = 0.012          # a bottom within this of the table top rests on it
-NEAR = 0.10               # side by side: at most this far apart, edge to edge
-ALIGNED = 0.06            # ... and offset at most this much along the other axis
+ON_TABLE = 0.012  # a bottom within this of the table top rests on it
+NEAR = 0.10  # side by side: at most this far apart, edge to edge
+ALIGNED = 0.06  # ... and offset at most this much along the other axis
 
 
 @dataclass(frozen=True)
 class Verdict:
     success: bool
-    reason: str           # what was measured, in words (also when it worked)
+    reason: str  # what was measured, in words (also when it worked)
 
 
 Truth = dict[str, dict[str, Any]]
 
 
-def judge(criterion: dict[str, Any], truth: Truth, grippers: dict[str, Any] | None = None,
-          later: Truth | None = None) -> Verdict:
+def judge(
+    criterion: dict[str, Any], truth: Truth, grippers: dict[str, Any] | None = None, later: Truth | None = None
+) -> Verdict:
     """Apply one task's success criterion; ``later`` is a second truth sample for "held" checks."""
     kind = criterion["kind"]
-    missing = [v for k, v in criterion.items() if k in ("top", "base", "moved", "landmark", "object", "container")
-               and v not in truth]
+    missing = [
+        v
+        for k, v in criterion.items()
+        if k in ("top", "base", "moved", "landmark", "object", "container") and v not in truth
+    ]
     if missing:
         return Verdict(False, f"the simulator reports no object {', '.join(missing)}")
     return _CRITERIA[kind](criterion, truth, grippers or {}, later or truth)
@@ -83,8 +87,11 @@ def _inside(c: dict[str, Any], truth: Truth, _g: dict[str, Any], _l: Truth) -> V
 def _lifted(c: dict[str, Any], truth: Truth, _g: dict[str, Any], later: Truth) -> Verdict:
     heights = [_box(sample[c["object"]])[0][2] - TABLE_TOP_Z for sample in (truth, later)]
     if min(heights) < c["height"]:
-        return Verdict(False, f"{c['object']} is {min(heights):.3f} m above the table, "
-                              f"not the {c['height']:.2f} m required (held over {c.get('hold_s', 0)} s)")
+        return Verdict(
+            False,
+            f"{c['object']} is {min(heights):.3f} m above the table, "
+            f"not the {c['height']:.2f} m required (held over {c.get('hold_s', 0)} s)",
+        )
     return Verdict(True, f"{c['object']} lifted {min(heights):.3f} m and held")
 
 
@@ -99,6 +106,9 @@ def _off_table_in_gripper(c: dict[str, Any], truth: Truth, grippers: dict[str, A
 
 
 _CRITERIA: dict[str, Callable[[dict[str, Any], Truth, dict[str, Any], Truth], Verdict]] = {
-    "stacked": _stacked, "side_by_side": _side_by_side, "inside": _inside,
-    "lifted": _lifted, "off_table_in_gripper": _off_table_in_gripper,
+    "stacked": _stacked,
+    "side_by_side": _side_by_side,
+    "inside": _inside,
+    "lifted": _lifted,
+    "off_table_in_gripper": _off_table_in_gripper,
 }

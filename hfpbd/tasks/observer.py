@@ -38,15 +38,15 @@ class Observer:
         self.lines: list[Line] = []
         self.results: list[tuple[float, dict[str, Any]]] = []
         self.executor: dict[str, Any] | None = None
-        self.busy_states = 0                     # executor states seen with a command running
+        self.busy_states = 0  # executor states seen with a command running
         self.sim: dict[str, Any] | None = None
-        self.rtf: list[float] = []               # the simulator's real-time factor, one per state
+        self.rtf: list[float] = []  # the simulator's real-time factor, one per state
         self.truth: dict[str, dict[str, Any]] = {}
         self.truth_at = 0.0
         self.objects: dict[str, dict[str, Any]] = {}
-        self.objects_stamp = 0.0                 # when the cloud behind the latest object list was rendered
+        self.objects_stamp = 0.0  # when the cloud behind the latest object list was rendered
         self._motion_since: float | None = None
-        self.motion_at: float | None = None      # sim stamp of the first arm motion after motion_since
+        self.motion_at: float | None = None  # sim stamp of the first arm motion after motion_since
         keys = bus.keys
         bus.subscribe(keys.say, self._on_say, schema="say")
         bus.subscribe(keys.nlu_result, self._on_result, schema="nlu_result")
@@ -116,7 +116,7 @@ class Observer:
             while (value := condition()) is None or not value:
                 left = deadline - time.monotonic()
                 if left <= 0:
-                    said = "; ".join(f"{l.kind}: {l.text}" for l in self.lines[-4:]) or "nothing"
+                    said = "; ".join(f"{line.kind}: {line.text}" for line in self.lines[-4:]) or "nothing"
                     raise WaitTimeout(f"timed out after {timeout:g} s waiting for {what} (last said: {said})")
                 self._changed.wait(min(left, 0.5))
             return value

@@ -14,15 +14,15 @@ import copy
 from dataclasses import dataclass
 from typing import Any
 
+from hfpbd.tasks.scripts import Task, Utterance
 from services.nlu.context import Dialogue
 from services.nlu.infer import Clarify, Model
 from services.nlu.world import parse_world
 from services.sim.scene_file import load_scene
-from hfpbd.tasks.scripts import Task, Utterance
 
 ADMIN = {"record", "create_action", "switch_action", "execute", "stop"}
-LIFT = 0.12          # a picked-up object rises about this much
-GAP = 0.05           # a placed object lands this far from its landmark's side
+LIFT = 0.12  # a picked-up object rises about this much
+GAP = 0.05  # a placed object lands this far from its landmark's side
 
 
 @dataclass(frozen=True)
@@ -30,13 +30,15 @@ class Rehearsed:
     """One utterance: what the model made of it, and whether that is what the script expects."""
 
     utterance: Utterance
-    understood: dict[str, Any]        # the parse JSON (command or clarify)
+    understood: dict[str, Any]  # the parse JSON (command or clarify)
 
     @property
     def ok(self) -> bool:
-        return (self.understood.get("kind") == "command"
-                and self.understood.get("procedure") == self.utterance.expect.procedure
-                and self.understood.get("args") == self.utterance.expect.args)
+        return (
+            self.understood.get("kind") == "command"
+            and self.understood.get("procedure") == self.utterance.expect.procedure
+            and self.understood.get("args") == self.utterance.expect.args
+        )
 
     def explain(self) -> str:
         if self.understood.get("kind") != "command":
@@ -48,8 +50,17 @@ class Rehearsed:
 def initial_world(scene_name: str) -> dict[str, Any]:
     """The world-state JSON perception and the executor would report for a freshly loaded scene."""
     scene = load_scene(scene_name)
-    objects = [{"id": o.id, "color": o.color, "type": o.type, "position": list(o.position), "size": list(o.size),
-                "held_by": None} for o in scene.objects]
+    objects = [
+        {
+            "id": o.id,
+            "color": o.color,
+            "type": o.type,
+            "position": list(o.position),
+            "size": list(o.size),
+            "held_by": None,
+        }
+        for o in scene.objects
+    ]
     robot = {"grippers": {"right": "open", "left": "open"}, "last_arm": None, "last_object": None, "executing": False}
     return {"objects": objects, "robot": robot}
 
@@ -103,8 +114,13 @@ def _placed(held: dict[str, Any], landmark: dict[str, Any], relation: str) -> li
     table_z = z - lz / 2
     if relation in ("on_top_of", "above"):
         return [x, y, z + lz / 2 + hz / 2]
-    offsets = {"left_of": (0.0, ly / 2 + GAP + hy / 2), "next_to": (0.0, -(ly / 2 + GAP + hy / 2)),
-               "right_of": (0.0, -(ly / 2 + GAP + hy / 2)), "near": (0.0, -(ly / 2 + GAP + hy / 2)),
-               "in_front_of": (-(lx / 2 + GAP + hx / 2), 0.0), "behind": (lx / 2 + GAP + hx / 2, 0.0)}
+    offsets = {
+        "left_of": (0.0, ly / 2 + GAP + hy / 2),
+        "next_to": (0.0, -(ly / 2 + GAP + hy / 2)),
+        "right_of": (0.0, -(ly / 2 + GAP + hy / 2)),
+        "near": (0.0, -(ly / 2 + GAP + hy / 2)),
+        "in_front_of": (-(lx / 2 + GAP + hx / 2), 0.0),
+        "behind": (lx / 2 + GAP + hx / 2, 0.0),
+    }
     dx, dy = offsets[relation]
     return [x + dx, y + dy, table_z + hz / 2]

@@ -22,22 +22,24 @@ from typing import Any
 
 import numpy as np
 
-from shared.bus import Bus, BusTimeout, RemoteError
 from hfpbd.tasks.judge import Verdict, judge
 from hfpbd.tasks.observer import Observer, WaitTimeout
 from hfpbd.tasks.scripts import Expected, Task, Utterance
+from shared.bus import Bus, BusTimeout, RemoteError
 
 log = logging.getLogger("hfpbd.tasks")
 
 SERVICES = ("sim", "perception", "nlu", "executor")
-NLU_TIMEOUT = 15.0        # s for the NLU to answer an utterance
-START_TIMEOUT = 10.0      # s for the executor to take a command up (or refuse it)
-STEP_TIMEOUT = 240.0      # s for one programmed step
-REPLAY_TIMEOUT = 900.0    # s for a whole replay
-TAKEN_UP_GRACE = 0.5    # s for a busy state sent just after the first line to arrive
-SETTLE = 1.0              # s to let objects come to rest before judging
-SEEN_WITHIN = 0.04        # m: perception's object must be this close to the simulator's
-SETTLE_AFTER_LOAD = 0.5   # s: only clouds rendered this long after a load count, when perception has surely seen the load
+NLU_TIMEOUT = 15.0  # s for the NLU to answer an utterance
+START_TIMEOUT = 10.0  # s for the executor to take a command up (or refuse it)
+STEP_TIMEOUT = 240.0  # s for one programmed step
+REPLAY_TIMEOUT = 900.0  # s for a whole replay
+TAKEN_UP_GRACE = 0.5  # s for a busy state sent just after the first line to arrive
+SETTLE = 1.0  # s to let objects come to rest before judging
+SEEN_WITHIN = 0.04  # m: perception's object must be this close to the simulator's
+SETTLE_AFTER_LOAD = (
+    0.5  # s: only clouds rendered this long after a load count, when perception has surely seen the load
+)
 
 
 class RunError(RuntimeError):
@@ -49,7 +51,7 @@ class StepReport:
     text: str
     words: int
     expected: dict[str, Any]
-    understood: dict[str, Any] | None = None    # procedure + args with the scene's object ids, or a question
+    understood: dict[str, Any] | None = None  # procedure + args with the scene's object ids, or a question
     ok: bool = False
     problem: str = ""
     said: list[str] = field(default_factory=list)
@@ -69,7 +71,7 @@ class RunReport:
     success: Verdict = Verdict(False, "not run")
     replay: Verdict = Verdict(False, "not run")
     replay_s: float = 0.0
-    sim_rtf: float | None = None      # median real-time factor of the simulator during the run
+    sim_rtf: float | None = None  # median real-time factor of the simulator during the run
 
     @property
     def programmed(self) -> bool:
@@ -80,12 +82,22 @@ class RunReport:
         return [s.motion_latency_s for s in self.steps if s.motion_latency_s is not None]
 
     def as_dict(self) -> dict[str, Any]:
-        return {"task": self.task, "title": self.title, "style": self.style, "utterances": self.utterances,
-                "words": self.words, "programmed": self.programmed, "programming_s": round(self.programming_s, 2),
-                "success": self.success.success, "success_reason": self.success.reason,
-                "replay": self.replay.success, "replay_reason": self.replay.reason, "replay_s": round(self.replay_s, 2),
-                "sim_rtf": None if self.sim_rtf is None else round(self.sim_rtf, 2),
-                "steps": [vars(s) for s in self.steps]}
+        return {
+            "task": self.task,
+            "title": self.title,
+            "style": self.style,
+            "utterances": self.utterances,
+            "words": self.words,
+            "programmed": self.programmed,
+            "programming_s": round(self.programming_s, 2),
+            "success": self.success.success,
+            "success_reason": self.success.reason,
+            "replay": self.replay.success,
+            "replay_reason": self.replay.reason,
+            "replay_s": round(self.replay_s, 2),
+            "sim_rtf": None if self.sim_rtf is None else round(self.sim_rtf, 2),
+            "steps": [vars(s) for s in self.steps],
+        }
 
 
 class TaskRunner:
@@ -103,10 +115,14 @@ class TaskRunner:
             if not missing:
                 break
             if time.monotonic() > deadline:
-                raise RunError(f"these services are not running: {', '.join(missing)} (start them with 'hfpbd up --headless')")
+                raise RunError(
+                    f"these services are not running: {', '.join(missing)} (start them with 'hfpbd up --headless')"
+                )
             time.sleep(0.5)
         try:
-            self.watch.wait_for(lambda: self.watch.sim and self.watch.executor, 30, "the simulator's and executor's first states")
+            self.watch.wait_for(
+                lambda: self.watch.sim and self.watch.executor, 30, "the simulator's and executor's first states"
+            )
         except WaitTimeout as exc:
             raise RunError(str(exc)) from exc
 
@@ -126,11 +142,17 @@ class TaskRunner:
         placed = {o["id"]: o for o in reply["objects"]}
         loaded = time.time()
         try:
-            self.watch.wait_for(lambda: self.watch.truth_at > loaded and set(self.watch.truth) == set(placed), 30,
-                                "ground truth of the new scene")
+            self.watch.wait_for(
+                lambda: self.watch.truth_at > loaded and set(self.watch.truth) == set(placed),
+                30,
+                "ground truth of the new scene",
+            )
             try:
-                self.watch.wait_for(lambda: self.watch.objects_stamp > loaded + SETTLE_AFTER_LOAD and self._perceived(),
-                                    60, f"perception to see exactly the {len(placed)} object(s) of {scene}")
+                self.watch.wait_for(
+                    lambda: self.watch.objects_stamp > loaded + SETTLE_AFTER_LOAD and self._perceived(),
+                    60,
+                    f"perception to see exactly the {len(placed)} object(s) of {scene}",
+                )
             except WaitTimeout as exc:
                 raise WaitTimeout(f"{exc}; {self._seen_against_truth()}") from exc
             self.watch.wait_for(lambda: self._reach_covers(), 60, "the executor's reachability map of the new objects")
@@ -146,10 +168,15 @@ class TaskRunner:
 
     def _seen_against_truth(self) -> str:
         """What perception reports next to where the simulator has the objects, to tell why they disagree."""
+
         def where(position: Any) -> str:
             return "(" + ", ".join(f"{v:.2f}" for v in np.asarray(position, dtype=float)[:3]) + ")"
-        seen = [f"{o['id']} {o.get('color', '?')} {o.get('type', '?')} at {where(o['position'])}"
-                + ("" if o.get("visible", True) else " unseen") for o in self.watch.objects.values()]
+
+        seen = [
+            f"{o['id']} {o.get('color', '?')} {o.get('type', '?')} at {where(o['position'])}"
+            + ("" if o.get("visible", True) else " unseen")
+            for o in self.watch.objects.values()
+        ]
         truth = [f"{tid} at {where(t['position'])}" for tid, t in self.watch.truth.items()]
         return f"perception reports {'; '.join(seen) or 'nothing'} - the simulator has {'; '.join(truth)}"
 
@@ -165,8 +192,12 @@ class TaskRunner:
         obj = self.watch.objects.get(perceived_id)
         if obj is None or not self.watch.truth:
             return None
-        return min(self.watch.truth, key=lambda t: float(np.linalg.norm(
-            np.asarray(self.watch.truth[t]["position"]) - np.asarray(obj["position"]))))
+        return min(
+            self.watch.truth,
+            key=lambda t: float(
+                np.linalg.norm(np.asarray(self.watch.truth[t]["position"]) - np.asarray(obj["position"]))
+            ),
+        )
 
     # -- one utterance -------------------------------------------------------------------
     def say(self, utterance: Utterance, timeout: float = STEP_TIMEOUT) -> StepReport:
@@ -177,8 +208,9 @@ class TaskRunner:
         self.watch.watch_motion(sent)
         self.bus.publish(self.bus.keys.utterance, {"text": utterance.text, "source": "script"})
         try:
-            result = self.watch.wait_for(lambda: self._result_for(utterance.text, sent), NLU_TIMEOUT,
-                                         f"the NLU to understand {utterance.text!r}")
+            result = self.watch.wait_for(
+                lambda: self._result_for(utterance.text, sent), NLU_TIMEOUT, f"the NLU to understand {utterance.text!r}"
+            )
         except WaitTimeout as exc:
             step.problem = str(exc)
             return self._finish(step, sent)
@@ -191,21 +223,24 @@ class TaskRunner:
             step.problem = f"understood {step.understood} instead of {step.expected}"
         try:
             # taken up: a busy state, or a line about it (a quick command can be over before its busy state is sent)
-            self.watch.wait_for(lambda: self.watch.busy_states > busy_before or self.watch.lines_since(sent),
-                                START_TIMEOUT, f"the executor to take up {utterance.text!r}")
+            self.watch.wait_for(
+                lambda: self.watch.busy_states > busy_before or self.watch.lines_since(sent),
+                START_TIMEOUT,
+                f"the executor to take up {utterance.text!r}",
+            )
             time.sleep(TAKEN_UP_GRACE)
             self.watch.wait_for(lambda: not self.watch.busy(), timeout, f"the executor to finish {utterance.text!r}")
         except WaitTimeout as exc:
             step.problem = step.problem or str(exc)
         time.sleep(0.3)  # the last line of a step arrives just after the idle state
-        errors = [l.text for l in self.watch.lines_since(sent) if l.kind == "error"]
+        errors = [line.text for line in self.watch.lines_since(sent) if line.kind == "error"]
         if errors and not step.problem:
             step.problem = errors[0]
         step.ok = not step.problem
         return self._finish(step, sent)
 
     def _finish(self, step: StepReport, sent: float) -> StepReport:
-        step.said = [f"{l.kind}: {l.text}" for l in self.watch.lines_since(sent)]
+        step.said = [f"{line.kind}: {line.text}" for line in self.watch.lines_since(sent)]
         step.duration_s = time.time() - sent
         if self.watch.motion_at is not None:
             step.motion_latency_s = max(0.0, self.watch.motion_at - sent)

@@ -99,7 +99,14 @@ def _task(item: Any, index: int) -> Task:
     where = f"tasks[{index}]"
     if not isinstance(item, dict):
         raise ScriptError(f"{where} must be an object")
-    for key, kind in (("id", str), ("title", str), ("scene", str), ("success", dict), ("replay_seed", int), ("styles", dict)):
+    for key, kind in (
+        ("id", str),
+        ("title", str),
+        ("scene", str),
+        ("success", dict),
+        ("replay_seed", int),
+        ("styles", dict),
+    ):
         if not isinstance(item.get(key), kind):
             raise ScriptError(f"{where}.{key} must be a {kind.__name__}")
     where = f"task {item['id']}"
@@ -117,6 +124,10 @@ def _utterance(line: Any, where: str) -> Utterance:
     if not isinstance(line, dict) or not isinstance(line.get("text"), str) or not line["text"].strip():
         raise ScriptError(f"{where} needs a non-empty 'text'")
     expect = line.get("expect")
-    if not isinstance(expect, dict) or not isinstance(expect.get("procedure"), str) or not isinstance(expect.get("args", {}), dict):
+    if (
+        not isinstance(expect, dict)
+        or not isinstance(expect.get("procedure"), str)
+        or not isinstance(expect.get("args", {}), dict)
+    ):
         raise ScriptError(f"{where} needs 'expect': {{'procedure', 'args'}}")
     return Utterance(line["text"], Expected(expect["procedure"], dict(expect.get("args", {}))))

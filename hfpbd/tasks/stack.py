@@ -32,8 +32,10 @@ class LocalStack:
         child = spawn_service(name, session_argv, self.log_dir / f"{name}.log", *extra)
         self.children.append(child)
         if not self.alive.wait(name, timeout=timeout, process=child):
-            raise RuntimeError(f"the {name} service did not come up (exit code {child.exited()}); "
-                               f"its log {child.log_path} ends:\n{child.log_tail()}")
+            raise RuntimeError(
+                f"the {name} service did not come up (exit code {child.exited()}); "
+                f"its log {child.log_path} ends:\n{child.log_tail()}"
+            )
         return child
 
     def stop(self, grace: float = 8.0) -> None:

@@ -75,13 +75,21 @@ def _print_action(reply: dict[str, Any]) -> None:
 def main(argv: Sequence[str]) -> int:
     # --data-dir and --json are accepted before or after the operation word
     common = argparse.ArgumentParser(add_help=False)
-    common.add_argument("--data-dir", default=argparse.SUPPRESS,
-                        help=f"where actions are stored, in DIR/<namespace>/ (default: {default_data_dir()})")
-    common.add_argument("--namespace", "-n", default=argparse.SUPPRESS,
-                        help="whose actions: the robot's namespace (default: $HFPBD_NAMESPACE or default)")
+    common.add_argument(
+        "--data-dir",
+        default=argparse.SUPPRESS,
+        help=f"where actions are stored, in DIR/<namespace>/ (default: {default_data_dir()})",
+    )
+    common.add_argument(
+        "--namespace",
+        "-n",
+        default=argparse.SUPPRESS,
+        help="whose actions: the robot's namespace (default: $HFPBD_NAMESPACE or default)",
+    )
     common.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the reply as JSON")
-    parser = argparse.ArgumentParser(prog="hfpbd executor actions", parents=[common],
-                                     description="list, show, rename and delete programmed actions")
+    parser = argparse.ArgumentParser(
+        prog="hfpbd executor actions", parents=[common], description="list, show, rename and delete programmed actions"
+    )
     sub = parser.add_subparsers(dest="op", required=True)
     sub.add_parser("list", parents=[common], help="one line per action")
     show = sub.add_parser("show", parents=[common], help="the steps of one action")

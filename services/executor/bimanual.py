@@ -17,13 +17,13 @@ import numpy as np
 
 from services.executor.kinematics import JOINT_ACCEL, JOINT_SPEED, PREFIX, ArmKinematics, Trajectory, joint_names
 
-MIN_DURATION = 0.5     # seconds: the shortest joint motion of both arms
+MIN_DURATION = 0.5  # seconds: the shortest joint motion of both arms
 CHECKS_PER_SECOND = 40  # instants at which the two moving arms are checked against each other
 PEAK_ACCELERATION = 10.0 / np.sqrt(3.0)  # a minimum-jerk motion's peak acceleration, in travel / duration²
 
 
 def _minimum_jerk(u: np.ndarray) -> np.ndarray:
-    return u ** 3 * (10.0 - 15.0 * u + 6.0 * u ** 2)
+    return u**3 * (10.0 - 15.0 * u + 6.0 * u**2)
 
 
 def _time_share(share: np.ndarray) -> np.ndarray:
@@ -101,8 +101,9 @@ def first_clash(kins: Mapping[str, ArmKinematics], trajectories: Mapping[str, Tr
                 other = next(a for a in kins if a != arm)
                 kin.set_joints(dict(zip(joint_names(other), poses[other])))
                 for a, b in kin.collisions(poses[arm]):
-                    if (_mine(a, arm, kin) and b.startswith(f"{PREFIX[other]}_")) or \
-                            (_mine(b, arm, kin) and a.startswith(f"{PREFIX[other]}_")):
+                    if (_mine(a, arm, kin) and b.startswith(f"{PREFIX[other]}_")) or (
+                        _mine(b, arm, kin) and a.startswith(f"{PREFIX[other]}_")
+                    ):
                         return float(t)
     finally:
         for arm, kin in kins.items():

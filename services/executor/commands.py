@@ -27,9 +27,20 @@ MIN_DISTANCE, MAX_DISTANCE = contract.DISTANCE.min_m, contract.DISTANCE.max_m
 # procedure -> parameter -> allowed values (None: an object id; "int|target": action number or next/previous),
 # the required parameters of the contract's procedures; ``distance`` is optional and checked on its own
 PROCEDURES: dict[str, dict[str, tuple[Any, ...] | None | str]] = {
-    name: {p.name: (ARMS if p.kind == "arm" else None if p.kind == "object" else "int|target" if p.kind == "action"
-                    else p.domain) for p in procedure.required}
-    for name, procedure in contract.PROCEDURES.items()}
+    name: {
+        p.name: (
+            ARMS
+            if p.kind == "arm"
+            else None
+            if p.kind == "object"
+            else "int|target"
+            if p.kind == "action"
+            else p.domain
+        )
+        for p in procedure.required
+    }
+    for name, procedure in contract.PROCEDURES.items()
+}
 ADMIN = contract.ADMIN_PROCEDURES
 # steps that are kept in an action when they succeed
 RECORDED = frozenset(PROCEDURES) - ADMIN
@@ -62,8 +73,12 @@ def check_compound(message: dict[str, Any]) -> list[Step]:
     phrases = _phrases(message.get("phrases"))
     if extra:  # the utterance's verb may belong to a later step ("put" in "put the cup on the plate" is the place)
         phrases.pop("verb", None)
-    first = Step(message.get("procedure"), check(message.get("procedure"), message.get("args")), phrases,
-                 _text(message.get("text")))
+    first = Step(
+        message.get("procedure"),
+        check(message.get("procedure"), message.get("args")),
+        phrases,
+        _text(message.get("text")),
+    )
     if not isinstance(extra, list):
         raise CommandError("The further steps of a command ('then') must be a list.")
     if extra and first.procedure in ADMIN:
@@ -77,8 +92,9 @@ def check_compound(message: dict[str, Any]) -> list[Step]:
         except CommandError as exc:
             raise CommandError(f"I can't do step {number} of that: {str(exc)[:1].lower()}{str(exc)[1:]}") from exc
         if item["procedure"] in ADMIN:
-            raise CommandError(f"I can't do step {number} of that: {item['procedure'].replace('_', ' ')} "
-                               "has to be said on its own.")
+            raise CommandError(
+                f"I can't do step {number} of that: {item['procedure'].replace('_', ' ')} has to be said on its own."
+            )
         steps.append(Step(item["procedure"], args, _phrases(item.get("phrases")), _text(item.get("text"))))
     return steps
 
@@ -109,8 +125,10 @@ def check(procedure: Any, args: Any) -> dict[str, Any]:
         value = args[name]
         if name == "arm" and value == BOTH:
             if procedure not in BOTH_ARMS:
-                raise CommandError(f"I can't {_VERBS.get(procedure, procedure.replace('_', ' '))} with both hands "
-                                   "at once; tell me which hand to use.")
+                raise CommandError(
+                    f"I can't {_VERBS.get(procedure, procedure.replace('_', ' '))} with both hands "
+                    "at once; tell me which hand to use."
+                )
         elif domain is None:
             if not isinstance(value, str) or not value:
                 raise CommandError(f"The object of {procedure.replace('_', ' ')} must be an object id such as 'obj0'.")
@@ -126,9 +144,15 @@ def check(procedure: Any, args: Any) -> dict[str, Any]:
 
 
 # verbs for refusing "both" (the procedures that take one hand only)
-_VERBS = {"move_rel_dest": "move relative to an object", "move_rel_dir": "move towards or away from an object",
-          "pick_up": "pick something up", "place_abs": "put something down", "place_rel": "place something",
-          "point_to": "point", "rotate": "turn my wrists"}
+_VERBS = {
+    "move_rel_dest": "move relative to an object",
+    "move_rel_dir": "move towards or away from an object",
+    "pick_up": "pick something up",
+    "place_abs": "put something down",
+    "place_rel": "place something",
+    "point_to": "point",
+    "rotate": "turn my wrists",
+}
 
 
 def _distance(procedure: str, value: Any) -> float:
@@ -137,8 +161,10 @@ def _distance(procedure: str, value: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value:
         raise CommandError("The distance must be a number of metres.")
     if not contract.DISTANCE.allows(round(float(value), 6)):
-        raise CommandError(f"I can move {round(MIN_DISTANCE * 100)} to {round(MAX_DISTANCE * 100)} centimetres "
-                           f"at a time, not {value * 100:.0f}.")
+        raise CommandError(
+            f"I can move {round(MIN_DISTANCE * 100)} to {round(MAX_DISTANCE * 100)} centimetres "
+            f"at a time, not {value * 100:.0f}."
+        )
     return float(value)
 
 

@@ -55,8 +55,8 @@ from shared.bus import Bus, BusTimeout, RemoteError
 
 log = logging.getLogger("hfpbd.executor")
 
-REACH_POLL = 0.2         # seconds between checks whether the reach map is stale
-JOINT_CHANGE = 0.01      # rad: an arm that moved more than this invalidates the map
+REACH_POLL = 0.2  # seconds between checks whether the reach map is stale
+JOINT_CHANGE = 0.01  # rad: an arm that moved more than this invalidates the map
 RECORD_TIMEOUT = 15.0
 
 
@@ -69,17 +69,17 @@ class Executor:
         self.scene = Scene()
         self.cancel = threading.Event()
         self.robot = SimRobot(bus, self.cancel, self.scene.sim_time)
-        self.procedures = Procedures(self.scene, self.robot,
-                                     {arm: ArmKinematics(arm, cancel=self.cancel) for arm in ARMS},
-                                     self._record_objects)
+        self.procedures = Procedures(
+            self.scene, self.robot, {arm: ArmKinematics(arm, cancel=self.cancel) for arm in ARMS}, self._record_objects
+        )
         # the same IK seed table as the procedures' models: the map must say "reachable" exactly when they would
         self._reach_arms = {arm: ArmKinematics(arm) for arm in ARMS}
         self._lock = threading.Lock()
-        self._busy: str | None = None           # procedure being run by the worker
+        self._busy: str | None = None  # procedure being run by the worker
         self._executing = False
         self._progress: dict[str, int] | None = None
         self._pending: tuple[list[Step], str] | None = None
-        self._last_command: tuple[list[Step], str] | None = None   # what "repeat" runs again
+        self._last_command: tuple[list[Step], str] | None = None  # what "repeat" runs again
         self._wake = threading.Condition(self._lock)
         self._publish_lock = threading.Lock()
         self._last_arm: str | None = None
@@ -90,8 +90,10 @@ class Executor:
         self._grippers: dict[str, str] = {}
         self._closing = threading.Event()
         self._state_publisher = bus.publisher(bus.keys.executor_state, cached=True)
-        self._threads = [threading.Thread(target=self._command_loop, name="executor-commands", daemon=True),
-                         threading.Thread(target=self._reach_loop, name="executor-reach", daemon=True)]
+        self._threads = [
+            threading.Thread(target=self._command_loop, name="executor-commands", daemon=True),
+            threading.Thread(target=self._reach_loop, name="executor-reach", daemon=True),
+        ]
 
     # -- lifecycle -----------------------------------------------------------------
     def start(self) -> None:
@@ -174,7 +176,7 @@ class Executor:
             verb = "executing" if self._executing else "still busy with"
             return f"I can't undo a step while I'm {verb} {doing}; say \"stop\" first."
         doing = "an action" if self._executing else doing
-        return f"I'm still busy with {doing}; say \"stop\" to interrupt it."
+        return f'I\'m still busy with {doing}; say "stop" to interrupt it.'
 
     def _stop(self) -> str:
         with self._lock:
@@ -202,8 +204,11 @@ class Executor:
                 self._run_command(steps, utterance)
             except Exception:  # a bug must not kill the worker: say so and carry on
                 log.exception("command %s failed unexpectedly", procedure)
-                self.say(f"Something went wrong inside me while doing {procedure.replace('_', ' ')}; "
-                         "the details are in my log.", "error")
+                self.say(
+                    f"Something went wrong inside me while doing {procedure.replace('_', ' ')}; "
+                    "the details are in my log.",
+                    "error",
+                )
             finally:
                 with self._wake:
                     self._busy = None
@@ -249,8 +254,9 @@ class Executor:
             note = None
             if len(steps) > 1:
                 rest = [self._gerund(s) for s in steps[number:]]
-                note = f"That was step {number} of {len(steps)}" + \
-                    (f"; I didn't go on with {_listed(rest)}." if rest else ".")
+                note = f"That was step {number} of {len(steps)}" + (
+                    f"; I didn't go on with {_listed(rest)}." if rest else "."
+                )
             context = _context(step, utterance)
             if len(steps) > 1:
                 context["part"] = {"step": number, "of": len(steps)}
@@ -258,10 +264,11 @@ class Executor:
                 return
 
     def _gerund(self, step: Step) -> str:
-        """"placing it on the plate with your right hand": a step not taken, for a compound's failure."""
+        """ "placing it on the plate with your right hand": a step not taken, for a compound's failure."""
         snap = self.scene.snapshot()
-        text = wording.narration(step.procedure, step.args, step.phrases, lambda oid: refer(snap.objects, oid),
-                                 held="it")
+        text = wording.narration(
+            step.procedure, step.args, step.phrases, lambda oid: refer(snap.objects, oid), held="it"
+        )
         return text[:1].lower() + text[1:].rstrip(".")
 
     def _undo(self) -> None:
@@ -280,12 +287,17 @@ class Executor:
         try:
             reverse(step, self.procedures)
         except Stopped:
-            self.say(f"Stopped. I took step {len(steps)} out of action {number}, but my arms are not all the way "
-                     "back.", "info")
+            self.say(
+                f"Stopped. I took step {len(steps)} out of action {number}, but my arms are not all the way back.",
+                "info",
+            )
             return
         except StepFailed as exc:
-            self.say(f"I took step {len(steps)} out of action {number}, but I couldn't reverse it: "
-                     f"{str(exc)[:1].lower()}{str(exc)[1:]}", "error")
+            self.say(
+                f"I took step {len(steps)} out of action {number}, but I couldn't reverse it: "
+                f"{str(exc)[:1].lower()}{str(exc)[1:]}",
+                "error",
+            )
             return
         self.say(f"Took back step {len(steps)} of action {number}.", "info")
 
@@ -309,8 +321,16 @@ class Executor:
         self.say(f"Switched to action {target}.", "info")
 
     # -- one step ------------------------------------------------------------------------------
-    def _step(self, procedure: str, args: dict[str, Any], context: dict[str, Any], *, keep: bool,
-              preferred: list[float] | None = None, failure_note: str | None = None) -> bool:
+    def _step(
+        self,
+        procedure: str,
+        args: dict[str, Any],
+        context: dict[str, Any],
+        *,
+        keep: bool,
+        preferred: list[float] | None = None,
+        failure_note: str | None = None,
+    ) -> bool:
         """Narrate, run and (when ``keep``) record one procedure; False when it failed or was stopped.
 
         ``failure_note`` is added to the error sentence (which step of a
@@ -326,6 +346,7 @@ class Executor:
         def failed(text: str) -> bool:
             self.say(f"{text} {failure_note}" if failure_note else text, "error")
             return False
+
         try:
             self.procedures.precheck(procedure, args)
         except StepFailed as exc:
@@ -333,8 +354,11 @@ class Executor:
         before = before_state(snap, self.procedures) if keep and procedure in RECORDED else None
         held_words = self.procedures.held_description(args["arm"], snap) if "arm" in args else None
         if procedure != "record":
-            self.say(wording.narration(procedure, args, context.get("phrases"), lambda oid: refer(snap.objects, oid),
-                                       held=held_words))
+            self.say(
+                wording.narration(
+                    procedure, args, context.get("phrases"), lambda oid: refer(snap.objects, oid), held=held_words
+                )
+            )
         method = getattr(self.procedures, procedure)
         kwargs = dict(args)
         if preferred is not None and procedure == "move_rel_dest":
@@ -349,9 +373,16 @@ class Executor:
         if done.message:
             self.say(done.message, "info")
         if before is not None:
-            step = {"procedure": procedure, "args": args, "phrases": context.get("phrases", {}),
-                    "text": context.get("text", ""), "utterance": context.get("utterance", ""),
-                    "landmark": done.landmark, "relative_pose": done.relative_pose, "before": before}
+            step = {
+                "procedure": procedure,
+                "args": args,
+                "phrases": context.get("phrases", {}),
+                "text": context.get("text", ""),
+                "utterance": context.get("utterance", ""),
+                "landmark": done.landmark,
+                "relative_pose": done.relative_pose,
+                "before": before,
+            }
             if context.get("part"):
                 step["part"] = context["part"]
             self.store.append_step(step)
@@ -384,7 +415,7 @@ class Executor:
             self.say(f"Stopped action {number} before its first step.", "error")
             return
         snap = self.scene.snapshot()
-        matched = reground([s["landmark"] for s in steps[start - 1:] if s.get("landmark")], snap.standing_objects())
+        matched = reground([s["landmark"] for s in steps[start - 1 :] if s.get("landmark")], snap.standing_objects())
         if matched.missing:  # find every landmark before moving at all: no half-done action
             self.say(f"{next(iter(matched.missing.values()))} I can't run action {number}.", "error")
             return
@@ -405,7 +436,11 @@ class Executor:
                     self.say(matched.missing[landmark["id"]] + f" Stopped action {number} at step {i}.", "error")
                     return
                 args["object"] = found
-            context = {"phrases": step.get("phrases", {}), "text": step.get("text", ""), "utterance": step.get("utterance", "")}
+            context = {
+                "phrases": step.get("phrases", {}),
+                "text": step.get("text", ""),
+                "utterance": step.get("utterance", ""),
+            }
             preferred = step.get("relative_pose") if step["procedure"] == "move_rel_dest" else None
             if not self._step(step["procedure"], args, context, keep=False, preferred=preferred):
                 if not self.cancel.is_set():
@@ -536,6 +571,5 @@ def _context(step: Step, utterance: str) -> dict[str, Any]:
 
 
 def _listed(words: list[str]) -> str:
-    """"a", "a and b", "a, b and c"."""
+    """ "a", "a and b", "a, b and c"."""
     return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} and {words[-1]}"
-

@@ -33,19 +33,22 @@ POINT_DISTANCE = 0.14
 RELEASE_CLEARANCE = 0.015  # a placed object's bottom is released this far above its support
 PLACE_SHIFT = 0.02  # metres a release point may move off the exact one when that is out of reach
 DOWN_RINGS = (0.04, 0.08, 0.12)  # metres: "put it down" may move the object this far when right below is taken
-TOP_MARGIN = 0.01   # a held object released on a top stays this far inside its edges
+TOP_MARGIN = 0.01  # a held object released on a top stays this far inside its edges
 ROTATE_STEP = 1.6  # rad, the paper's wrist-roll increment
 MAX_GRIP_WIDTH = 0.085  # widest object the open gripper can close around, with margin
 SIDE_GRASP_HEIGHT = 0.7  # share of an object's height at which a side grasp squeezes it
 SIDE_GRASP_PITCH = 0.35  # rad: the tilted-down variant of each side grasp
-ANGLED_PITCH = 0.8       # rad: the angled grasps, between a side grasp and a top-down one
-AROUND_YAWS = (0.8, -0.8, 1.4, -1.4)   # rad off the robot's direction: side grasps from around the object
+ANGLED_PITCH = 0.8  # rad: the angled grasps, between a side grasp and a top-down one
+AROUND_YAWS = (0.8, -0.8, 1.4, -1.4)  # rad off the robot's direction: side grasps from around the object
 
 RELATIONS = ("above", "next_to", "left_of", "right_of", "in_front_of", "behind", "on_top_of", "near")
 DIRECTIONS = {
-    "up": (0.0, 0.0, 1.0), "down": (0.0, 0.0, -1.0),
-    "left": (0.0, 1.0, 0.0), "right": (0.0, -1.0, 0.0),
-    "forward": (1.0, 0.0, 0.0), "backward": (-1.0, 0.0, 0.0),
+    "up": (0.0, 0.0, 1.0),
+    "down": (0.0, 0.0, -1.0),
+    "left": (0.0, 1.0, 0.0),
+    "right": (0.0, -1.0, 0.0),
+    "forward": (1.0, 0.0, 0.0),
+    "backward": (-1.0, 0.0, 0.0),
 }
 # Relations that are unions of others, tried in this order.
 COMPOSITE = {"next_to": ("left_of", "right_of"), "near": ("left_of", "right_of", "in_front_of", "behind")}
@@ -78,6 +81,7 @@ class Box:
 
 
 # -- orientation helpers -------------------------------------------------------
+
 
 def quat_wxyz(rotation: Rotation) -> np.ndarray:
     x, y, z, w = rotation.as_quat()
@@ -124,6 +128,7 @@ def tilted(approach: np.ndarray, towards: np.ndarray, angle: float) -> np.ndarra
 
 
 # -- relative destinations -----------------------------------------------------
+
 
 def _side_point(box: Box, relation: str, clearance: float) -> tuple[np.ndarray, np.ndarray]:
     """Target point and the gripper's approach direction (towards the landmark) for a side relation."""
@@ -186,6 +191,7 @@ def relation_candidates(relation: str, box: Box) -> list[np.ndarray]:
 
 # -- placing a held object -------------------------------------------------------
 
+
 def placement_centers(relation: str, landmark: Box, held_size: np.ndarray, table_z: float) -> list[np.ndarray]:
     """Where the held object's centre may be released for ``relation`` of ``landmark``, best first.
 
@@ -203,16 +209,16 @@ def placement_centers(relation: str, landmark: Box, held_size: np.ndarray, table
     if relation in ("above", "on_top_of"):
         extra = ABOVE if relation == "above" else RELEASE_CLEARANCE
         z = landmark.top + extra + half[2]
-        room = lh[:2] - half[:2] - TOP_MARGIN   # how far the centre may move with the object still on the top
+        room = lh[:2] - half[:2] - TOP_MARGIN  # how far the centre may move with the object still on the top
         points = [c[:2]]
-        for axis, sign in ((0, -1.0), (1, 1.0), (1, -1.0), (0, 1.0)):   # towards the robot first
+        for axis, sign in ((0, -1.0), (1, 1.0), (1, -1.0), (0, 1.0)):  # towards the robot first
             if room[axis] >= PLACE_SHIFT:
                 offset = np.zeros(2)
                 offset[axis] = sign * min(room[axis], 2 * PLACE_SHIFT)
                 points.append(c[:2] + offset)
         return [np.array([p[0], p[1], z]) for p in points]
     z = table_z + RELEASE_CLEARANCE + half[2]
-    sides = {   # (offset from the landmark's centre, outward unit, unit along the side)
+    sides = {  # (offset from the landmark's centre, outward unit, unit along the side)
         "left_of": ([0.0, lh[1] + GAP + half[1], 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]),
         "right_of": ([0.0, -lh[1] - GAP - half[1], 0.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]),
         "in_front_of": ([-lh[0] - GAP - half[0], 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
@@ -235,8 +241,9 @@ def carry_pose(tool_pose: np.ndarray, held_center: np.ndarray, new_center: np.nd
     return carry_poses(tool_pose, held_center, [new_center], (yaw,))[0]
 
 
-def carry_poses(tool_pose: np.ndarray, held_center: np.ndarray, centers: list[np.ndarray],
-                yaws: tuple[float, ...]) -> list[np.ndarray]:
+def carry_poses(
+    tool_pose: np.ndarray, held_center: np.ndarray, centers: list[np.ndarray], yaws: tuple[float, ...]
+) -> list[np.ndarray]:
     """:func:`carry_pose` for every centre at every heading (centre-major), computed in one go.
 
     The reach map asks for these for every object and relation, so the
@@ -270,6 +277,7 @@ def table_release_centers(held_center: np.ndarray, held_size: np.ndarray, table_
 
 
 # -- directions, pointing, grasping ---------------------------------------------
+
 
 def shifted(pose: np.ndarray, offset: np.ndarray) -> np.ndarray:
     out = np.array(pose, float)
@@ -326,8 +334,9 @@ class Grasp:
     lift: np.ndarray
 
 
-def grasp_candidates(box: Box, *, round_shape: bool = False, approach_distance: float = 0.10,
-                     lift_height: float = 0.12) -> list[Grasp]:
+def grasp_candidates(
+    box: Box, *, round_shape: bool = False, approach_distance: float = 0.10, lift_height: float = 0.12
+) -> list[Grasp]:
     """Grasps for an upright object: from the side facing the robot, then top-down.
 
     A side grasp squeezes the object at 70 % of its height (high enough that
@@ -347,8 +356,13 @@ def grasp_candidates(box: Box, *, round_shape: bool = False, approach_distance: 
     # then around the object (an object behind another is reached from its side), and steeper, over what
     # stands in front of it: tried only when all of the above fail
     around = [Rotation.from_euler("z", a).apply(outward) for a in AROUND_YAWS]
-    for pitch, headings in ((0.0, directions), (SIDE_GRASP_PITCH, directions), (0.0, around),
-                            (SIDE_GRASP_PITCH, around), (ANGLED_PITCH, directions + around)):
+    for pitch, headings in (
+        (0.0, directions),
+        (SIDE_GRASP_PITCH, directions),
+        (0.0, around),
+        (SIDE_GRASP_PITCH, around),
+        (ANGLED_PITCH, directions + around),
+    ):
         for direction in headings:
             if _across(box, direction, round_shape) > MAX_GRIP_WIDTH:
                 continue

@@ -19,19 +19,23 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 SIZE_TOLERANCE = 0.35  # relative size difference per axis still accepted as "the same object"
-SIZE_SLACK = 0.02      # metres: perception noise on small objects
+SIZE_SLACK = 0.02  # metres: perception noise on small objects
 REJECT = 1e6
 
 
 def descriptor(obj: dict[str, Any]) -> dict[str, Any]:
     """What a step keeps of a landmark object."""
-    return {"id": obj["id"], "color": obj.get("color", "unknown"), "type": obj.get("type", "unknown"),
-            "size": [round(float(v), 4) for v in obj["size"]],
-            "position": [round(float(v), 4) for v in obj["position"]]}
+    return {
+        "id": obj["id"],
+        "color": obj.get("color", "unknown"),
+        "type": obj.get("type", "unknown"),
+        "size": [round(float(v), 4) for v in obj["size"]],
+        "position": [round(float(v), 4) for v in obj["position"]],
+    }
 
 
 def describe_kind(desc: dict[str, Any]) -> str:
-    """"red cup", "blue object", "box" — the words for a descriptor, for messages."""
+    """ "red cup", "blue object", "box" — the words for a descriptor, for messages."""
     color = desc.get("color", "unknown")
     kind = desc.get("type", "unknown")
     noun = kind if kind != "unknown" else "object"
@@ -80,7 +84,9 @@ def reground(descriptors: list[dict[str, Any]], objects: list[dict[str, Any]]) -
     if not ids:
         return Regrounding({}, {})
     if not objects:
-        return Regrounding({}, {i: f"I can't see any objects, so I can't find the {describe_kind(unique[i])}." for i in ids})
+        return Regrounding(
+            {}, {i: f"I can't see any objects, so I can't find the {describe_kind(unique[i])}." for i in ids}
+        )
     table = np.array([[cost(unique[i], obj) for obj in objects] for i in ids])
     rows, cols = linear_sum_assignment(table)
     mapping: dict[str, str] = {}

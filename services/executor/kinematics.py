@@ -49,9 +49,9 @@ URDF = ROBOT.urdf_path
 SRDF = ROBOT.srdf_path
 SEED_COUNT = 24000
 NEIGHBOURS = 5
-APPROACH_WEIGHT, FINGER_WEIGHT = 0.2, 0.1   # metres per unit axis difference in the seed index
+APPROACH_WEIGHT, FINGER_WEIGHT = 0.2, 0.1  # metres per unit axis difference in the seed index
 IK_ITERATIONS = 25  # Newton steps per start: a start that converges does so in about ten
-ARM_REACH = 1.0     # metres from the shoulder pan axis to the farthest tool position (0.1 + 0.4 + 0.321 + 0.18)
+ARM_REACH = 1.0  # metres from the shoulder pan axis to the farthest tool position (0.1 + 0.4 + 0.321 + 0.18)
 # Joint speed and acceleration limits for time parameterisation: moves take
 # time in proportion to how far the joints travel (about 0.5 m/s at the hand).
 JOINT_SPEED = 1.0
@@ -62,17 +62,17 @@ TABLE_PADDING = 0.005
 # two tries, as the C++ planner cannot be interrupted inside one.
 PLANNING_SLICE = 1.0
 PLANNING_TRIES = 7
-CARTESIAN_STEP = 0.01   # metres: straight-line moves are interpolated every centimetre
-VIA_LIFT = 0.10        # metres the hand is lifted before a joint-space line when the direct ones are blocked
+CARTESIAN_STEP = 0.01  # metres: straight-line moves are interpolated every centimetre
+VIA_LIFT = 0.10  # metres the hand is lifted before a joint-space line when the direct ones are blocked
 JOINT_RESOLUTION = 0.05  # rad between checked waypoints of a planned path
-ROLL_JOINTS = (4, 6)     # forearm and wrist roll: sampled over one turn only
+ROLL_JOINTS = (4, 6)  # forearm and wrist roll: sampled over one turn only
 HELD_PREFIX = "held:"
 CONTACT_STEP = 0.0025  # metres between checked poses of a contact move (how exactly its end is found)
-PRESS_DEPTH = 0.02     # a press is planned this far past the touched object's perceived surface
-MIN_PRESS = 0.003      # ... and must get at least this far past it to count as pressing
-MIN_LEAD = 0.01        # metres of a press's approach worth travelling while the fingers still close
-STEER_NUDGE = 0.1      # rad the elbow is swung to look for solutions with more room to the joint limits
-STEER_JUMP = 0.15      # rad: the most any joint may move between two poses of a contact move
+PRESS_DEPTH = 0.02  # a press is planned this far past the touched object's perceived surface
+MIN_PRESS = 0.003  # ... and must get at least this far past it to count as pressing
+MIN_LEAD = 0.01  # metres of a press's approach worth travelling while the fingers still close
+STEER_NUDGE = 0.1  # rad the elbow is swung to look for solutions with more room to the joint limits
+STEER_JUMP = 0.15  # rad: the most any joint may move between two poses of a contact move
 READY = "untucked"  # the ready posture: the arm bent in front of the body, above the table's near edge
 joint_names = ROBOT.arm_joint_names
 tool_frame = ROBOT.tool_frame
@@ -125,7 +125,7 @@ def _nudged(arm_q: np.ndarray) -> list[np.ndarray]:
 
 
 def _part_name(link_or_object: str) -> str:
-    """"r_forearm_link" -> "right arm", "torso_lift_link" -> "body", obstacles keep their name."""
+    """ "r_forearm_link" -> "right arm", "torso_lift_link" -> "body", obstacles keep their name."""
     for arm, prefix in PREFIX.items():
         if link_or_object.startswith(f"{prefix}_"):
             return f"{arm} arm"
@@ -145,13 +145,25 @@ def _features(position: np.ndarray, approach: np.ndarray, fingers: np.ndarray) -
 class ArmKinematics:
     """IK, collision checks and planning for one arm. Not thread-safe: one instance per thread."""
 
-    def __init__(self, arm: str, *, urdf: Path = URDF, srdf: Path = SRDF, seeds: int = SEED_COUNT,
-                 rng_seed: int = 0, cancel: threading.Event | None = None) -> None:
+    def __init__(
+        self,
+        arm: str,
+        *,
+        urdf: Path = URDF,
+        srdf: Path = SRDF,
+        seeds: int = SEED_COUNT,
+        rng_seed: int = 0,
+        cancel: threading.Event | None = None,
+    ) -> None:
         self.arm = arm
         self._cancel = cancel
-        self.planner = mplib.Planner(urdf=str(urdf), srdf=str(srdf), move_group=tool_frame(arm),
-                                     joint_vel_limits=np.full(8, JOINT_SPEED),
-                                     joint_acc_limits=np.full(8, JOINT_ACCEL))
+        self.planner = mplib.Planner(
+            urdf=str(urdf),
+            srdf=str(srdf),
+            move_group=tool_frame(arm),
+            joint_vel_limits=np.full(8, JOINT_SPEED),
+            joint_acc_limits=np.full(8, JOINT_ACCEL),
+        )
         self.model = self.planner.pinocchio_model
         self.names = list(self.planner.user_joint_names)
         self.index = {name: i for i, name in enumerate(self.names)}
@@ -273,8 +285,14 @@ class ArmKinematics:
             world.remove_object(name)
         self._obstacles.discard(name)
         relative = _to_pose(tool_pose).inv() * Pose(box.center, [1, 0, 0, 0])
-        world.attach_object(HELD_PREFIX + name, fcl.Box(np.maximum(box.size, 1e-3)), self.planner.robot.get_name(),
-                            self.link, relative, self._gripper_links)
+        world.attach_object(
+            HELD_PREFIX + name,
+            fcl.Box(np.maximum(box.size, 1e-3)),
+            self.planner.robot.get_name(),
+            self.link,
+            relative,
+            self._gripper_links,
+        )
         self.held = name
 
     @property
@@ -299,8 +317,14 @@ class ArmKinematics:
         return bool(np.all(arm_q >= lim[:, 0] - 1e-6) and np.all(arm_q <= lim[:, 1] + 1e-6))
 
     # -- inverse kinematics ---------------------------------------------------------
-    def ik(self, pose: np.ndarray, *, seeds: list[np.ndarray] | None = None, check_collisions: bool = True,
-           neighbours: int = NEIGHBOURS) -> np.ndarray | None:
+    def ik(
+        self,
+        pose: np.ndarray,
+        *,
+        seeds: list[np.ndarray] | None = None,
+        check_collisions: bool = True,
+        neighbours: int = NEIGHBOURS,
+    ) -> np.ndarray | None:
         """Arm joints putting the tool frame at ``pose``, or None.
 
         Tries the given seeds, then the current joints, then the nearest
@@ -314,8 +338,9 @@ class ArmKinematics:
         goal = _to_pose(pose)
         starts = list(seeds or []) + [self.arm_q] + self._seeds_for(pose, neighbours)
         for start in starts:
-            q, ok, _ = self.model.compute_IK_CLIK(self.link, goal, self.full(start), self._ik_mask,
-                                                  eps=1e-4, max_iter=IK_ITERATIONS, dt=1.0)
+            q, ok, _ = self.model.compute_IK_CLIK(
+                self.link, goal, self.full(start), self._ik_mask, eps=1e-4, max_iter=IK_ITERATIONS, dt=1.0
+            )
             if not ok:
                 continue
             arm_q = self._wrapped(q[self.arm_idx])
@@ -433,10 +458,18 @@ class ArmKinematics:
         box this hand is about to press too).
         """
         mine = (f"{PREFIX[self.arm]}_", HELD_PREFIX)
-        touched = sorted({name for pair in self.collisions(self.arm_q) if any(n.startswith(mine) for n in pair)
-                          for name in pair if name in self._obstacles} - {"table"})
+        touched = sorted(
+            {
+                name
+                for pair in self.collisions(self.arm_q)
+                if any(n.startswith(mine) for n in pair)
+                for name in pair
+                if name in self._obstacles
+            }
+            - {"table"}
+        )
         acm = self.planner.planning_world.get_allowed_collision_matrix()
-        leaving = self._robot_links + ([self.held_body] if self.held_body else [])   # what it holds may leave too
+        leaving = self._robot_links + ([self.held_body] if self.held_body else [])  # what it holds may leave too
         for name in touched:
             acm.set_entry(name, leaving, True)
         try:
@@ -461,7 +494,7 @@ class ArmKinematics:
         for i, q in enumerate(up[1:], start=1):
             hits = set(self.collisions(q))
             if not hits:
-                return np.asarray(up[:i + 1])
+                return np.asarray(up[: i + 1])
             if not hits <= at_start:
                 return None
         return None
@@ -482,7 +515,7 @@ class ArmKinematics:
         """
         with self._tolerating_start_contacts():
             lift = self._out_of_contact() if self.collisions(self.arm_q) else None
-        if lift is not None:   # planned from where the lift ends, the start's contacts no longer allowed
+        if lift is not None:  # planned from where the lift ends, the start's contacts no longer allowed
             with self.posed(lift[-1]):
                 rest = self.plan_to(arm_q)
             return None if rest is None else self.timed(np.vstack([lift, rest.points[1:]]))
@@ -504,9 +537,14 @@ class ArmKinematics:
                 # OMPL checks edges at a resolution relative to the whole joint space (coarse, with the
                 # rolls' two turns), so its raw RRT path (short edges) is taken and shortcut here with
                 # dense checks instead of OMPL's own simplification.
-                status, path = self.planner.planner.plan(start[self.group_idx], [self.full(arm_q)[self.group_idx]],
-                                                         time=PLANNING_SLICE, range=JOINT_RESOLUTION, fixed_joints=fixed,
-                                                         simplify=False)
+                status, path = self.planner.planner.plan(
+                    start[self.group_idx],
+                    [self.full(arm_q)[self.group_idx]],
+                    time=PLANNING_SLICE,
+                    range=JOINT_RESOLUTION,
+                    fixed_joints=fixed,
+                    simplify=False,
+                )
                 if status != "Exact solution":
                     log.info("%s arm: no collision-free path in %.1f s (%s)", self.arm, PLANNING_SLICE, status)
                     continue
@@ -525,8 +563,11 @@ class ArmKinematics:
         back from the side) are solved this way at once; the random planner
         is left for the cluttered cases.
         """
-        ready = np.clip(np.asarray(ROBOT.arm_pose(READY, self.arm), float),
-                        self.limits[self.arm_idx, 0], self.limits[self.arm_idx, 1])
+        ready = np.clip(
+            np.asarray(ROBOT.arm_pose(READY, self.arm), float),
+            self.limits[self.arm_idx, 0],
+            self.limits[self.arm_idx, 1],
+        )
         if self.collisions(ready):
             return None
         first = self._joint_line(self.arm_q, ready)
@@ -613,8 +654,9 @@ class ArmKinematics:
                 return None
         return path
 
-    def _cartesian_path(self, pose: np.ndarray, resolution: float = CARTESIAN_STEP,
-                        steer: bool = False) -> list[np.ndarray] | None:
+    def _cartesian_path(
+        self, pose: np.ndarray, resolution: float = CARTESIAN_STEP, steer: bool = False
+    ) -> list[np.ndarray] | None:
         """Joint waypoints moving the tool in a straight line to ``pose``, ``resolution`` metres apart (no checks).
 
         ``steer``: at each waypoint prefer, among nearby solutions, the one
@@ -637,14 +679,19 @@ class ArmKinematics:
             if q is not None:
                 q = self._turned_towards(q, path[-1])
             if q is None or np.max(np.abs(q - path[-1])) > 0.5:
-                log.info("%s arm: no smooth IK along the line at %s (%s)", self.arm, waypoint.round(3),
-                         "no solution" if q is None else f"jump {np.max(np.abs(q - path[-1])):.2f} rad")
+                log.info(
+                    "%s arm: no smooth IK along the line at %s (%s)",
+                    self.arm,
+                    waypoint.round(3),
+                    "no solution" if q is None else f"jump {np.max(np.abs(q - path[-1])):.2f} rad",
+                )
                 return None
             path.append(q)
         return path
 
-    def straight_line(self, pose: np.ndarray, *, check_collisions: bool = True,
-                      ignore: tuple[str, ...] = (), steer: bool = False) -> Trajectory | None:
+    def straight_line(
+        self, pose: np.ndarray, *, check_collisions: bool = True, ignore: tuple[str, ...] = (), steer: bool = False
+    ) -> Trajectory | None:
         """Move the tool in a straight line to ``pose`` (approach, descend, lift), orientation interpolated.
 
         Collisions with obstacles in ``ignore`` (the object being grasped)
@@ -653,8 +700,9 @@ class ArmKinematics:
         path = self.line_path(pose, check_collisions=check_collisions, ignore=ignore, steer=steer)
         return None if path is None else self.timed(path)
 
-    def line_path(self, pose: np.ndarray, *, check_collisions: bool = True,
-                  ignore: tuple[str, ...] = (), steer: bool = False) -> np.ndarray | None:
+    def line_path(
+        self, pose: np.ndarray, *, check_collisions: bool = True, ignore: tuple[str, ...] = (), steer: bool = False
+    ) -> np.ndarray | None:
         """The joint path of :meth:`straight_line`, untimed: for checking a line clear before moving at all."""
         path = self._cartesian_path(pose, steer=steer)
         if path is None:
@@ -723,8 +771,8 @@ class ArmKinematics:
         if not touched or end == 0:
             return None
         if not pressing and travelled < OBJECT_PADDING + MIN_PRESS:
-            return None   # blocked before the fingers would even reach the object's surface
-        return ContactMove(np.asarray(path[:end + 1]), touched, lead)
+            return None  # blocked before the fingers would even reach the object's surface
+        return ContactMove(np.asarray(path[: end + 1]), touched, lead)
 
     def free_lead(self, move: ContactMove) -> np.ndarray | None:
         """The start of ``move`` that is clear with the gripper as the model has it now (None: too short to bother).
@@ -735,7 +783,7 @@ class ArmKinematics:
         """
         clear = 1
         with self._tolerating_start_contacts():
-            for q in move.path[1:move.lead]:
+            for q in move.path[1 : move.lead]:
                 if self._own_collisions(q):
                     break
                 clear += 1

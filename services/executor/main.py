@@ -11,15 +11,21 @@ from services.executor.store import ActionStore, StoreError, default_data_dir, h
 from shared.bus import Bus
 from shared.service import run_service, wait_until_stopped
 
-DESCRIPTION = ("Carries out commands on the simulated PR2, publishes what is possible (reachability, "
-               "gripper states), and records and replays programmed actions.")
+DESCRIPTION = (
+    "Carries out commands on the simulated PR2, publishes what is possible (reachability, "
+    "gripper states), and records and replays programmed actions."
+)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("executor")
-    group.add_argument("--data-dir", default=None, metavar="DIR",
-                       help="where programmed actions are kept, in DIR/<namespace>/ "
-                            f"(default: $HFPBD_DATA_DIR or {default_data_dir()})")
+    group.add_argument(
+        "--data-dir",
+        default=None,
+        metavar="DIR",
+        help="where programmed actions are kept, in DIR/<namespace>/ "
+        f"(default: $HFPBD_DATA_DIR or {default_data_dir()})",
+    )
 
 
 def body(bus: Bus, args: argparse.Namespace, stop: threading.Event) -> None:
@@ -45,5 +51,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
     if args and args[0] == "actions":
         from services.executor.actions_cli import main as actions_main
+
         return actions_main(args[1:])
     return run_service("executor", DESCRIPTION, body, args, add_arguments)

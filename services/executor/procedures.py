@@ -50,13 +50,13 @@ log = logging.getLogger("hfpbd.executor.procedures")
 OPEN_WIDTH = ROBOT.gripper.open_width
 CLOSE_WIDTH = 0.0
 GRIP_FORCE = ROBOT.gripper.default_effort
-RETREAT = 0.08          # after releasing, the hand backs off this far
-STATE_WAIT = 1.0        # seconds to wait for a robot state newer than a finished motion
-PLACE_PLANS = 3         # release candidates a placement may fail to plan a path to before it gives up
-PICK_ATTEMPTS = 3       # grasps tried in turn (an approach found blocked on arrival counts as one)
-FLAT_MARGIN = 0.01      # metres: how far a "flat" object's top may reach above a released object's bottom
-PRESS_KEPT = 0.03       # metres between the measured and the commanded tool position of a hand still pressing
-AWAY = -0.5             # cosine between a move and the press direction below which the move leaves the object
+RETREAT = 0.08  # after releasing, the hand backs off this far
+STATE_WAIT = 1.0  # seconds to wait for a robot state newer than a finished motion
+PLACE_PLANS = 3  # release candidates a placement may fail to plan a path to before it gives up
+PICK_ATTEMPTS = 3  # grasps tried in turn (an approach found blocked on arrival counts as one)
+FLAT_MARGIN = 0.01  # metres: how far a "flat" object's top may reach above a released object's bottom
+PRESS_KEPT = 0.03  # metres between the measured and the commanded tool position of a hand still pressing
+AWAY = -0.5  # cosine between a move and the press direction below which the move leaves the object
 
 
 @dataclass(frozen=True)
@@ -93,8 +93,13 @@ class Done:
 class Procedures:
     """Runs p1–p13. Called from the one command worker thread (never concurrently)."""
 
-    def __init__(self, scene: Scene, robot: SimRobot, arms: dict[str, ArmKinematics],
-                 record_objects: Callable[[], list[dict[str, Any]]]) -> None:
+    def __init__(
+        self,
+        scene: Scene,
+        robot: SimRobot,
+        arms: dict[str, ArmKinematics],
+        record_objects: Callable[[], list[dict[str, Any]]],
+    ) -> None:
         self.scene = scene
         self.robot = robot
         self.arms = arms
@@ -143,16 +148,21 @@ class Procedures:
                 what = refer(snap.objects, held[arm].object_id) if held[arm] else "something"
                 raise StepFailed(wording.sentence(f"My {arm} hand is already holding {what}"))
             other = "left" if arm == "right" else "right"
-            if (held[other] is not None and held[other].object_id == object_id) or \
-                    snap.objects[object_id].get("held_by") == other:
+            if (held[other] is not None and held[other].object_id == object_id) or snap.objects[object_id].get(
+                "held_by"
+            ) == other:
                 raise StepFailed(wording.sentence(f"My {other} hand is holding {refer(snap.objects, object_id)}"))
         elif procedure == "open" and gripper == "open":
             raise StepFailed(wording.sentence(f"My {arm} hand is already open"))
         elif procedure == "close" and gripper != "open":
-            raise StepFailed(wording.sentence(f"My {arm} hand is already closed" +
-                                              (" on something" if gripper == "holding" else "")))
-        elif procedure in ("move_rel_dest", "move_rel_dir", "point_to") and held[arm] is not None \
-                and held[arm].object_id == object_id:
+            raise StepFailed(
+                wording.sentence(f"My {arm} hand is already closed" + (" on something" if gripper == "holding" else ""))
+            )
+        elif (
+            procedure in ("move_rel_dest", "move_rel_dir", "point_to")
+            and held[arm] is not None
+            and held[arm].object_id == object_id
+        ):
             raise StepFailed(wording.sentence(f"I'm holding {refer(snap.objects, object_id)} in my {arm} hand"))
 
     def _precheck_both(self, procedure: str, snap: SceneSnapshot) -> None:
@@ -170,8 +180,11 @@ class Procedures:
             if snap.gripper_state(hand) == "holding":
                 held = self.held().get(hand)
                 what = refer(snap.objects, held.object_id) if held else "something"
-                raise StepFailed(wording.sentence(f"My {hand} hand is holding {what}, so I won't {verb} both hands; "
-                                                  f"tell me which hand to {verb}"))
+                raise StepFailed(
+                    wording.sentence(
+                        f"My {hand} hand is holding {what}, so I won't {verb} both hands; tell me which hand to {verb}"
+                    )
+                )
         if not self._grippers_to_change(procedure, snap):
             raise StepFailed(f"Both my hands are already {'open' if procedure == 'open' else 'closed'}.")
 
@@ -239,14 +252,18 @@ class Procedures:
                 self._press[arm] = None
         version = self.scene.snapshot().robot_version
         try:
-            started = self.robot.start_together({
-                arm: partial(self.robot.start_arm, arm, trajectories[arm].points, trajectories[arm].times, contact)
-                for arm, (_, contact) in paths.items()})
+            started = self.robot.start_together(
+                {
+                    arm: partial(self.robot.start_arm, arm, trajectories[arm].points, trajectories[arm].times, contact)
+                    for arm, (_, contact) in paths.items()
+                }
+            )
             outcomes = {arm: self.robot.finish(motion) for arm, motion in started.items()}
         except MotionError as exc:
             raise StepFailed(wording.sentence(f"My arms could not move: {exc}")) from exc
-        blocked = [f"my {arm} arm was blocked: {o.message or o.status}"
-                   for arm, o in outcomes.items() if o.status != "done"]
+        blocked = [
+            f"my {arm} arm was blocked: {o.message or o.status}" for arm, o in outcomes.items() if o.status != "done"
+        ]
         if blocked:
             raise StepFailed(wording.sentence("; ".join(blocked)))
         self.scene.wait_robot(version, STATE_WAIT)
@@ -261,8 +278,9 @@ class Procedures:
             return
         version = self.scene.snapshot().robot_version
         try:
-            started = self.robot.start_together({arm: partial(self.robot.start_gripper, arm, width, GRIP_FORCE)
-                                                 for arm in arms})
+            started = self.robot.start_together(
+                {arm: partial(self.robot.start_gripper, arm, width, GRIP_FORCE) for arm in arms}
+            )
             for motion in started.values():
                 self.robot.finish(motion)
         except MotionError as exc:
@@ -316,7 +334,9 @@ class Procedures:
             return Done()
         kin, _ = self._ready(arm)
         goal = np.asarray(ROBOT.arm_pose("side", arm), float)
-        self._go(arm, self._plan(kin, goal, wording.sentence(f"I can't find a clear path to move my {arm} hand to the side")))
+        self._go(
+            arm, self._plan(kin, goal, wording.sentence(f"I can't find a clear path to move my {arm} hand to the side"))
+        )
         return Done()
 
     def return_to(self, joints: dict[str, Any], where: str = "back") -> None:
@@ -348,9 +368,19 @@ class Procedures:
             poses = [np.concatenate([box.center + preferred[:3], preferred[3:7]])] + poses
         found = kin.first_reachable(poses)
         if found is None:
-            raise StepFailed(self._unreachable(kin, snap, poses, wording.cannot_reach(arm, relation, refer(snap.objects, object))))
-        self._go(arm, self._plan(kin, found[1], wording.sentence(
-            f"I can't find a clear path for my {arm} hand to {wording.RELATION_WORDS[relation]} {refer(snap.objects, object)}")))
+            raise StepFailed(
+                self._unreachable(kin, snap, poses, wording.cannot_reach(arm, relation, refer(snap.objects, object)))
+            )
+        self._go(
+            arm,
+            self._plan(
+                kin,
+                found[1],
+                wording.sentence(
+                    f"I can't find a clear path for my {arm} hand to {wording.RELATION_WORDS[relation]} {refer(snap.objects, object)}"
+                ),
+            ),
+        )
         kin.set_joints(self._snapshot().joints())
         return Done(landmark=self._landmark(obj), relative_pose=self._relative(kin, box))
 
@@ -360,8 +390,10 @@ class Procedures:
         log.info("%s: blocked by %s", sentence, blockers)
         if not blockers:
             return sentence
-        names = sorted(refer(snap.objects, b) if b in snap.objects else ("the table" if b == "table" else f"my {b}")
-                       for b in blockers)
+        names = sorted(
+            refer(snap.objects, b) if b in snap.objects else ("the table" if b == "table" else f"my {b}")
+            for b in blockers
+        )
         verb = "is" if len(names) == 1 else "are"
         return f"{sentence[:-1]}: {' and '.join(names)} {verb} in the way."
 
@@ -380,7 +412,7 @@ class Procedures:
         goal = geo.direction_target(kin.fk(), direction, distance)
         words = wording.DIRECTION_WORDS[direction]
         why = wording.sentence(f"I can't move my {arm} hand {words} any further")
-        if leaving and press is None:   # off the object it pressed: a plain move
+        if leaving and press is None:  # off the object it pressed: a plain move
             self._go(arm, self._line(kin, goal, why))
             return Done()
         self._move_line(arm, kin, goal, unit, press, why)
@@ -461,8 +493,9 @@ class Procedures:
         kin.set_arm(press.arm_q)
         return press
 
-    def _move_line(self, arm: str, kin: ArmKinematics, goal: np.ndarray, unit: np.ndarray, press: Press | None,
-                   why: str) -> None:
+    def _move_line(
+        self, arm: str, kin: ArmKinematics, goal: np.ndarray, unit: np.ndarray, press: Press | None, why: str
+    ) -> None:
         """A straight move to ``goal``; where an object is in the way, a press against it."""
         if press is None and not kin.gripper_touching():
             trajectory = kin.straight_line(goal)
@@ -509,8 +542,14 @@ class Procedures:
         words = refer(snap.objects, object)
         if goal is None:
             raise StepFailed(wording.sentence(f"My {arm} hand is already as close to {words} as it can get"))
-        self._go(arm, self._line(kin, goal, wording.sentence(
-            f"I can't move my {arm} hand {wording.RELATION_WORDS[direction]} {words} any further")))
+        self._go(
+            arm,
+            self._line(
+                kin,
+                goal,
+                wording.sentence(f"I can't move my {arm} hand {wording.RELATION_WORDS[direction]} {words} any further"),
+            ),
+        )
         kin.set_joints(self._snapshot().joints())
         return Done(landmark=self._landmark(obj), relative_pose=self._relative(kin, box))
 
@@ -528,11 +567,15 @@ class Procedures:
             box = Box.of(obj)
             if thin_and_wide(box) and overhang(box, self._snapshot().near_edge) < targets.MIN_OVERHANG:
                 raise StepFailed(wording.sentence(f"{words} is too wide to grasp; push it over the table edge first"))
-            raise StepFailed(self._out_of_reach(arm, kin, obj, words) or wording.cannot_pick(
-                arm, words, self._in_the_way(kin, snap, obj) or "I can't reach around it"))
+            raise StepFailed(
+                self._out_of_reach(arm, kin, obj, words)
+                or wording.cannot_pick(arm, words, self._in_the_way(kin, snap, obj) or "I can't reach around it")
+            )
         reason = "it slipped out of my fingers"
         for attempt, (grasp, pre_q) in enumerate(itertools.islice(itertools.chain([first], plans), PICK_ATTEMPTS)):
-            self._open_on_the_way(arm, kin, snap, pre_q, wording.cannot_pick(arm, words, "I can't find a clear path to it"))
+            self._open_on_the_way(
+                arm, kin, snap, pre_q, wording.cannot_pick(arm, words, "I can't find a clear path to it")
+            )
             kin, snap = self._ready(arm)
             if isinstance(grasp, EdgeGrasp):
                 down = kin.straight_line(grasp.pregrasp)
@@ -568,8 +611,7 @@ class Procedures:
             self._go(arm, trajectory)
             snap = self._snapshot()
             if snap.gripper_state(arm) == "holding":
-                return Done(landmark=self._landmark(obj), relative_pose=None,
-                            extra={"attempts": attempt + 1})
+                return Done(landmark=self._landmark(obj), relative_pose=None, extra={"attempts": attempt + 1})
             self._set_held(arm, None)
             reason = "it slipped out of my fingers when I lifted it"
             self._release_and_back_off(arm)
@@ -583,10 +625,14 @@ class Procedures:
         near_edge = self._snapshot().near_edge
         if reach.graspable_at(kin, obj, np.zeros(3), near_edge):
             return None
-        short = reach.shortfall(kin, lambda offset: reach.graspable_at(kin, obj, offset, near_edge),
-                                np.asarray(obj["position"]))
-        where = f"{max(1, round(100 * short))} cm beyond my {arm} hand" if short is not None else \
-            f"out of my {arm} hand's reach"
+        short = reach.shortfall(
+            kin, lambda offset: reach.graspable_at(kin, obj, offset, near_edge), np.asarray(obj["position"])
+        )
+        where = (
+            f"{max(1, round(100 * short))} cm beyond my {arm} hand"
+            if short is not None
+            else f"out of my {arm} hand's reach"
+        )
         other = "left" if arm == "right" else "right"
         other_kin = self.arms.get(other)
         if other_kin is not None and self.held()[other] is None:
@@ -600,9 +646,11 @@ class Procedures:
     def _in_the_way(kin: ArmKinematics, snap: SceneSnapshot, obj: dict[str, Any]) -> str | None:
         """What the grasps of ``obj`` would hit (other objects, the other arm), as words; None if nothing is named."""
         poses = [grasp.pregrasp for grasp in targets.grasps(obj, snap.near_edge)]
-        blockers = (kin.blockers(poses) or set()) - {obj["id"], "table"}   # the table is always near a grasp
-        names = sorted(refer(snap.objects, b) if b in snap.objects else ("the table" if b == "table" else f"my {b}")
-                       for b in blockers)
+        blockers = (kin.blockers(poses) or set()) - {obj["id"], "table"}  # the table is always near a grasp
+        names = sorted(
+            refer(snap.objects, b) if b in snap.objects else ("the table" if b == "table" else f"my {b}")
+            for b in blockers
+        )
         if not names:
             return None
         return f"{' and '.join(names)} {'is' if len(names) == 1 else 'are'} in the way"
@@ -611,8 +659,9 @@ class Procedures:
     def _lift(kin: ArmKinematics, height: float) -> Trajectory | None:
         """Straight up by ``height``, or by less where the wrist cannot go that high in this orientation."""
         for share in (1.0, 0.66, 0.4):
-            trajectory = kin.straight_line(geo.shifted(kin.fk(), [0.0, 0.0, share * height]), check_collisions=False,
-                                           steer=True)
+            trajectory = kin.straight_line(
+                geo.shifted(kin.fk(), [0.0, 0.0, share * height]), check_collisions=False, steer=True
+            )
             if trajectory is not None:
                 return trajectory
         return None
@@ -638,7 +687,9 @@ class Procedures:
         kin, _ = self._ready(arm)
         self._go(arm, self._plan(kin, pre_q, why))
 
-    def _look_again(self, arm: str, object_id: str) -> tuple[ArmKinematics, dict[str, Any], Iterator[tuple[geo.Grasp, np.ndarray]]]:
+    def _look_again(
+        self, arm: str, object_id: str
+    ) -> tuple[ArmKinematics, dict[str, Any], Iterator[tuple[geo.Grasp, np.ndarray]]]:
         """Grasp plans from a fresh settled view, before a pick-up is refused.
 
         The view at hand may date from while a hand was on the object: a plate
@@ -674,7 +725,9 @@ class Procedures:
             if grasp_q is not None and self._descent_clear(kin, pre_q, grasp.grasp, obj["id"]):
                 yield grasp, pre_q
 
-    def _edge_approach(self, kin: ArmKinematics, grasp: EdgeGrasp, hover_q: np.ndarray, object_id: str) -> np.ndarray | None:
+    def _edge_approach(
+        self, kin: ArmKinematics, grasp: EdgeGrasp, hover_q: np.ndarray, object_id: str
+    ) -> np.ndarray | None:
         """Joints at the hover pose from which both straight legs (down to the pre-grasp, in to the grasp) are clear."""
         for start in kin.turn_variants(hover_q):
             low_q = kin.ik(grasp.pregrasp, seeds=[start])
@@ -717,8 +770,9 @@ class Procedures:
         where = "here" if destination == "here" else "on the table"
         # right below first, landing on a plate's rim allowed; then only free spots of the table around it
         pairs = [first] + [(hover, release) for hover, release in around if self._free_spot(held, release, snap)]
-        done = self._place(arm, kin, snap, held, pairs, wording.sentence(
-            f"I can't find a clear path to put it down {where}"))
+        done = self._place(
+            arm, kin, snap, held, pairs, wording.sentence(f"I can't find a clear path to put it down {where}")
+        )
         if done is None:
             raise StepFailed(wording.sentence(f"I can't lower my {arm} hand to put it down {where}"))
         return done
@@ -731,9 +785,15 @@ class Procedures:
         """
         center = held.center_at(release)
         arm = next((a for a, h in self.held().items() if h is not None and h.object_id == held.object_id), "")
-        return all(oid in (held.object_id, on) or reach.is_held_sighting(obj, arm, held) or np.any(np.abs(Box.of(obj).center[:2] - center[:2]) >=
-                                                   Box.of(obj).half[:2] + held.box.half[:2] + geo.PLACE_SHIFT / 2)
-                   for oid, obj in snap.objects.items())
+        return all(
+            oid in (held.object_id, on)
+            or reach.is_held_sighting(obj, arm, held)
+            or np.any(
+                np.abs(Box.of(obj).center[:2] - center[:2])
+                >= Box.of(obj).half[:2] + held.box.half[:2] + geo.PLACE_SHIFT / 2
+            )
+            for oid, obj in snap.objects.items()
+        )
 
     @staticmethod
     def _flat_below(held: Held, release: np.ndarray, snap: SceneSnapshot) -> list[str]:
@@ -743,8 +803,11 @@ class Procedures:
         was picked from, right beside a plate.
         """
         bottom = float(release[2] + held.offset[2] - held.box.size[2] / 2)
-        return [oid for oid, obj in snap.objects.items()
-                if oid != held.object_id and Box.of(obj).top <= bottom + FLAT_MARGIN]
+        return [
+            oid
+            for oid, obj in snap.objects.items()
+            if oid != held.object_id and Box.of(obj).top <= bottom + FLAT_MARGIN
+        ]
 
     @staticmethod
     def _support_below(object_id: str, above: Box, snap: SceneSnapshot) -> float:
@@ -768,36 +831,61 @@ class Procedures:
             raise StepFailed(wording.sentence(f"I can't place {words} relative to itself"))
         box = Box.of(obj)
         # only where it stands clear of everything else (next to a cup, not half on the plate beside it)
-        pairs = [(hover, release) for hover, release in targets.place_relation(relation, box, kin.fk(), held,
-                                                                               snap.table_z)
-                 if self._free_spot(held, release, snap, on=object if relation in ("above", "on_top_of") else None)]
-        done = self._place(arm, kin, snap, held, pairs, wording.sentence(
-            f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}"), (object, box))
+        pairs = [
+            (hover, release)
+            for hover, release in targets.place_relation(relation, box, kin.fk(), held, snap.table_z)
+            if self._free_spot(held, release, snap, on=object if relation in ("above", "on_top_of") else None)
+        ]
+        done = self._place(
+            arm,
+            kin,
+            snap,
+            held,
+            pairs,
+            wording.sentence(f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}"),
+            (object, box),
+        )
         if done is None:
-            raise StepFailed(self._beyond(kin, held, relation, box, words, snap.table_z, arm)
-                             or wording.cannot_reach(arm, relation, words))
+            raise StepFailed(
+                self._beyond(kin, held, relation, box, words, snap.table_z, arm)
+                or wording.cannot_reach(arm, relation, words)
+            )
         done.landmark = self._landmark(obj)
         return done
 
     @staticmethod
-    def _beyond(kin: ArmKinematics, held: Held, relation: str, box: Box, words: str, table_z: float,
-                arm: str) -> str | None:
+    def _beyond(
+        kin: ArmKinematics, held: Held, relation: str, box: Box, words: str, table_z: float, arm: str
+    ) -> str | None:
         """When no release ``relation`` the landmark is within the arm's length at all: how far out it is."""
+
         def reachable(offset: np.ndarray) -> bool:
             moved = Box(box.center + offset, box.size)
-            return any(kin.ik(hover, check_collisions=False) is not None
-                       for hover, _ in targets.place_relation(relation, moved, kin.fk(), held, table_z))
+            return any(
+                kin.ik(hover, check_collisions=False) is not None
+                for hover, _ in targets.place_relation(relation, moved, kin.fk(), held, table_z)
+            )
 
         if reachable(np.zeros(3)):
             return None
         short = reach.shortfall(kin, reachable, box.center)
-        where = f"{max(1, round(100 * short))} cm beyond my {arm} hand" if short is not None else \
-            f"out of my {arm} hand's reach"
+        where = (
+            f"{max(1, round(100 * short))} cm beyond my {arm} hand"
+            if short is not None
+            else f"out of my {arm} hand's reach"
+        )
         return wording.sentence(f"I can't put it {wording.RELATION_WORDS[relation]} {words}: {words} is {where}")
 
-    def _place(self, arm: str, kin: ArmKinematics, snap: SceneSnapshot, held: Held,
-               pairs: list[tuple[np.ndarray, np.ndarray]], no_path: str,
-               landmark: tuple[str, Box] | None = None) -> Done | None:
+    def _place(
+        self,
+        arm: str,
+        kin: ArmKinematics,
+        snap: SceneSnapshot,
+        held: Held,
+        pairs: list[tuple[np.ndarray, np.ndarray]],
+        no_path: str,
+        landmark: tuple[str, Box] | None = None,
+    ) -> Done | None:
         """Carry the held object to the first (hover, release) pair it can be lowered from, lower it, let go.
 
         None when no pair can be lowered from (checked before the arm moves);
@@ -816,7 +904,7 @@ class Procedures:
                     if kin.cancelled:
                         raise Stopped()
                     unplanned += 1
-                    if unplanned >= PLACE_PLANS:   # each failure costs seconds of planning: say so instead
+                    if unplanned >= PLACE_PLANS:  # each failure costs seconds of planning: say so instead
                         raise StepFailed(no_path)
                     continue
                 self._go(arm, trajectory)
@@ -828,9 +916,14 @@ class Procedures:
             with kin.tolerating(kin.held_body or held.object_id, self._flat_below(held, release, snap)):
                 descent = kin.straight_line(release)
             if descent is None:
-                log.info("the way down to %s is blocked now; objects seen: %s", np.round(release[:3], 3),
-                         {k: (np.round(o["position"], 3).tolist(), np.round(o["size"], 3).tolist(), o.get("type"))
-                          for k, o in snap.objects.items()})
+                log.info(
+                    "the way down to %s is blocked now; objects seen: %s",
+                    np.round(release[:3], 3),
+                    {
+                        k: (np.round(o["position"], 3).tolist(), np.round(o["size"], 3).tolist(), o.get("type"))
+                        for k, o in snap.objects.items()
+                    },
+                )
                 continue
             self._go(arm, descent)
             return self._release(arm, held)
@@ -862,8 +955,9 @@ class Procedures:
             return self._release(arm, held)
         raise StepFailed(f"I can't reach the place where {refer(snap.objects, held.object_id)} stood.")
 
-    def _lowerable(self, kin: ArmKinematics, snap: SceneSnapshot, held: Held, hover: np.ndarray,
-                   release: np.ndarray) -> np.ndarray | None:
+    def _lowerable(
+        self, kin: ArmKinematics, snap: SceneSnapshot, held: Held, hover: np.ndarray, release: np.ndarray
+    ) -> np.ndarray | None:
         """Joints at ``hover`` when the held object can also be lowered straight from there to ``release``.
 
         Checked for every candidate before the arm moves at all, so a hover
@@ -919,7 +1013,9 @@ class Procedures:
         words = wording.DIRECTION_WORDS[direction]
         if not kin.within_limits(q):
             raise StepFailed(wording.sentence(f"My {arm} wrist can't turn {words} any further"))
-        self._go(arm, self._plan(kin, q, wording.sentence(f"My {arm} wrist can't turn {words} without hitting something")))
+        self._go(
+            arm, self._plan(kin, q, wording.sentence(f"My {arm} wrist can't turn {words} without hitting something"))
+        )
         return Done()
 
     def open(self, arm: str) -> Done:
@@ -937,8 +1033,11 @@ class Procedures:
             if snap.gripper_state(hand) == "holding":
                 kin, _ = self._ready(hand)
                 tool = kin.fk()
-                nearest = min(snap.objects.values(), default=None,
-                              key=lambda o: float(np.linalg.norm(np.asarray(o["position"]) - tool[:3])))
+                nearest = min(
+                    snap.objects.values(),
+                    default=None,
+                    key=lambda o: float(np.linalg.norm(np.asarray(o["position"]) - tool[:3])),
+                )
                 if nearest is not None:
                     self._set_held(hand, Held(nearest["id"], Box.of(nearest), tool))
         return Done()

@@ -23,7 +23,7 @@ from services.executor.kinematics import ArmKinematics
 from services.executor.scene import SceneSnapshot
 from services.executor.targets import Held
 
-HELD_MARGIN = 0.03   # metres around the carried box within which a sighting marked held may lie
+HELD_MARGIN = 0.03  # metres around the carried box within which a sighting marked held may lie
 RELATION_KEYS = ("above", "next_to", "left_of", "right_of", "in_front_of", "behind", "on_top_of", "near")
 REACH_KEYS = ("pick_up", "place", *RELATION_KEYS, "towards", "away_from")
 SIDES = ("left_of", "right_of", "in_front_of", "behind")
@@ -95,8 +95,9 @@ def can_pick(kin: ArmKinematics, obj: dict[str, Any], near_edge: float | None) -
     return False
 
 
-def object_reach(kin: ArmKinematics, snap: SceneSnapshot, oid: str, held: Held | None,
-                 interrupted: Interruption = lambda: False) -> dict[str, bool]:
+def object_reach(
+    kin: ArmKinematics, snap: SceneSnapshot, oid: str, held: Held | None, interrupted: Interruption = lambda: False
+) -> dict[str, bool]:
     """Every reach key of one object for one (already synced) arm (``interrupted`` as in :func:`reach_map`)."""
     obj = snap.objects[oid]
     box = Box.of(obj)
@@ -135,9 +136,12 @@ def can_move(kin: ArmKinematics, interrupted: Interruption = lambda: False) -> d
     return moves
 
 
-def reach_map(arms: dict[str, ArmKinematics], snap: SceneSnapshot, held: dict[str, Held | None],
-              interrupted: Interruption = lambda: False
-              ) -> tuple[dict[str, dict[str, dict[str, bool]]], dict[str, dict[str, bool]]] | None:
+def reach_map(
+    arms: dict[str, ArmKinematics],
+    snap: SceneSnapshot,
+    held: dict[str, Held | None],
+    interrupted: Interruption = lambda: False,
+) -> tuple[dict[str, dict[str, dict[str, bool]]], dict[str, dict[str, bool]]] | None:
     """``(reach[object][arm][key], can_move[arm][direction])`` for the scene in ``snap``.
 
     None when ``interrupted()`` turned true on the way (it is asked before
@@ -158,8 +162,8 @@ def reach_map(arms: dict[str, ArmKinematics], snap: SceneSnapshot, held: dict[st
     return reach, moves
 
 
-SHORTFALL_MAX = 0.5      # metres: farther out than this is just "out of reach"
-SHORTFALL_STEPS = 6      # halvings of the search (a centimetre or so)
+SHORTFALL_MAX = 0.5  # metres: farther out than this is just "out of reach"
+SHORTFALL_STEPS = 6  # halvings of the search (a centimetre or so)
 
 
 def shortfall(kin: ArmKinematics, reachable: Callable[[np.ndarray], bool], center: np.ndarray) -> float | None:

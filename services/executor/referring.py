@@ -25,8 +25,9 @@ def describe_objects(objects: dict[str, dict[str, Any]]) -> dict[str, str]:
         from services.nlu.refexp import Scene as ReferringScene
         from services.nlu.world import parse_world
 
-        world = parse_world({"objects": [{k: o[k] for k in WORLD_FIELDS if k in o} for o in objects.values()]},
-                            strict=False)
+        world = parse_world(
+            {"objects": [{k: o[k] for k in WORLD_FIELDS if k in o} for o in objects.values()]}, strict=False
+        )
         return ReferringScene(world).describe_all()
     except Exception as exc:  # the generator is optional: narration must go on without it
         log.debug("falling back to plain descriptions: %s", exc)

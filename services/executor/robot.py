@@ -21,11 +21,11 @@ from shared.bus import Bus, BusTimeout, RemoteError
 
 log = logging.getLogger("hfpbd.executor.robot")
 
-EVENT_SLACK = 8.0      # simulated seconds a motion may take beyond its planned duration before we give up on it
-WAIT_SLICE = 0.25      # wall seconds between checks of the simulation clock
-SIM_SILENCE = 10.0     # wall seconds without a new simulator state before it counts as gone
+EVENT_SLACK = 8.0  # simulated seconds a motion may take beyond its planned duration before we give up on it
+WAIT_SLICE = 0.25  # wall seconds between checks of the simulation clock
+SIM_SILENCE = 10.0  # wall seconds without a new simulator state before it counts as gone
 REQUEST_TIMEOUT = 5.0
-SHORT_MOTION = 3.0     # simulated seconds a gripper or head motion takes at most
+SHORT_MOTION = 3.0  # simulated seconds a gripper or head motion takes at most
 
 
 class MotionError(RuntimeError):
@@ -38,7 +38,7 @@ class Stopped(RuntimeError):
 
 @dataclass(frozen=True)
 class Outcome:
-    status: str   # done / stopped / failed
+    status: str  # done / stopped / failed
     message: str
 
 

@@ -37,7 +37,7 @@ class SceneSnapshot:
     """A consistent copy of what is known at one moment."""
 
     objects: dict[str, dict[str, Any]]
-    table: Table | None              # None until perception has seen one
+    table: Table | None  # None until perception has seen one
     robot: dict[str, Any] | None
     version: int
     robot_version: int = 0
@@ -66,8 +66,13 @@ class SceneSnapshot:
         So is a faint blob perception could neither type nor see clearly.
         """
         boxes = {"table": self.table.box()} if self.table is not None else {}
-        boxes.update({oid: Box.of(o) for oid, o in self.objects.items()
-                      if oid not in skip and self.supported(oid) and not _faint(o)})
+        boxes.update(
+            {
+                oid: Box.of(o)
+                for oid, o in self.objects.items()
+                if oid not in skip and self.supported(oid) and not _faint(o)
+            }
+        )
         return boxes
 
     def standing_objects(self) -> list[dict[str, Any]]:
@@ -88,9 +93,12 @@ class SceneSnapshot:
             return False
         for oid, other in self.objects.items():
             under = Box.of(other)
-            if (oid != object_id and abs(under.top - box.bottom) <= SUPPORT_GAP
-                    and np.all(np.abs(under.center[:2] - box.center[:2]) < under.half[:2] + box.half[:2])
-                    and self.supported(oid, depth + 1)):
+            if (
+                oid != object_id
+                and abs(under.top - box.bottom) <= SUPPORT_GAP
+                and np.all(np.abs(under.center[:2] - box.center[:2]) < under.half[:2] + box.half[:2])
+                and self.supported(oid, depth + 1)
+            ):
                 return True
         return False
 
@@ -159,9 +167,14 @@ class Scene:
 
     def snapshot(self) -> SceneSnapshot:
         with self._lock:
-            return SceneSnapshot(copy.deepcopy(self._objects), self._table, copy.deepcopy(self._robot),
-                                 self._version, self._robot_version,
-                                 {k: v for k, v in self._remembered.items() if k not in self._objects})
+            return SceneSnapshot(
+                copy.deepcopy(self._objects),
+                self._table,
+                copy.deepcopy(self._robot),
+                self._version,
+                self._robot_version,
+                {k: v for k, v in self._remembered.items() if k not in self._objects},
+            )
 
     def sim_time(self) -> float | None:
         """The simulation clock of the latest robot state (None before the first)."""
@@ -188,9 +201,13 @@ def _faint(obj: dict[str, Any]) -> bool:
 
 def _valid_object(obj: Any) -> bool:
     try:
-        return (isinstance(obj.get("id"), str) and len(obj["position"]) == 3 and len(obj["size"]) == 3
-                and all(np.isfinite(np.asarray(obj["position"], float)))
-                and all(np.isfinite(np.asarray(obj["size"], float))))
+        return (
+            isinstance(obj.get("id"), str)
+            and len(obj["position"]) == 3
+            and len(obj["size"]) == 3
+            and all(np.isfinite(np.asarray(obj["position"], float)))
+            and all(np.isfinite(np.asarray(obj["size"], float)))
+        )
     except (TypeError, ValueError, KeyError, AttributeError):
         return False
 

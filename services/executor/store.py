@@ -172,9 +172,16 @@ class ActionStore:
         """One line per action: number, name, step count, creation time, whether current."""
         with self._lock:
             self._reload()
-            return [{"number": i + 1, "name": a.get("name"), "steps": len(a["steps"]),
-                     "created": a.get("created"), "current": i + 1 == self._current}
-                    for i, a in enumerate(self._actions)]
+            return [
+                {
+                    "number": i + 1,
+                    "name": a.get("name"),
+                    "steps": len(a["steps"]),
+                    "created": a.get("created"),
+                    "current": i + 1 == self._current,
+                }
+                for i, a in enumerate(self._actions)
+            ]
 
     def _index(self, number: int) -> int:
         if not isinstance(number, int) or isinstance(number, bool) or not 1 <= number <= len(self._actions):

@@ -20,9 +20,9 @@ import numpy as np
 
 from services.executor.geometry import Box
 
-SLAB = 0.04          # m: thickness planned under the top (the camera sees only the top)
-UNSEEN_REACH = 0.5   # m the table is assumed to go on past the last point seen, on a side whose edge was not seen
-SIDES = {"near": (0, 0), "far": (0, 1), "right": (1, 0), "left": (1, 1)}   # side -> (axis, lower/upper end)
+SLAB = 0.04  # m: thickness planned under the top (the camera sees only the top)
+UNSEEN_REACH = 0.5  # m the table is assumed to go on past the last point seen, on a side whose edge was not seen
+SIDES = {"near": (0, 0), "far": (0, 1), "right": (1, 0), "left": (1, 1)}  # side -> (axis, lower/upper end)
 
 
 @dataclass(frozen=True)
@@ -63,8 +63,11 @@ def parse_table(field: Any) -> Table | None:
     if extent is None:
         return None
     edges = field.get("edges") if isinstance(field.get("edges"), Mapping) else {}
-    return Table(float(field["height"]), extent,
-                 {side: float(value) for side, value in edges.items() if side in SIDES and _number(value)})
+    return Table(
+        float(field["height"]),
+        extent,
+        {side: float(value) for side, value in edges.items() if side in SIDES and _number(value)},
+    )
 
 
 def _extent(field: Mapping[str, Any]) -> np.ndarray | None:

@@ -21,19 +21,19 @@ import numpy as np
 from services.executor import geometry as geo
 from services.executor.geometry import Box
 
-HOVER = 0.06          # a carried object is brought this far above its release point first
+HOVER = 0.06  # a carried object is brought this far above its release point first
 # Headings (rad about the vertical) a carried object may be turned to: the hand keeps the grasp's
 # orientation, which suits the place it was picked from but rarely one across the table.
 CARRY_YAWS = (0.0, 0.35, -0.35, 0.7, -0.7)
 ROUND_TYPES = ("cup", "bowl", "plate")
 # Gripping a flat object by the part that sticks out over the table's near edge:
-MAX_EDGE_THICKNESS = 0.03   # metres: thicker than this, the fingers cannot pass over and under it
-MIN_OVERHANG = 0.04         # the fingers need this much of it past the edge (clearance + a firm hold)
-EDGE_CLEARANCE = 0.012      # fingertips stop this far short of the table edge
-FINGERTIP = 0.02            # tool frame -> fingertips, along the approach axis
-EDGE_APPROACH = 0.06        # the pre-grasp is at least this far back from the grasp (the body is close behind)
+MAX_EDGE_THICKNESS = 0.03  # metres: thicker than this, the fingers cannot pass over and under it
+MIN_OVERHANG = 0.04  # the fingers need this much of it past the edge (clearance + a firm hold)
+EDGE_CLEARANCE = 0.012  # fingertips stop this far short of the table edge
+FINGERTIP = 0.02  # tool frame -> fingertips, along the approach axis
+EDGE_APPROACH = 0.06  # the pre-grasp is at least this far back from the grasp (the body is close behind)
 EDGE_LIFT = 0.12
-EDGE_HOVER = 0.06           # the hand is brought this far above the pre-grasp first
+EDGE_HOVER = 0.06  # the hand is brought this far above the pre-grasp first
 
 
 @dataclass(frozen=True)
@@ -77,7 +77,9 @@ def _carry(tool_pose: np.ndarray, held: Held, centers: list[np.ndarray], lift: f
     return geo.carry_poses(tool_pose, held.center_at(tool_pose), [c + [0.0, 0.0, lift] for c in centers], CARRY_YAWS)
 
 
-def move_relation(relation: str, landmark: Box, tool_pose: np.ndarray, held: Held | None, table_z: float) -> list[np.ndarray]:
+def move_relation(
+    relation: str, landmark: Box, tool_pose: np.ndarray, held: Held | None, table_z: float
+) -> list[np.ndarray]:
     """Poses for "move above/next to/... the landmark"; with a held object, it hovers over its release point."""
     if held is None:
         return geo.relation_candidates(relation, landmark)
@@ -85,7 +87,9 @@ def move_relation(relation: str, landmark: Box, tool_pose: np.ndarray, held: Hel
     return _carry(tool_pose, held, centers, lift=HOVER)
 
 
-def place_relation(relation: str, landmark: Box, tool_pose: np.ndarray, held: Held, table_z: float) -> list[tuple[np.ndarray, np.ndarray]]:
+def place_relation(
+    relation: str, landmark: Box, tool_pose: np.ndarray, held: Held, table_z: float
+) -> list[tuple[np.ndarray, np.ndarray]]:
     """(hover pose, release pose) pairs for placing the held object ``relation`` the landmark."""
     centers = geo.placement_centers(relation, landmark, held.box.size, table_z)
     releases = _carry(tool_pose, held, centers)
@@ -150,11 +154,12 @@ def edge_grasp(box: Box, table_edge: float) -> EdgeGrasp:
     The fingertips stop ``EDGE_CLEARANCE`` short of the table edge, so the
     lower finger passes under the object without touching the table.
     """
-    rot = geo.facing(np.array([1.0, 0.0, 0.0]), np.pi / 2)   # closing axis vertical
+    rot = geo.facing(np.array([1.0, 0.0, 0.0]), np.pi / 2)  # closing axis vertical
     point = np.array([table_edge - EDGE_CLEARANCE - FINGERTIP, box.center[1], box.center[2]])
     grasp = geo.make_pose(point, rot)
     near_edge = float(box.center[0] - box.half[0])
-    back = max(EDGE_APPROACH, point[0] + FINGERTIP + EDGE_CLEARANCE - near_edge)   # fingertips clear of the edge
+    back = max(EDGE_APPROACH, point[0] + FINGERTIP + EDGE_CLEARANCE - near_edge)  # fingertips clear of the edge
     pregrasp = geo.shifted(grasp, [-back, 0.0, 0.0])
-    return EdgeGrasp(pregrasp, grasp, geo.shifted(grasp, [0.0, 0.0, EDGE_LIFT]),
-                     geo.shifted(pregrasp, [0.0, 0.0, EDGE_HOVER]))
+    return EdgeGrasp(
+        pregrasp, grasp, geo.shifted(grasp, [0.0, 0.0, EDGE_LIFT]), geo.shifted(pregrasp, [0.0, 0.0, EDGE_HOVER])
+    )

@@ -36,8 +36,7 @@ from services.executor.procedures import Procedures, StepFailed
 from services.executor.robot import MotionError
 from services.executor.scene import ARMS, SceneSnapshot
 
-OPPOSITE = {"up": "down", "down": "up", "left": "right", "right": "left", "forward": "backward",
-            "backward": "forward"}
+OPPOSITE = {"up": "down", "down": "up", "left": "right", "right": "left", "forward": "backward", "backward": "forward"}
 HEAD_JOINTS = ("head_pan_joint", "head_tilt_joint")
 
 
@@ -46,12 +45,13 @@ def before_state(snap: SceneSnapshot, procedures: Procedures) -> dict[str, Any]:
     joints = snap.joints()
     ee = (snap.robot or {}).get("ee", {})
     held = {arm: (h.object_id if h else None) for arm, h in procedures.held().items()}
-    return {"joints": {arm: [float(joints.get(n, 0.0)) for n in joint_names(arm)] for arm in ARMS},
-            "tools": {arm: [float(v) for v in ee.get(arm, [0.0, 0.0, 0.0])[:3]] for arm in ARMS},
-            "grippers": {arm: snap.gripper_state(arm) for arm in ARMS},
-            "holding": {arm: descriptor(snap.objects[oid]) if oid in snap.objects else None
-                        for arm, oid in held.items()},
-            "head": [float(joints.get(n, 0.0)) for n in HEAD_JOINTS]}
+    return {
+        "joints": {arm: [float(joints.get(n, 0.0)) for n in joint_names(arm)] for arm in ARMS},
+        "tools": {arm: [float(v) for v in ee.get(arm, [0.0, 0.0, 0.0])[:3]] for arm in ARMS},
+        "grippers": {arm: snap.gripper_state(arm) for arm in ARMS},
+        "holding": {arm: descriptor(snap.objects[oid]) if oid in snap.objects else None for arm, oid in held.items()},
+        "head": [float(joints.get(n, 0.0)) for n in HEAD_JOINTS],
+    }
 
 
 def reverse(step: dict[str, Any], procedures: Procedures) -> None:
@@ -96,8 +96,7 @@ def _back_along(procedures: Procedures, arm: str, direction: str, before: dict[s
     snap = procedures.scene.snapshot()
     ee = (snap.robot or {}).get("ee", {})
     hands = list(ARMS) if arm == BOTH else [arm]
-    went = max(float(np.dot(np.asarray(ee[h][:3], float) - np.asarray(before["tools"][h], float), unit))
-               for h in hands)
+    went = max(float(np.dot(np.asarray(ee[h][:3], float) - np.asarray(before["tools"][h], float), unit)) for h in hands)
     if went < MIN_DISTANCE / 2:  # it hardly moved: nothing to take back
         return
     procedures.move_abs_dir(arm, OPPOSITE[direction], float(np.clip(went, MIN_DISTANCE, MAX_DISTANCE)))

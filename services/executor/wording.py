@@ -15,33 +15,60 @@ from collections.abc import Callable, Mapping
 Refer = Callable[[str], str]
 
 DEFAULT_VERBS = {
-    "move_abs_dest": "move", "move_rel_dest": "move", "move_abs_dir": "move", "move_rel_dir": "move",
-    "pick_up": "pick up", "place_abs": "place", "place_rel": "place", "point_to": "point at",
-    "look_at": "look at", "rotate": "rotate", "open": "open", "close": "close",
+    "move_abs_dest": "move",
+    "move_rel_dest": "move",
+    "move_abs_dir": "move",
+    "move_rel_dir": "move",
+    "pick_up": "pick up",
+    "place_abs": "place",
+    "place_rel": "place",
+    "point_to": "point at",
+    "look_at": "look at",
+    "rotate": "rotate",
+    "open": "open",
+    "close": "close",
 }
 RELATION_WORDS = {
-    "above": "above", "next_to": "next to", "left_of": "to the left of", "right_of": "to the right of",
-    "in_front_of": "in front of", "behind": "behind", "on_top_of": "on top of", "near": "near",
-    "towards": "towards", "away_from": "away from",
+    "above": "above",
+    "next_to": "next to",
+    "left_of": "to the left of",
+    "right_of": "to the right of",
+    "in_front_of": "in front of",
+    "behind": "behind",
+    "on_top_of": "on top of",
+    "near": "near",
+    "towards": "towards",
+    "away_from": "away from",
 }
 DIRECTION_WORDS = {
-    "up": "up", "down": "down", "left": "to the left", "right": "to the right",
-    "forward": "forward", "backward": "backward", "cw": "clockwise", "ccw": "counter-clockwise",
+    "up": "up",
+    "down": "down",
+    "left": "to the left",
+    "right": "to the right",
+    "forward": "forward",
+    "backward": "backward",
+    "cw": "clockwise",
+    "ccw": "counter-clockwise",
 }
 DESTINATION_WORDS = {"side": "to the side", "table": "on the table", "here": "here"}
 VOWELS = set("aeiou")
 
 
 def gerund(verb: str) -> str:
-    """"grab" -> "grabbing", "move" -> "moving", "pick up" -> "picking up" (first word inflected)."""
+    """ "grab" -> "grabbing", "move" -> "moving", "pick up" -> "picking up" (first word inflected)."""
     head, _, rest = verb.strip().partition(" ")
     word = head.lower()
     if word.endswith("ie"):
         word = word[:-2] + "y"
     elif word.endswith("e") and not word.endswith(("ee", "ye", "oe")) and len(word) > 2:
         word = word[:-1]
-    elif (len(word) >= 3 and word[-1] not in VOWELS | set("wxy") and word[-2] in VOWELS
-          and word[-3] not in VOWELS and _syllables(word) == 1):
+    elif (
+        len(word) >= 3
+        and word[-1] not in VOWELS | set("wxy")
+        and word[-2] in VOWELS
+        and word[-3] not in VOWELS
+        and _syllables(word) == 1
+    ):
         word = word + word[-1]  # one-syllable consonant-vowel-consonant words: grab, put, drop
     word += "ing"
     return f"{word} {rest}".strip()
@@ -66,7 +93,7 @@ HAND_NOUNS = frozenset({"hand", "arm", "gripper", "hands", "arms", "grippers"})
 
 
 def arm_words(arm: str, phrases: Mapping[str, str] | None = None, *, own: bool = False) -> str:
-    """"your right hand" in narration (the user's address to the robot), "my right hand" in errors."""
+    """ "your right hand" in narration (the user's address to the robot), "my right hand" in errors."""
     said = (phrases or {}).get("arm")
     if arm == "both":
         return "both my hands" if own else "both hands"
@@ -82,15 +109,20 @@ def _word(table: Mapping[str, str], key: str, phrases: Mapping[str, str] | None,
     return said if said else table.get(key, key.replace("_", " "))
 
 
-def narration(procedure: str, args: Mapping, phrases: Mapping[str, str] | None, refer: Refer,
-              held: str | None = None) -> str:
+def narration(
+    procedure: str, args: Mapping, phrases: Mapping[str, str] | None, refer: Refer, held: str | None = None
+) -> str:
     """The sentence said just before a step runs, e.g. "Grabbing the red cup with your right hand."."""
     verb = gerund((phrases or {}).get("verb") or DEFAULT_VERBS.get(procedure, procedure.replace("_", " ")))
     arm = args.get("arm")
     hand = arm_words(arm, phrases) if arm else ""
     obj = refer(args["object"]) if args.get("object") else ""
-    relation = _word(RELATION_WORDS, args.get("relation") or args.get("direction", ""), phrases,
-                     "relation" if "relation" in args else "direction")
+    relation = _word(
+        RELATION_WORDS,
+        args.get("relation") or args.get("direction", ""),
+        phrases,
+        "relation" if "relation" in args else "direction",
+    )
     if procedure == "move_abs_dest":
         return sentence(f"{verb} {hand} {_word(DESTINATION_WORDS, args['destination'], phrases, 'destination')}")
     if procedure == "move_rel_dir":
@@ -104,7 +136,9 @@ def narration(procedure: str, args: Mapping, phrases: Mapping[str, str] | None, 
         return sentence(f"{verb} {obj} with {hand}")
     if procedure == "place_abs":
         thing = held or "what I'm holding"
-        return sentence(f"{verb} {thing} {_word(DESTINATION_WORDS, args['destination'], phrases, 'destination')} with {hand}")
+        return sentence(
+            f"{verb} {thing} {_word(DESTINATION_WORDS, args['destination'], phrases, 'destination')} with {hand}"
+        )
     if procedure == "place_rel":
         thing = held or "what I'm holding"
         return sentence(f"{verb} {thing} {relation} {obj} with {hand}")
@@ -118,7 +152,7 @@ def narration(procedure: str, args: Mapping, phrases: Mapping[str, str] | None, 
 
 
 def _distance(args: Mapping) -> str:
-    """"5 centimetres " for a move given a distance (nothing for the default step)."""
+    """ "5 centimetres " for a move given a distance (nothing for the default step)."""
     distance = args.get("distance")
     if distance is None:
         return ""
@@ -128,6 +162,7 @@ def _distance(args: Mapping) -> str:
 
 
 # -- failures -----------------------------------------------------------------
+
 
 def cannot_reach(arm: str, relation: str, obj_words: str) -> str:
     return sentence(f"I can't reach {RELATION_WORDS.get(relation, relation)} {obj_words} with my {arm} hand")
@@ -146,4 +181,4 @@ def gone(obj_words: str) -> str:
 
 
 def unknown_object(object_id: str) -> str:
-    return sentence(f"I don't know any object called {object_id!r}; say \"record\" to look at the table again")
+    return sentence(f'I don\'t know any object called {object_id!r}; say "record" to look at the table again')

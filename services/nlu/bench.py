@@ -39,22 +39,45 @@ PAPER_BATCH_MS = {4: 3.5, 16: 6.2, 64: 16.5}
 BATCH_SPEEDUP_TARGET = 10.0
 ACCURACY_TARGET = 0.97
 UTTERANCES = (
-    "move your right hand above the red cup", "pick it up", "up", "above", "grab the leftmost box",
-    "place it next to the blue bowl", "point to the biggest object", "move left hand right",
-    "switch to action 3", "execute", "the tallest one", "rotate clockwise", "xyzzy",
-    "could you please put the green plate on the table", "look at the farthest cup",
+    "move your right hand above the red cup",
+    "pick it up",
+    "up",
+    "above",
+    "grab the leftmost box",
+    "place it next to the blue bowl",
+    "point to the biggest object",
+    "move left hand right",
+    "switch to action 3",
+    "execute",
+    "the tallest one",
+    "rotate clockwise",
+    "xyzzy",
+    "could you please put the green plate on the table",
+    "look at the farthest cup",
 )
 
 
 def scene(count: int, seed: int = 7) -> World:
     rng = random.Random(seed)
-    objects = [{"id": f"obj{i}", "color": rng.choice(COLORS[:8]), "type": rng.choice(TYPES[:4]),
-                "position": [rng.uniform(0.4, 0.9), rng.uniform(-0.5, 0.5), 0.8],
-                "size": [rng.uniform(0.04, 0.2), rng.uniform(0.04, 0.2), rng.uniform(0.02, 0.2)],
-                "reach": {"right": {"pick_up": rng.random() < 0.7}, "left": {"pick_up": rng.random() < 0.7}}}
-               for i in range(count)]
-    robot = {"grippers": {"right": "holding", "left": "open"}, "last_arm": "right", "last_object": "obj0",
-             "can_move": {"right": {"up": True, "down": False}}, "action": 1, "actions": [3]}
+    objects = [
+        {
+            "id": f"obj{i}",
+            "color": rng.choice(COLORS[:8]),
+            "type": rng.choice(TYPES[:4]),
+            "position": [rng.uniform(0.4, 0.9), rng.uniform(-0.5, 0.5), 0.8],
+            "size": [rng.uniform(0.04, 0.2), rng.uniform(0.04, 0.2), rng.uniform(0.02, 0.2)],
+            "reach": {"right": {"pick_up": rng.random() < 0.7}, "left": {"pick_up": rng.random() < 0.7}},
+        }
+        for i in range(count)
+    ]
+    robot = {
+        "grippers": {"right": "holding", "left": "open"},
+        "last_arm": "right",
+        "last_object": "obj0",
+        "can_move": {"right": {"up": True, "down": False}},
+        "action": 1,
+        "actions": [3],
+    }
     return parse_world({"objects": objects, "robot": robot})
 
 
@@ -86,18 +109,35 @@ def measure(count: int, rounds: int) -> dict[str, float]:
     current, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     del kept
-    return {"objects": count, "commands": len(model.index.commands),
-            "p50_ms": statistics.median(latencies) * 1e3, "p99_ms": _percentile(latencies, 0.99) * 1e3,
-            "cpu_p99_ms": _percentile(cpu, 0.99) * 1e3,
-            "update_ms": statistics.median(updates) * 1e3, "model_kib": current / 1024, "peak_kib": peak / 1024}
+    return {
+        "objects": count,
+        "commands": len(model.index.commands),
+        "p50_ms": statistics.median(latencies) * 1e3,
+        "p99_ms": _percentile(latencies, 0.99) * 1e3,
+        "cpu_p99_ms": _percentile(cpu, 0.99) * 1e3,
+        "update_ms": statistics.median(updates) * 1e3,
+        "model_kib": current / 1024,
+        "peak_kib": peak / 1024,
+    }
 
 
 def batch_ms(count: int, lines: int = 3000) -> float:
     """Milliseconds per utterance through ``hfpbd nlu parse --batch``, start-up subtracted (two runs' difference)."""
     world = scene(count)
-    data = {"objects": [{"id": o.id, "color": o.color, "type": o.type, "position": list(o.position),
-                         "size": list(o.size), "reach": o.reach} for o in world.objects],
-            "robot": {**world.robot.__dict__, "actions": list(world.robot.actions)}}
+    data = {
+        "objects": [
+            {
+                "id": o.id,
+                "color": o.color,
+                "type": o.type,
+                "position": list(o.position),
+                "size": list(o.size),
+                "reach": o.reach,
+            }
+            for o in world.objects
+        ],
+        "robot": {**world.robot.__dict__, "actions": list(world.robot.actions)},
+    }
     with tempfile.TemporaryDirectory() as folder:
         world_file = Path(folder) / "world.json"
         world_file.write_text(json.dumps(data))
@@ -106,8 +146,11 @@ def batch_ms(count: int, lines: int = 3000) -> float:
             batch = Path(folder) / f"batch{n}.txt"
             batch.write_text("\n".join(UTTERANCES[i % len(UTTERANCES)] for i in range(n)) + "\n")
             start = time.perf_counter()
-            subprocess.run([sys.executable, "-m", "services.nlu", "parse", "--world", str(world_file),
-                            "--batch", str(batch)], check=True, stdout=subprocess.DEVNULL)
+            subprocess.run(
+                [sys.executable, "-m", "services.nlu", "parse", "--world", str(world_file), "--batch", str(batch)],
+                check=True,
+                stdout=subprocess.DEVNULL,
+            )
             times.append(time.perf_counter() - start)
     return (times[1] - times[0]) / (lines - lines // 10) * 1e3
 
@@ -135,8 +178,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="hfpbd bench nlu", description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=2000, help="parses per scene size (default 2000)")
     parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES), help="object counts to measure")
-    parser.add_argument("--batch-lines", type=int, default=3000,
-                        help="utterances per command-line (--batch) timing run; 0 skips it (default 3000)")
+    parser.add_argument(
+        "--batch-lines",
+        type=int,
+        default=3000,
+        help="utterances per command-line (--batch) timing run; 0 skips it (default 3000)",
+    )
     args = parser.parse_args(argv)
     if args.rounds < 1 or any(s < 1 for s in args.sizes) or not (args.batch_lines == 0 or args.batch_lines >= 20):
         parser.error("--rounds and --sizes must be positive, --batch-lines 0 or at least 20")
@@ -145,13 +192,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     missed = int(right < ACCURACY_TARGET * total)
     print()
     load = psutil.getloadavg()[0]
-    print(f"NLU benchmark: {args.rounds} parses per size over {len(UTTERANCES)} utterances; "
-          f"load average {load:.1f} on {psutil.cpu_count()} CPUs")
-    print("parse targets are judged on the p99 of CPU time per parse (wall p99 also shown: it includes "
-          "waiting for a CPU when the machine is shared)")
-    header = (f"{'objects':>7} {'commands':>8} {'p50 ms':>8} {'p99 ms':>8} {'cpu p99':>8} {'update ms':>9} "
-              f"{'model KiB':>9}  "
-              f"{'parse p99 target':<18} {'update target':<16} paper parse")
+    print(
+        f"NLU benchmark: {args.rounds} parses per size over {len(UTTERANCES)} utterances; "
+        f"load average {load:.1f} on {psutil.cpu_count()} CPUs"
+    )
+    print(
+        "parse targets are judged on the p99 of CPU time per parse (wall p99 also shown: it includes "
+        "waiting for a CPU when the machine is shared)"
+    )
+    header = (
+        f"{'objects':>7} {'commands':>8} {'p50 ms':>8} {'p99 ms':>8} {'cpu p99':>8} {'update ms':>9} "
+        f"{'model KiB':>9}  "
+        f"{'parse p99 target':<18} {'update target':<16} paper parse"
+    )
     print(header)
     print("-" * len(header))
     for count in args.sizes:
@@ -161,13 +214,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         missed += "MISS" in parse_verdict + update_verdict
         paper = PAPER_PARSE_MS.get(count)
         comparison = f"{paper:g} ms ({paper / row['p50_ms']:.0f}x slower)" if paper else ""
-        print(f"{count:>7} {row['commands']:>8} {row['p50_ms']:>8.3f} {row['p99_ms']:>8.3f} {row['cpu_p99_ms']:>8.3f} "
-              f"{row['update_ms']:>9.2f} "
-              f"{row['model_kib']:>9.0f}  {parse_verdict:<18} {update_verdict:<16} {comparison}")
+        print(
+            f"{count:>7} {row['commands']:>8} {row['p50_ms']:>8.3f} {row['p99_ms']:>8.3f} {row['cpu_p99_ms']:>8.3f} "
+            f"{row['update_ms']:>9.2f} "
+            f"{row['model_kib']:>9.0f}  {parse_verdict:<18} {update_verdict:<16} {comparison}"
+        )
     if args.batch_lines:
-        print("\nper utterance through 'hfpbd nlu parse --batch' "
-              f"(target: >= {BATCH_SPEEDUP_TARGET:g}x faster than the "
-              "paper's parser the same way)")
+        print(
+            "\nper utterance through 'hfpbd nlu parse --batch' "
+            f"(target: >= {BATCH_SPEEDUP_TARGET:g}x faster than the "
+            "paper's parser the same way)"
+        )
         for count, paper in PAPER_BATCH_MS.items():
             ms = batch_ms(count, args.batch_lines)
             speedup = paper / ms

@@ -33,8 +33,9 @@ def main(argv: Sequence[str]) -> int:
     if tool != "describe":
         source = parser.add_mutually_exclusive_group(required=True)
         source.add_argument("text", nargs="?", help="the utterance or referring phrase")
-        source.add_argument("--batch", metavar="FILE",
-                            help="one input per line ('-' for stdin); one JSON line out per line")
+        source.add_argument(
+            "--batch", metavar="FILE", help="one input per line ('-' for stdin); one JSON line out per line"
+        )
     args = parser.parse_args(rest)
     try:
         model = Model(load_world(args.world))

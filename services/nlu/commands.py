@@ -63,4 +63,3 @@ def enumerate_commands(world: World) -> list[Command]:
             combos = [combo + ((name, value),) for combo in combos for value in values]
         commands.extend(Command(procedure, combo) for combo in combos)
     return commands
-

@@ -24,8 +24,10 @@ from shared.contract import ARMS, BOTH
 if TYPE_CHECKING:
     from services.nlu.infer import Model
 
-_ALWAYS = re.compile(r"\s*(?:,\s*)?(?:\band then\b|\bthen\b|\bafter that\b|\bafterwards\b|\bnext,|;"
-                     r"|(?<=[a-z])\.(?=\s|$))\s*")
+_ALWAYS = re.compile(
+    r"\s*(?:,\s*)?(?:\band then\b|\bthen\b|\bafter that\b|\bafterwards\b|\bnext,|;"
+    r"|(?<=[a-z])\.(?=\s|$))\s*"
+)
 _AND = re.compile(r"\s*(?:,\s*and\b|\band\b|,)\s*")
 _JOINS = re.compile(r"\b(?:and|then|after|afterwards|next)\b|[,;.]")
 MAX_STEPS = 6  # more than this in one breath is almost surely pasted text
@@ -75,9 +77,14 @@ def run(model: Model, parts: list[str], history: History) -> Result:
         result = current.parse_step(part, history)
         if not isinstance(result, CommandResult):
             if isinstance(result, Clarify):
-                prefix = f"About \"{part}\": " if commands else ""
-                return Clarify(result.params, prefix + result.question, result.candidates if not commands else [],
-                               result.labels if not commands else [], result.score)
+                prefix = f'About "{part}": ' if commands else ""
+                return Clarify(
+                    result.params,
+                    prefix + result.question,
+                    result.candidates if not commands else [],
+                    result.labels if not commands else [],
+                    result.score,
+                )
             return result
         commands.extend(result.commands)
         texts.append(result.text)
@@ -86,8 +93,10 @@ def run(model: Model, parts: list[str], history: History) -> Result:
         world = current.world
         for command in result.commands:
             world = after(world, command)
-            history = History(command.arg("arm") if command.arg("arm") in ARMS else history.last_arm,
-                              command.arg("object") or history.last_object)
+            history = History(
+                command.arg("arm") if command.arg("arm") in ARMS else history.last_arm,
+                command.arg("object") or history.last_object,
+            )
         current = type(model)(world)
     return CommandResult(commands[0], confidence, ", then ".join(texts), {}, score, tuple(commands[1:]))
 
@@ -111,5 +120,7 @@ def after(world: World, command: Command) -> World:
             grippers[hand] = "holding" if any(o.held_by == hand for o in objects) else "closed"
     last_arm = arm if arm in ARMS else robot.last_arm
     last_object = object_id or robot.last_object
-    return World(objects, RobotState(**{**robot.__dict__, "grippers": grippers, "last_arm": last_arm,
-                                        "last_object": last_object}))
+    return World(
+        objects,
+        RobotState(**{**robot.__dict__, "grippers": grippers, "last_arm": last_arm, "last_object": last_object}),
+    )

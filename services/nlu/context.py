@@ -21,9 +21,11 @@ from services.nlu.weights import LANGUAGE
 from shared.contract import ARMS
 
 _WORD = re.compile(r"[a-z]+")
-_CANCEL = re.compile(r"(?:(?:no|oh|ok|okay|well|please|just) )*(?:cancel|never mind|nevermind|forget it|"
-                     r"forget about it|nothing|none|neither|none of them|neither of them|skip it|drop it|leave it)"
-                     r"(?: please| then)?")
+_CANCEL = re.compile(
+    r"(?:(?:no|oh|ok|okay|well|please|just) )*(?:cancel|never mind|nevermind|forget it|"
+    r"forget about it|nothing|none|neither|none of them|neither of them|skip it|drop it|leave it)"
+    r"(?: please| then)?"
+)
 _OTHER = re.compile(r"(?:(?:no|nope|not that one|wrong|please) )*(?:the )?other(?: one)?(?: please)?")
 
 
@@ -63,7 +65,7 @@ class Dialogue:
         return result
 
     def _settle(self, model: Model, text: str) -> Result | None:
-        """"cancel" drops the pending question; "no, the other one" takes the other of two candidates."""
+        """ "cancel" drops the pending question; "no, the other one" takes the other of two candidates."""
         words = " ".join(_WORD.findall(text.lower()))
         if _CANCEL.fullmatch(words):
             self.pending = None
@@ -78,8 +80,12 @@ class Dialogue:
             return Clarify([], "There is no question pending to choose an answer for.")
         candidates = self.pending.clarify.candidates
         if not 0 <= choice < len(candidates):
-            return Clarify([], f"There is no candidate {choice}; please choose from 0 to {len(candidates) - 1}.",
-                           candidates, self.pending.clarify.labels)
+            return Clarify(
+                [],
+                f"There is no candidate {choice}; please choose from 0 to {len(candidates) - 1}.",
+                candidates,
+                self.pending.clarify.labels,
+            )
         command = candidates[choice]
         result = CommandResult(command, 1.0, model.describe_command(command), {}, 0.0)
         self._remember(result, model)
@@ -88,8 +94,12 @@ class Dialogue:
     @staticmethod
     def _is_reply(text: str) -> bool:
         """A reply names parameters only; a new verb means a new command."""
-        return not any(m.slot == "procedure" and m.weight >= LANGUAGE.verb
-                       for term in read(text).terms for reading in term.readings for m in reading)
+        return not any(
+            m.slot == "procedure" and m.weight >= LANGUAGE.verb
+            for term in read(text).terms
+            for reading in term.readings
+            for m in reading
+        )
 
     def _history(self, model: Model) -> History:
         return self.history if self.history is not None else model.default_history

@@ -32,8 +32,7 @@ class Refusal(Exception):
     """The command cannot be done in this state; the message says why, in the robot's words."""
 
 
-def situate(model: Model, command: Command, match: Match, history: History,
-            said_arm: bool) -> tuple[Command, ...]:
+def situate(model: Model, command: Command, match: Match, history: History, said_arm: bool) -> tuple[Command, ...]:
     """The commands that carry out ``command`` in the current state (the first is the one asked for)."""
     world = model.world
     if command.procedure == "pick_up":

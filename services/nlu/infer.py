@@ -46,8 +46,13 @@ class Model:
     def default_history(self) -> History:
         return History(self.world.robot.last_arm, self.world.robot.last_object)
 
-    def parse(self, text: str, history: History | None = None, among: list[Command] | None = None,
-              focus: list[str] | None = None) -> Result:
+    def parse(
+        self,
+        text: str,
+        history: History | None = None,
+        among: list[Command] | None = None,
+        focus: list[str] | None = None,
+    ) -> Result:
         """Understand ``text``: a question, one command, or several in a row.
 
         ``among`` restricts the choice to a pending clarification's candidates
@@ -67,19 +72,30 @@ class Model:
                 return compound.run(self, parts, history)
         return self.parse_step(text, history, among, focus)
 
-    def parse_step(self, text: str, history: History, among: list[Command] | None = None,
-                   focus: list[str] | None = None) -> Result:
+    def parse_step(
+        self, text: str, history: History, among: list[Command] | None = None, focus: list[str] | None = None
+    ) -> Result:
         """One command: the model's choice, with the distance and "both hands" said put into it."""
         said = modifiers.extract(text)
         if said.problem is not None:
             return Clarify(["distance"], said.problem)
         result = self._understand(said.text, history, among, focus)
-        first = result.command if isinstance(result, CommandResult) else \
-            result.candidates[0] if isinstance(result, Clarify) and result.candidates else None
+        first = (
+            result.command
+            if isinstance(result, CommandResult)
+            else result.candidates[0]
+            if isinstance(result, Clarify) and result.candidates
+            else None
+        )
         if said.two_arms and first is not None and first.arg("arm") is not None:
             options = [first.with_arg("arm", arm) for arm in ARMS]
-            return Clarify(["arm"], "You named both hands. Which hand do you mean: the right hand or the left hand?",
-                           options, [command_text(c, self.scene) for c in options], result.score)
+            return Clarify(
+                ["arm"],
+                "You named both hands. Which hand do you mean: the right hand or the left hand?",
+                options,
+                [command_text(c, self.scene) for c in options],
+                result.score,
+            )
         if said.both and isinstance(result, Clarify) and result.candidates:
             one_handed = _one_handed(result.candidates[0], self.scene, result.score)
             if one_handed is not None and len({c.procedure for c in result.candidates}) == 1:
@@ -92,12 +108,12 @@ class Model:
         """The per-utterance part of the prior: last arm (or the object's side), last object (once per history)."""
         part = self._history_parts.get(history)
         if part is None:
-            part = self._history_parts[history] = history_scores(self.index.arm, self.index.object, history,
-                                                                 self.world, self.sides)
+            part = self._history_parts[history] = history_scores(
+                self.index.arm, self.index.object, history, self.world, self.sides
+            )
         return part
 
-    def _understand(self, text: str, history: History, among: list[Command] | None,
-                    focus: list[str] | None) -> Result:
+    def _understand(self, text: str, history: History, among: list[Command] | None, focus: list[str] | None) -> Result:
         utterance = read(text)
         if focus:
             utterance = _focused(utterance, focus)
@@ -143,14 +159,19 @@ class Model:
             return self._command(tied[0], confidence, best_score, match, history)
         everything = [self._filled(self.index.commands[i], match) for i in tied]
         if len({c.procedure for c in everything}) > 1:
-            firsts = _one_per_procedure(everything)[:DECISION.max_candidates]
-            return Clarify([], rephrase_question(firsts, self.scene), firsts,
-                           [command_text(c, self.scene) for c in firsts], best_score)
+            firsts = _one_per_procedure(everything)[: DECISION.max_candidates]
+            return Clarify(
+                [],
+                rephrase_question(firsts, self.scene),
+                firsts,
+                [command_text(c, self.scene) for c in firsts],
+                best_score,
+            )
         try:
             hands.already_held(self, everything[0].procedure, match)
         except hands.Refusal as refusal:
             return Clarify([], str(refusal))
-        candidates = everything[:DECISION.max_candidates]
+        candidates = everything[: DECISION.max_candidates]
         labels = [command_text(c, self.scene) for c in candidates]
         procedure = candidates[0].procedure
         params = [p for p in PROCEDURES[procedure] if len({c.arg(p) for c in candidates}) > 1]
@@ -164,8 +185,9 @@ class Model:
         command = self._filled(self.index.commands[position], match)
         return self._situated(command, self.index.explain(position, match), confidence, score, match, history)
 
-    def _situated(self, command: Command, phrases: dict[str, str], confidence: float, score: float, match: Match,
-                  history: History) -> Result:
+    def _situated(
+        self, command: Command, phrases: dict[str, str], confidence: float, score: float, match: Match, history: History
+    ) -> Result:
         """The command as the hands' state allows it (see ``hands``), with its sentence."""
         if command.procedure == "execute" and match.has_number:  # "play action 2": that action, then run it
             switch = self._filled(Command("switch_action", (("target", NUMBER),)), match)
@@ -217,11 +239,14 @@ def qualify(result: CommandResult, said: modifiers.Modifiers, scene: Scene) -> R
     command = result.command
     if said.distance is not None:
         if command.procedure not in DISTANCE_PROCEDURES:
-            return Clarify(["distance"], "A distance goes with a move in a direction, like \"move up 5 centimetres\" "
-                           "or \"move towards the cup a little\".")
+            return Clarify(
+                ["distance"],
+                'A distance goes with a move in a direction, like "move up 5 centimetres" '
+                'or "move towards the cup a little".',
+            )
         command = Command(command.procedure, command.args + (("distance", round(said.distance, 4)),))
     elif said.bare_number and command.procedure in DISTANCE_PROCEDURES:
-        return Clarify(["distance"], "How far is that? Please say the distance with a unit, like \"5 centimetres\".")
+        return Clarify(["distance"], 'How far is that? Please say the distance with a unit, like "5 centimetres".')
     if said.both and command.arg("arm") is not None:
         refusal = _one_handed(command, scene, result.score)
         if refusal is not None:
@@ -240,8 +265,13 @@ def _one_handed(command: Command, scene: Scene, score: float) -> Clarify | None:
         return None
     verb = PROCEDURES_CONTRACT[command.procedure].verb
     options = [command.with_arg("arm", arm) for arm in ARMS]
-    return Clarify(["arm"], f"I can {verb} with only one hand at a time. Which hand do you mean: the right hand "
-                   "or the left hand?", options, [command_text(c, scene) for c in options], score)
+    return Clarify(
+        ["arm"],
+        f"I can {verb} with only one hand at a time. Which hand do you mean: the right hand or the left hand?",
+        options,
+        [command_text(c, scene) for c in options],
+        score,
+    )
 
 
 def _focused(utterance: Utterance, focus: list[str]) -> Utterance:

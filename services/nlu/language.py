@@ -80,8 +80,10 @@ class Index:
         self.held = np.array([holder.get(c.arg("arm"), -1) if carrying[i] else -1 for i, c in enumerate(self.commands)])
         grippers = world.robot.grippers
         self.landmarked = np.isin(self.procedure, list(LANDMARKED)).astype(int)
-        self.carries = self.place | (carrying & np.array([grippers.get(c.arg("arm")) == "holding"
-                                                         or c.arg("arm") in holder for c in self.commands]))
+        self.carries = self.place | (
+            carrying
+            & np.array([grippers.get(c.arg("arm")) == "holding" or c.arg("arm") in holder for c in self.commands])
+        )
         self._verb_columns: dict[frozenset[str], np.ndarray] = {}
 
     def column(self, meaning: Meaning) -> np.ndarray:
@@ -148,15 +150,22 @@ class Index:
                     slots: tuple[str, ...] = ("object",)
                     if theme and vector is not None and held >= 0 and vector[held] > score:
                         score, slots = float(vector[held]), ()  # words for the held object
-                    if theme and reading[0].slot == "anaphor" and self.carries[command_index] \
-                            and reading[0].weight > score:
+                    if (
+                        theme
+                        and reading[0].slot == "anaphor"
+                        and self.carries[command_index]
+                        and reading[0].weight > score
+                    ):
                         score, slots = reading[0].weight, ()  # "it" is the held object, not the landmark
                 else:
                     fits = [m for m in reading if self.column(m)[command_index]]
                     score = sum(m.weight for m in fits)
                     # a weak verb reading ("action") is not a verb the user chose
-                    slots = tuple("verb" if m.slot == "procedure" else m.slot for m in fits
-                                  if m.slot != "number" and (m.slot != "procedure" or m.weight >= LANGUAGE.verb))
+                    slots = tuple(
+                        "verb" if m.slot == "procedure" else m.slot
+                        for m in fits
+                        if m.slot != "number" and (m.slot != "procedure" or m.weight >= LANGUAGE.verb)
+                    )
                     if any(m.slot == "number" for m in fits):
                         slots += ("target",)
                 if score > best_score:

@@ -26,7 +26,7 @@ REFERRING_SLOTS = frozenset({"relate", "ordinal", "order"})
 
 @dataclass(frozen=True)
 class Meaning:
-    slot: str        # procedure, arm, destination, relation, direction, target, number, or an object slot
+    slot: str  # procedure, arm, destination, relation, direction, target, number, or an object slot
     value: Any
     weight: float
 
@@ -63,8 +63,10 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     (("retreat", "back off", "back away"), ((verb(MOVE), option("direction", "away_from")),)),
     (("tuck", "put away"), ((verb(MOVE), option("destination", "side")),)),
     # pick and place
-    (("pick up", "pick", "pickup", "grab", "take", "grasp", "get", "collect", "seize", "hold", "take hold of"),
-     ((verb(_procs("pick_up")),),)),
+    (
+        ("pick up", "pick", "pickup", "grab", "take", "grasp", "get", "collect", "seize", "hold", "take hold of"),
+        ((verb(_procs("pick_up")),),),
+    ),
     # "lift it" with the object in hand raises the hand; with an empty hand, naming an object picks it up
     (("lift",), ((verb(_procs("pick_up")),), (verb(_procs("move_abs_dir")), option("direction", "up", W.weak)))),
     (("place", "set", "lay", "drop", "deposit", "stack", "place down", "set down", "lay down"), ((verb(PLACE),),)),
@@ -72,67 +74,171 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     (("put down",), ((verb(PLACE), option("destination", "table", W.weak)),)),
     (("release", "let go", "let go of"), ((verb(_procs("open")),), (verb(PLACE, W.weak),))),
     # looking and pointing
-    (("point", "point to", "point at", "point towards", "point toward", "indicate", "show", "show me"),
-     ((verb(_procs("point_to")),),)),
-    (("look", "look at", "look to", "look towards", "look toward", "see", "watch", "gaze at", "find"),
-     ((verb(_procs("look_at")),),)),
+    (
+        ("point", "point to", "point at", "point towards", "point toward", "indicate", "show", "show me"),
+        ((verb(_procs("point_to")),),),
+    ),
+    (
+        ("look", "look at", "look to", "look towards", "look toward", "see", "watch", "gaze at", "find"),
+        ((verb(_procs("look_at")),),),
+    ),
     # wrist and gripper
     (("rotate", "turn", "twist", "spin", "roll"), ((verb(_procs("rotate")),),)),
     (("clockwise", "cw", "clock wise"), ((option("direction", "cw"),),)),
-    (("counterclockwise", "counter clockwise", "anticlockwise", "anti clockwise", "ccw"),
-     ((option("direction", "ccw"),),)),
+    (
+        ("counterclockwise", "counter clockwise", "anticlockwise", "anti clockwise", "ccw"),
+        ((option("direction", "ccw"),),),
+    ),
     (("open", "ungrip", "unclench", "open up"), ((verb(_procs("open")),),)),
     (("close", "shut", "grip", "clench", "squeeze", "close up"), ((verb(_procs("close")),),)),
     # the system itself
-    (("record", "scan", "rescan", "look around", "detect", "refresh", "update", "record objects", "scan the table"),
-     ((verb(_procs("record")),),)),
+    (
+        ("record", "scan", "rescan", "look around", "detect", "refresh", "update", "record objects", "scan the table"),
+        ((verb(_procs("record")),),),
+    ),
     (("start recording", "start recording a new action", "start programming"), ((verb(_procs("create_action")),),)),
-    (("create", "new", "make", "begin", "create action", "new action", "create new action", "make new action",
-      "start new action", "start a new action"), ((verb(_procs("create_action")),),)),
-    (("switch", "switch to", "change to", "go to action", "switch action", "change action"),
-     ((verb(_procs("switch_action")),),)),
+    (
+        (
+            "create",
+            "new",
+            "make",
+            "begin",
+            "create action",
+            "new action",
+            "create new action",
+            "make new action",
+            "start new action",
+            "start a new action",
+        ),
+        ((verb(_procs("create_action")),),),
+    ),
+    (
+        ("switch", "switch to", "change to", "go to action", "switch action", "change action"),
+        ((verb(_procs("switch_action")),),),
+    ),
     (("action", "program"), ((verb(_procs("create_action", "switch_action", "execute"), W.weak),),)),
     (("next", "following"), ((option("target", "next"),),)),
     (("previous", "prior", "preceding"), ((option("target", "previous"),),)),
-    (("next action", "the next action", "following action"),
-     ((verb(_procs("switch_action")), option("target", "next")),)),
-    (("previous action", "the previous action", "last action", "the last action", "prior action"),
-     ((verb(_procs("switch_action")), option("target", "previous")),)),
-    (("execute", "run", "perform", "replay", "play", "do it", "go ahead", "start", "test", "execute action",
-      "run action"), ((verb(_procs("execute")),),)),
-    (("undo the last move", "undo the move", "undo that move", "undo last", "undo the last one"),
-     ((verb(_procs("undo")),),)),
-    (("undo", "undo that", "undo it", "take that back", "take it back", "revert", "revert that", "go back a step",
-      "undo the last step", "scratch that"), ((verb(_procs("undo")),),)),
-    (("repeat", "do it again", "do that again", "once more", "one more time", "same again", "repeat that",
-      "same thing again", "do the same", "do the same again"), ((verb(_procs("repeat")),),)),
+    (
+        ("next action", "the next action", "following action"),
+        ((verb(_procs("switch_action")), option("target", "next")),),
+    ),
+    (
+        ("previous action", "the previous action", "last action", "the last action", "prior action"),
+        ((verb(_procs("switch_action")), option("target", "previous")),),
+    ),
+    (
+        (
+            "execute",
+            "run",
+            "perform",
+            "replay",
+            "play",
+            "do it",
+            "go ahead",
+            "start",
+            "test",
+            "execute action",
+            "run action",
+        ),
+        ((verb(_procs("execute")),),),
+    ),
+    (
+        ("undo the last move", "undo the move", "undo that move", "undo last", "undo the last one"),
+        ((verb(_procs("undo")),),),
+    ),
+    (
+        (
+            "undo",
+            "undo that",
+            "undo it",
+            "take that back",
+            "take it back",
+            "revert",
+            "revert that",
+            "go back a step",
+            "undo the last step",
+            "scratch that",
+        ),
+        ((verb(_procs("undo")),),),
+    ),
+    (
+        (
+            "repeat",
+            "do it again",
+            "do that again",
+            "once more",
+            "one more time",
+            "same again",
+            "repeat that",
+            "same thing again",
+            "do the same",
+            "do the same again",
+        ),
+        ((verb(_procs("repeat")),),),
+    ),
     (("again",), ((verb(_procs("repeat"), W.option),),)),  # alone it repeats; with another verb it is an adverb
     (("go back to", "return to", "back to"), ((verb(_procs("switch_action")),), (verb(MOVE),))),
     (("look at the table", "look at the table again", "look again", "have a look"), ((verb(_procs("record")),),)),
-    (("stop", "halt", "freeze", "abort", "cancel", "pause", "stop executing", "stop it", "stop moving", "hold on",
-      "hang on", "wait"),
-     ((verb(_procs("stop")),),)),
+    (
+        (
+            "stop",
+            "halt",
+            "freeze",
+            "abort",
+            "cancel",
+            "pause",
+            "stop executing",
+            "stop it",
+            "stop moving",
+            "hold on",
+            "hang on",
+            "wait",
+        ),
+        ((verb(_procs("stop")),),),
+    ),
     # arms
     (("right hand", "right arm", "right gripper", "your right"), ((option("arm", "right", W.arm),),)),
     (("left hand", "left arm", "left gripper", "your left"), ((option("arm", "left", W.arm),),)),
     (("hand", "arm", "gripper", "claw"), ((option("arm", "*", W.generic_arm),),)),
     # places
-    (("side", "to the side", "aside", "out of the way", "sideways", "to your side"),
-     ((option("destination", "side"),),)),
-    (("table", "on the table", "onto the table", "on table", "to the table", "on the tabletop"),
-     ((option("destination", "table"),),)),
-    (("here", "right here", "over here", "where it is", "in place", "there it is"),
-     ((option("destination", "here"),),)),
+    (
+        ("side", "to the side", "aside", "out of the way", "sideways", "to your side"),
+        ((option("destination", "side"),),),
+    ),
+    (
+        ("table", "on the table", "onto the table", "on table", "to the table", "on the tabletop"),
+        ((option("destination", "table"),),),
+    ),
+    (
+        ("here", "right here", "over here", "where it is", "in place", "there it is"),
+        ((option("destination", "here"),),),
+    ),
     # relations (destinations relative to an object)
     (("above", "over", "on top", "higher than"), ((option("relation", "above"),),)),
-    (("on top of", "on", "onto", "on to", "atop", "upon", "in", "into", "inside"),
-     ((option("relation", "on_top_of"),),)),
-    (("next to", "beside", "besides", "alongside", "by the side of", "at the side of"),
-     ((option("relation", "next_to"),),)),
-    (("to the left of", "left of", "on the left of", "at the left of", "on the left side of", "to the left side of"),
-     ((option("relation", "left_of"),),)),
-    (("to the right of", "right of", "on the right of", "at the right of", "on the right side of",
-      "to the right side of"), ((option("relation", "right_of"),),)),
+    (
+        ("on top of", "on", "onto", "on to", "atop", "upon", "in", "into", "inside"),
+        ((option("relation", "on_top_of"),),),
+    ),
+    (
+        ("next to", "beside", "besides", "alongside", "by the side of", "at the side of"),
+        ((option("relation", "next_to"),),),
+    ),
+    (
+        ("to the left of", "left of", "on the left of", "at the left of", "on the left side of", "to the left side of"),
+        ((option("relation", "left_of"),),),
+    ),
+    (
+        (
+            "to the right of",
+            "right of",
+            "on the right of",
+            "at the right of",
+            "on the right side of",
+            "to the right side of",
+        ),
+        ((option("relation", "right_of"),),),
+    ),
     (("in front of", "front of", "before"), ((option("relation", "in_front_of"),),)),
     (("behind", "in back of", "at the back of", "back of", "beyond"), ((option("relation", "behind"),),)),
     (("near", "close to", "near to", "nearby", "by", "around"), ((option("relation", "near"),),)),
@@ -141,33 +247,94 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     (("down", "downward", "downwards"), ((option("direction", "down"),), (option("destination", "table", W.weak),))),
     (("to the left", "leftward", "leftwards", "to your left"), ((option("direction", "left"),),)),
     (("to the right", "rightward", "rightwards", "to your right"), ((option("direction", "right"),),)),
-    (("left",), ((option("direction", "left"),), (option("arm", "left", W.weak),),
-                 (Meaning("label", "leftmost", W.adjective),), (option("direction", "ccw", W.weak * 3),))),
-    (("right",), ((option("direction", "right"),), (option("arm", "right", W.weak),),
-                  (Meaning("label", "rightmost", W.adjective),), (option("direction", "cw", W.weak * 3),))),
-    (("forward", "forwards", "ahead", "further", "farther", "away from me", "outward"),
-     ((option("direction", "forward"),),)),
-    (("backward", "backwards", "back", "towards yourself", "toward yourself", "towards you", "toward you",
-      "closer to you"), ((option("direction", "backward"),),)),
+    (
+        ("left",),
+        (
+            (option("direction", "left"),),
+            (option("arm", "left", W.weak),),
+            (Meaning("label", "leftmost", W.adjective),),
+            (option("direction", "ccw", W.weak * 3),),
+        ),
+    ),
+    (
+        ("right",),
+        (
+            (option("direction", "right"),),
+            (option("arm", "right", W.weak),),
+            (Meaning("label", "rightmost", W.adjective),),
+            (option("direction", "cw", W.weak * 3),),
+        ),
+    ),
+    (
+        ("forward", "forwards", "ahead", "further", "farther", "away from me", "outward"),
+        ((option("direction", "forward"),),),
+    ),
+    (
+        (
+            "backward",
+            "backwards",
+            "back",
+            "towards yourself",
+            "toward yourself",
+            "towards you",
+            "toward you",
+            "closer to you",
+        ),
+        ((option("direction", "backward"),),),
+    ),
     (("towards", "toward", "closer to", "closer", "nearer to"), ((option("direction", "towards"),),)),
-    (("away from", "away", "further from", "farther from", "further away from"),
-     ((option("direction", "away_from"),),)),
+    (
+        ("away from", "away", "further from", "farther from", "further away from"),
+        ((option("direction", "away_from"),),),
+    ),
     (("to",), ((option("direction", "towards", W.weak),),)),
     (("from",), ((option("direction", "away_from", W.weak),),)),
     # object words
     (("leftmost", "left most", "furthest left", "farthest left"), _label("leftmost")),
     (("rightmost", "right most", "furthest right", "farthest right"), _label("rightmost")),
     # where an object stands, said as a place: "the cup on the left" (an object's label, or weakly the direction)
-    (("on the left", "on your left", "at the left", "on the left side", "on the left hand side"),
-     ((Meaning("label", "leftmost", W.adjective),), (option("direction", "left", W.weak),))),
-    (("on the right", "on your right", "at the right", "on the right side", "on the right hand side"),
-     ((Meaning("label", "rightmost", W.adjective),), (option("direction", "right", W.weak),))),
+    (
+        ("on the left", "on your left", "at the left", "on the left side", "on the left hand side"),
+        ((Meaning("label", "leftmost", W.adjective),), (option("direction", "left", W.weak),)),
+    ),
+    (
+        ("on the right", "on your right", "at the right", "on the right side", "on the right hand side"),
+        ((Meaning("label", "rightmost", W.adjective),), (option("direction", "right", W.weak),)),
+    ),
     (("in the back", "at the back", "in the rear", "at the far end"), _label("farthest")),
     (("in front", "at the front", "up front"), _label("nearest")),
-    (("nearest", "closest", "near most", "front", "nearer", "closest to me", "closest to you", "nearest to me",
-      "nearest to you", "nearest me", "nearest you"), _label("nearest")),
-    (("farthest", "furthest", "far", "farthest away", "furthest away", "far away", "rear", "farthest from me",
-      "furthest from me", "farthest from you", "furthest from you"), _label("farthest")),
+    (
+        (
+            "nearest",
+            "closest",
+            "near most",
+            "front",
+            "nearer",
+            "closest to me",
+            "closest to you",
+            "nearest to me",
+            "nearest to you",
+            "nearest me",
+            "nearest you",
+        ),
+        _label("nearest"),
+    ),
+    (
+        (
+            "farthest",
+            "furthest",
+            "far",
+            "farthest away",
+            "furthest away",
+            "far away",
+            "rear",
+            "farthest from me",
+            "furthest from me",
+            "farthest from you",
+            "furthest from you",
+        ),
+        _label("farthest"),
+    ),
     (("tallest", "tall", "highest", "high", "taller"), _label("tallest")),
     (("shortest", "short", "lowest", "low", "shorter", "flattest", "flat"), _label("shortest")),
     (("biggest", "big", "largest", "large", "bigger", "larger", "huge"), _label("biggest")),
@@ -185,27 +352,62 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     (("from the back", "from the far end", "from the rear"), ((Meaning("order", "back", 0.0),),)),
     *(((word,), ((Meaning("ordinal", n, 0.0),),)) for n, word in enumerate(ORDINALS, 1)),
     (("last",), ((Meaning("ordinal", -1, 0.0),),)),
-    (("it", "that", "this", "there", "same", "the same one", "same one", "same object", "that one", "this one",
-      "them"), ((Meaning("anaphor", "*", W.anaphor),),)),
+    (
+        (
+            "it",
+            "that",
+            "this",
+            "there",
+            "same",
+            "the same one",
+            "same one",
+            "same object",
+            "that one",
+            "this one",
+            "them",
+        ),
+        ((Meaning("anaphor", "*", W.anaphor),),),
+    ),
 ]
 
 COLOR_WORDS: dict[str, str] = {
-    "red": "red", "green": "green", "blue": "blue", "yellow": "yellow", "orange": "orange",
-    "purple": "purple", "violet": "purple", "white": "white", "black": "black", "grey": "grey", "gray": "grey",
+    "red": "red",
+    "green": "green",
+    "blue": "blue",
+    "yellow": "yellow",
+    "orange": "orange",
+    "purple": "purple",
+    "violet": "purple",
+    "white": "white",
+    "black": "black",
+    "grey": "grey",
+    "gray": "grey",
 }
 TYPE_WORDS: dict[str, str] = {
-    "cup": "cup", "mug": "cup", "glass": "cup", "box": "box", "block": "box", "crate": "box", "cube": "box",
-    "plate": "plate", "dish": "plate", "saucer": "plate", "bowl": "bowl",
+    "cup": "cup",
+    "mug": "cup",
+    "glass": "cup",
+    "box": "box",
+    "block": "box",
+    "crate": "box",
+    "cube": "box",
+    "plate": "plate",
+    "dish": "plate",
+    "saucer": "plate",
+    "bowl": "bowl",
 }
 
 FILLERS = frozenset(
     "please now could can would will you your my the a an robot kindly just then and ok okay hey with of at "
-    "i want like me is for so use using hmm um uh well also let us lets s its".split())
+    "i want like me is for so use using hmm um uh well also let us lets s its".split()
+)
 
 NUMBER_WORDS: dict[str, int] = {
-    w: i for i, w in enumerate(
+    w: i
+    for i, w in enumerate(
         "zero one two three four five six seven eight nine ten eleven twelve thirteen fourteen fifteen "
-        "sixteen seventeen eighteen nineteen twenty".split())
+        "sixteen seventeen eighteen nineteen twenty".split()
+    )
 }
 
 
@@ -229,8 +431,12 @@ def _phrases_with(test: Any) -> frozenset[str]:
 
 
 # phrases after which the object words name a landmark: a relation or an object-relative direction
-LANDMARK_PHRASES = _phrases_with(lambda m: m.weight >= W.option and (
-    (m.slot == "relation" and m.value in RELATIONS) or (m.slot == "direction" and m.value in REL_DIRECTIONS)))
+LANDMARK_PHRASES = _phrases_with(
+    lambda m: (
+        m.weight >= W.option
+        and ((m.slot == "relation" and m.value in RELATIONS) or (m.slot == "direction" and m.value in REL_DIRECTIONS))
+    )
+)
 # phrases that may start or link a relational referring expression (``relational.py``)
 REFERRING_PHRASES = LANDMARK_PHRASES | _phrases_with(lambda m: m.slot in REFERRING_SLOTS)
 MAX_PHRASE_WORDS = max(len(p.split()) for p in PHRASES)

@@ -18,30 +18,56 @@ from rapidfuzz.distance import DamerauLevenshtein
 
 from shared.contract import DISTANCE
 
-_SMALL = ("zero one two three four five six seven eight nine ten eleven twelve thirteen fourteen fifteen sixteen "
-          "seventeen eighteen nineteen").split()
-_TENS = {"twenty": 20, "thirty": 30, "forty": 40, "fifty": 50, "sixty": 60, "seventy": 70, "eighty": 80,
-         "ninety": 90, "hundred": 100}
-_WORD_NUMBER = (r"(?:(?:" + "|".join(_TENS) + r")(?:[ -](?:" + "|".join(_SMALL[1:10]) + r"))?|"
-                + "|".join(sorted(_SMALL, key=len, reverse=True)) + r"|an?|half an?|half)")
+_SMALL = (
+    "zero one two three four five six seven eight nine ten eleven twelve thirteen fourteen fifteen sixteen "
+    "seventeen eighteen nineteen"
+).split()
+_TENS = {
+    "twenty": 20,
+    "thirty": 30,
+    "forty": 40,
+    "fifty": 50,
+    "sixty": 60,
+    "seventy": 70,
+    "eighty": 80,
+    "ninety": 90,
+    "hundred": 100,
+}
+_WORD_NUMBER = (
+    r"(?:(?:"
+    + "|".join(_TENS)
+    + r")(?:[ -](?:"
+    + "|".join(_SMALL[1:10])
+    + r"))?|"
+    + "|".join(sorted(_SMALL, key=len, reverse=True))
+    + r"|an?|half an?|half)"
+)
 _NUMBER = rf"(?P<number>\d+(?:[.,]\d+)?|\.\d+|{_WORD_NUMBER})(?: and a half)?"
-_UNIT = (r"(?P<unit>millimet(?:er|re)s?|mms?|centimet(?:er|re)s?|cms?|centis?|met(?:er|re)s?|m|inch(?:es)?|\"|ft"
-         r"|foot|feet)")
+_UNIT = (
+    r"(?P<unit>millimet(?:er|re)s?|mms?|centimet(?:er|re)s?|cms?|centis?|met(?:er|re)s?|m|inch(?:es)?|\"|ft"
+    r"|foot|feet)"
+)
 _UNIT_WORDS = ("millimetres", "millimeters", "centimetres", "centimeters", "metres", "meters", "inches")
 _UNIT_TYPO = re.compile(r"(?P<lead>\d ?)(?P<word>(?!(?:millimet|centimet|met)(?:er|re)s\b|inches\b)[a-z]{6,})\b")
 _MEASURED = re.compile(rf"\b(?:by |about |around |roughly )?{_NUMBER} ?{_UNIT}(?![a-z])")
 _QUALITATIVE = {
-    DISTANCE.a_little_m: re.compile(r"\b(?:just )?(?:a (?:little|tiny|wee) bit|a little|a bit|a tad|a touch|"
-                                    r"slightly|a smidge|a few centimet(?:er|re)s|a few cms?)\b"
-                                    r"(?! (?:cup|box|plate|bowl|object))"),
+    DISTANCE.a_little_m: re.compile(
+        r"\b(?:just )?(?:a (?:little|tiny|wee) bit|a little|a bit|a tad|a touch|"
+        r"slightly|a smidge|a few centimet(?:er|re)s|a few cms?)\b"
+        r"(?! (?:cup|box|plate|bowl|object))"
+    ),
     DISTANCE.a_lot_m: re.compile(r"\b(?:a lot|a long way|a great deal|quite a bit|a good bit)\b"),
 }
-_UNIT_ONLY = re.compile(r"\b(?:some |several |a few |few |many )?(?:millimet(?:er|re)s?|centimet(?:er|re)s?|"
-                        r"inch(?:es)?|met(?:er|re)s?)\b")
+_UNIT_ONLY = re.compile(
+    r"\b(?:some |several |a few |few |many )?(?:millimet(?:er|re)s?|centimet(?:er|re)s?|"
+    r"inch(?:es)?|met(?:er|re)s?)\b"
+)
 _BARE_NUMBER = re.compile(r"(?<!action )(?<!number )\b(?:\d+(?:\.\d+)?)\b")
 _BOTH = re.compile(r"\b(?:with )?both(?: of)?(?: (?:your|my|the))? (?:hands|arms|grippers|claws)\b|\bboth\b")
-_TWO_ARMS = re.compile(r"\b(?:with )?(?:your |the |my )?(?P<a>right|left)(?: (?:hand|arm|gripper))? (?:and|&) "
-                       r"(?:your |the |my )?(?P<b>right|left) (?:hands?|arms?|grippers?)\b")
+_TWO_ARMS = re.compile(
+    r"\b(?:with )?(?:your |the |my )?(?P<a>right|left)(?: (?:hand|arm|gripper))? (?:and|&) "
+    r"(?:your |the |my )?(?P<b>right|left) (?:hands?|arms?|grippers?)\b"
+)
 
 _ARM_NAMED = re.compile(r"\b(right|left) (?:hand|arm|gripper|claw)s?\b")
 
@@ -51,12 +77,12 @@ class Modifiers:
     """What was taken out of an utterance: the rest for the model, and the qualifiers."""
 
     text: str
-    distance: float | None = None      # metres, within the limits
-    distance_words: str = ""           # how the user said it
-    both: bool = False                  # "both hands", "right and left hand"
-    problem: str | None = None          # a distance that cannot be used, said as the robot would
-    bare_number: bool = False           # a number with no unit ("move up 5")
-    two_arms: bool = False              # each hand named apart ("move your right hand up with the left hand")
+    distance: float | None = None  # metres, within the limits
+    distance_words: str = ""  # how the user said it
+    both: bool = False  # "both hands", "right and left hand"
+    problem: str | None = None  # a distance that cannot be used, said as the robot would
+    bare_number: bool = False  # a number with no unit ("move up 5")
+    two_arms: bool = False  # each hand named apart ("move your right hand up with the left hand")
 
 
 def extract(text: str) -> Modifiers:
@@ -82,22 +108,24 @@ def extract(text: str) -> Modifiers:
                 lowered = _cut(lowered, found)
                 break
     if distance is None and _UNIT_ONLY.search(lowered):
-        problem = "How far? Please say the distance with a number, like \"up 5 centimetres\"."
+        problem = 'How far? Please say the distance with a number, like "up 5 centimetres".'
     elif distance is not None and not DISTANCE.allows(round(distance, 4)):
-        problem = (f"I can move between {DISTANCE.min_m * 100:g} and {DISTANCE.max_m * 100:g} cm in one step; "
-                   f"{said} is too {'far' if distance > DISTANCE.max_m else 'small'}.")
+        problem = (
+            f"I can move between {DISTANCE.min_m * 100:g} and {DISTANCE.max_m * 100:g} cm in one step; "
+            f"{said} is too {'far' if distance > DISTANCE.max_m else 'small'}."
+        )
     named = {found[1] for found in _ARM_NAMED.finditer(lowered)}
     return Modifiers(lowered, distance, said, both, problem, _BARE_NUMBER.search(lowered) is not None, len(named) > 1)
 
 
 def _unit_fixed(found: re.Match[str]) -> str:
-    """"5 centimetrs" -> "5 centimetres": a misspelt unit right after a number (two edits at most)."""
+    """ "5 centimetrs" -> "5 centimetres": a misspelt unit right after a number (two edits at most)."""
     match = process.extractOne(found["word"], _UNIT_WORDS, scorer=DamerauLevenshtein.distance, score_cutoff=2)
     return f"{found['lead']}{match[0] if match is not None else found['word']}"
 
 
 def _cut(text: str, found: re.Match[str]) -> str:
-    return " ".join((text[:found.start()] + " " + text[found.end():]).split())
+    return " ".join((text[: found.start()] + " " + text[found.end() :]).split())
 
 
 def _metres(found: re.Match[str]) -> float:

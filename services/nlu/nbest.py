@@ -67,8 +67,9 @@ class Choice:
         return isinstance(self.reading.result, CommandResult) and self.share < below
 
 
-def most_plausible(model: Model, history: History | None, nbest: list[Any],
-                   nlu_weight: float = NLU_WEIGHT) -> Choice | None:
+def most_plausible(
+    model: Model, history: History | None, nbest: list[Any], nlu_weight: float = NLU_WEIGHT
+) -> Choice | None:
     """The choice among ``dialog/utterance`` n-best entries ``{"text", "score"}``; malformed ones are skipped."""
     readings = []
     for hypothesis in nbest:

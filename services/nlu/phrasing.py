@@ -14,8 +14,12 @@ from shared.contract import BOTH, PROCEDURES, arm_words, distance_words
 from shared.contract import value_words as option_words
 
 SLOT_QUESTIONS = {
-    "arm": "Which hand", "object": "Which object", "relation": "Where exactly", "direction": "Which direction",
-    "destination": "Where", "target": "Which action",
+    "arm": "Which hand",
+    "object": "Which object",
+    "relation": "Where exactly",
+    "direction": "Which direction",
+    "destination": "Where",
+    "target": "Which action",
 }
 
 
@@ -27,8 +31,11 @@ def command_text(command: Command, scene: Scene, phrases: dict[str, str] | None 
     arm = command.arg("arm")
     said_arm = phrases.get("arm", "")
     names_limb = arm is not None and arm in said_arm and any(w in said_arm for w in ("hand", "arm", "gripper"))
-    hand = f"your {said_arm}" if names_limb else (f"your {arm_words(arm)}" if arm and arm != BOTH else
-                                                  arm_words(arm) if arm else "")
+    hand = (
+        f"your {said_arm}"
+        if names_limb
+        else (f"your {arm_words(arm)}" if arm and arm != BOTH else arm_words(arm) if arm else "")
+    )
     distance = command.arg("distance")
     far = distance_words(distance) if distance is not None else ""
     obj = _object_words(command, scene)
@@ -93,7 +100,7 @@ def value_words(slot: str, value: object, scene: Scene) -> str:
 
 
 def either(options: list[str], limit: int = 4) -> str:
-    """"a, b or c" (with "or another" beyond ``limit``)."""
+    """ "a, b or c" (with "or another" beyond ``limit``)."""
     shown = options[:limit]
     if len(options) > limit:
         return ", ".join(shown) + " or another one"
@@ -103,7 +110,7 @@ def either(options: list[str], limit: int = 4) -> str:
 
 
 def parameter_question(params: list[str], candidates: list[Command], scene: Scene) -> str:
-    """"Which object do you mean: the red cup or the blue cup?" for every contended parameter."""
+    """ "Which object do you mean: the red cup or the blue cup?" for every contended parameter."""
     parts = []
     for i, slot in enumerate(params):
         values: list[object] = []

@@ -38,14 +38,23 @@ def situation_scores(world: World, commands: list[Command]) -> np.ndarray:
 
 def side_scores(world: World, commands: list[Command]) -> np.ndarray:
     """Penalty of each arm command on an object lying on the other arm's side (for when no hand was used yet)."""
-    side = {obj.id: ("right" if obj.position[1] < -MARGINS.side_m else "left" if obj.position[1] > MARGINS.side_m
-                     else None) for obj in world.objects}
-    return np.array([PRIOR.far_side if c.arg("arm") is not None
-                     and side.get(c.arg("object")) not in (None, c.arg("arm")) else 0.0 for c in commands])
+    side = {
+        obj.id: ("right" if obj.position[1] < -MARGINS.side_m else "left" if obj.position[1] > MARGINS.side_m else None)
+        for obj in world.objects
+    }
+    return np.array(
+        [
+            PRIOR.far_side
+            if c.arg("arm") is not None and side.get(c.arg("object")) not in (None, c.arg("arm"))
+            else 0.0
+            for c in commands
+        ]
+    )
 
 
-def history_scores(arm_index: np.ndarray, object_index: np.ndarray, history: History, world: World,
-                   sides: np.ndarray) -> np.ndarray:
+def history_scores(
+    arm_index: np.ndarray, object_index: np.ndarray, history: History, world: World, sides: np.ndarray
+) -> np.ndarray:
     """Prefer the last arm used (or, with none yet, the arm on the object's side) and the last object referred to."""
     scores = np.zeros(len(arm_index))
     if history.last_arm in ARMS:

@@ -22,31 +22,53 @@ if TYPE_CHECKING:
     from services.nlu.infer import Model
     from services.nlu.prior import History
 
-_PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple((topic, re.compile(pattern)) for topic, pattern in (
-    ("help", r"^(?:help\b|help me\b|what (?:can|should|do) i (?:say|do|ask|tell)|what (?:can|do) you (?:do|understand)"
-             r"|what commands|which commands|how do i (?:talk|speak|use)|what are the commands|how does this work)"),
-    ("holding", r"^(?:what (?:are|do|did) you (?:holding|have|carrying|hold|got|grab)|what(?:'s| is) in (?:your|my) "
-                r"(?:\w+ )?(?:hand|gripper|arm)s?|are you holding|do you have anything|is (?:your|the) (?:\w+ )?hand "
-                r"(?:empty|full|holding)|what do you hold|what have you got)"),
-    ("actions", r"^(?:what(?:'s| is| does| do)? (?:(?:in|inside) )?(?:action|program) (?P<number>\w+)"
-                r"|how many (?:actions|programs|steps)|which action|what actions|list (?:the |all )?actions"
-                r"|what (?:have|did) i (?:program|record|teach|make)|what is the current action|what(?:'s| is) "
-                r"(?:the )?current action|show (?:me )?(?:the )?actions)"),
-    ("object", r"^(?:where(?:'s| is| are)|is there|are there|do you see|can you see|have you seen|where did|where)"
-               r"\b(?P<phrase>.*)"),
-    ("scene", r"^(?:what (?:do |can )?you (?:see|notice)|which (?:objects|things)"
-              r"|what(?:'s| is| are) (?:on|in front of you|there|around|in view)"
-              r"|what (?:objects|things)|describe (?:the |what)|list (?:the |all )?(?:objects|things)"
-              r"|how many (?:objects|things)"
-              r"|tell me what you see|what is on the table|what have you (?:got|found) on the table)"),
-))
-_POLITE = re.compile(r"^(?:(?:hey|ok|okay|so|well|and|robot|please|now|tell me|can you tell me|could you tell me|"
-                     r"do you know),? )+")
+_PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple(
+    (topic, re.compile(pattern))
+    for topic, pattern in (
+        (
+            "help",
+            r"^(?:help\b|help me\b|what (?:can|should|do) i (?:say|do|ask|tell)|what (?:can|do) you (?:do|understand)"
+            r"|what commands|which commands|how do i (?:talk|speak|use)|what are the commands|how does this work)",
+        ),
+        (
+            "holding",
+            r"^(?:what (?:are|do|did) you (?:holding|have|carrying|hold|got|grab)|what(?:'s| is) in (?:your|my) "
+            r"(?:\w+ )?(?:hand|gripper|arm)s?|are you holding|do you have anything|is (?:your|the) (?:\w+ )?hand "
+            r"(?:empty|full|holding)|what do you hold|what have you got)",
+        ),
+        (
+            "actions",
+            r"^(?:what(?:'s| is| does| do)? (?:(?:in|inside) )?(?:action|program) (?P<number>\w+)"
+            r"|how many (?:actions|programs|steps)|which action|what actions|list (?:the |all )?actions"
+            r"|what (?:have|did) i (?:program|record|teach|make)|what is the current action|what(?:'s| is) "
+            r"(?:the )?current action|show (?:me )?(?:the )?actions)",
+        ),
+        (
+            "object",
+            r"^(?:where(?:'s| is| are)|is there|are there|do you see|can you see|have you seen|where did|where)"
+            r"\b(?P<phrase>.*)",
+        ),
+        (
+            "scene",
+            r"^(?:what (?:do |can )?you (?:see|notice)|which (?:objects|things)"
+            r"|what(?:'s| is| are) (?:on|in front of you|there|around|in view)"
+            r"|what (?:objects|things)|describe (?:the |what)|list (?:the |all )?(?:objects|things)"
+            r"|how many (?:objects|things)"
+            r"|tell me what you see|what is on the table|what have you (?:got|found) on the table)",
+        ),
+    )
+)
+_POLITE = re.compile(
+    r"^(?:(?:hey|ok|okay|so|well|and|robot|please|now|tell me|can you tell me|could you tell me|"
+    r"do you know),? )+"
+)
 
 
 # the first words a question can start with (after "please", "tell me", ...): a cheap test before the patterns
-_OPENERS = frozenset("help what whats where wheres is are do can have how which list describe tell show could so ok "
-                     "okay hey well and robot please now".split())
+_OPENERS = frozenset(
+    "help what whats where wheres is are do can have how which list describe tell show could so ok "
+    "okay hey well and robot please now".split()
+)
 _CONTRACTED = re.compile(r"\b(what|where)(?:'s|s)\b")
 
 
@@ -140,7 +162,7 @@ def _actions(model: Model, number_word: str | None) -> str:
     robot = model.world.robot
     steps = list(robot.actions)
     if not steps:
-        return "There are no actions yet. Say \"create a new action\" to start one."
+        return 'There are no actions yet. Say "create a new action" to start one.'
     current = f" The current one is action {robot.action}." if robot.action is not None else ""
     number = _number(number_word)
     if number is None:
@@ -153,9 +175,11 @@ def _actions(model: Model, number_word: str | None) -> str:
 
 
 def _help(_model: Model) -> str:
-    return ("You can say things like \"pick up the red cup\", \"put it on the plate\", \"move your left hand up "
-            "5 centimetres\", \"open both hands\", \"create a new action\", \"execute\", \"undo\", \"again\", or ask "
-            "\"what do you see\" and \"what are you holding\".")
+    return (
+        'You can say things like "pick up the red cup", "put it on the plate", "move your left hand up '
+        '5 centimetres", "open both hands", "create a new action", "execute", "undo", "again", or ask '
+        '"what do you see" and "what are you holding".'
+    )
 
 
 def _number(word: str | None) -> int | None:

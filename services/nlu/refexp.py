@@ -115,8 +115,9 @@ class Scene:
         return frozenset(int(i) for i in np.flatnonzero(mask))
 
     # -- grounding ---------------------------------------------------------
-    def term_vectors(self, terms: tuple[Term, ...], within: frozenset[int] | None = None,
-                     last_object: int | None = None) -> dict[int, np.ndarray]:
+    def term_vectors(
+        self, terms: tuple[Term, ...], within: frozenset[int] | None = None, last_object: int | None = None
+    ) -> dict[int, np.ndarray]:
         """For each term with an object reading, its best object-reading score per object.
 
         ``within`` limits the label context (e.g. to the objects a pending
@@ -216,16 +217,18 @@ class Scene:
         singles: list[tuple[str, ...]] = [(label,) for label in fitting if self.group(context, label) == {index}]
         if singles:
             return singles
-        return [pair for pair in combinations(fitting, 2)
-                if self.group(context, pair[0]) & self.group(context, pair[1]) == {index}]
+        return [
+            pair
+            for pair in combinations(fitting, 2)
+            if self.group(context, pair[0]) & self.group(context, pair[1]) == {index}
+        ]
 
     def describe_all(self) -> dict[str, str]:
         return {obj.id: self.describe(i).text for i, obj in enumerate(self.world.objects)}
 
 
 def _object_meanings(term: Term) -> list[Meaning]:
-    return [m for reading in term.readings for m in reading
-            if m.slot in OBJECT_SLOTS]
+    return [m for reading in term.readings for m in reading if m.slot in OBJECT_SLOTS]
 
 
 def _priority(label: str) -> int:

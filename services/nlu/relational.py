@@ -30,8 +30,13 @@ _SIDES = {"left_of": (1, 1), "right_of": (1, -1), "in_front_of": (0, -1), "behin
 _ORDER_AXES = {"left": ("y", -1), "right": ("y", +1), "front": ("x", +1), "back": ("x", -1)}  # sort key sign
 
 
-def resolve(scene: Scene, terms: tuple[Term, ...], referent: int | None,
-            within: frozenset[int] | None = None, phrase: bool = False) -> tuple[Term, ...]:
+def resolve(
+    scene: Scene,
+    terms: tuple[Term, ...],
+    referent: int | None,
+    within: frozenset[int] | None = None,
+    phrase: bool = False,
+) -> tuple[Term, ...]:
     """``terms`` with each relational referring expression replaced by one term naming what it means.
 
     ``phrase``: the terms are a referring phrase alone (``ground``), so no relation is a command's.
@@ -56,7 +61,7 @@ def resolve(scene: Scene, terms: tuple[Term, ...], referent: int | None,
         if landmark_end == i + 1:
             i += 1
             continue
-        landmarks = _group(scene, out[i + 1:landmark_end], referent)
+        landmarks = _group(scene, out[i + 1 : landmark_end], referent)
         extra_end = landmark_end
         if relation == "between" and len(landmarks) < 2 and landmark_end < len(out):
             extra_end = _phrase_end(out, landmark_end)
@@ -74,8 +79,9 @@ def resolve(scene: Scene, terms: tuple[Term, ...], referent: int | None,
     return tuple(out)
 
 
-_DESCRIBED = {relation: VALUE_WORDS[relation]
-              for relation in ("next_to", "left_of", "right_of", "in_front_of", "behind")}
+_DESCRIBED = {
+    relation: VALUE_WORDS[relation] for relation in ("next_to", "left_of", "right_of", "in_front_of", "behind")
+}
 
 
 def describe(scene: Scene, index: int) -> str | None:
@@ -97,7 +103,7 @@ def describe(scene: Scene, index: int) -> str | None:
 
 
 def _ordinals_and_others(scene: Scene, terms: list[Term], referent: int | None) -> list[Term]:
-    """"the second cup from the left", "the other one": resolved within the objects the words describe."""
+    """ "the second cup from the left", "the other one": resolved within the objects the words describe."""
     out = list(terms)
     i = 0
     while i < len(out):
@@ -107,7 +113,7 @@ def _ordinals_and_others(scene: Scene, terms: list[Term], referent: int | None) 
             continue
         end = _phrase_end(out, i + 1)
         order = _value(out[end], "order") if end < len(out) else None
-        noun = out[i + 1:end]
+        noun = out[i + 1 : end]
         group = _group(scene, noun, None) if noun else frozenset(range(scene.n))
         if other:
             if not any(_value(t, "type") or _value(t, "color") for t in noun) and referent is not None:
@@ -176,8 +182,9 @@ def _segment_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     return float(np.linalg.norm(point - (a + t * ab)))
 
 
-def _group(scene: Scene, phrase: Sequence[Term], referent: int | None,
-           within: frozenset[int] | None = None) -> frozenset[int]:
+def _group(
+    scene: Scene, phrase: Sequence[Term], referent: int | None, within: frozenset[int] | None = None
+) -> frozenset[int]:
     """The objects a plain object phrase fits best (all of them when it says nothing)."""
     refer = next((m.value for t in phrase for r in t.readings for m in r if m.slot == "refer"), None)
     if refer is not None:
@@ -206,8 +213,7 @@ def _phrase_end(terms: list[Term], start: int) -> int:
 
 
 def _is_object_word(term: Term) -> bool:
-    return any(m.slot in _OBJECT_WORDS or m.slot == "refer" for r in term.readings for m in r) \
-        and not _relating(term)
+    return any(m.slot in _OBJECT_WORDS or m.slot == "refer" for r in term.readings for m in r) and not _relating(term)
 
 
 def _relating(term: Term) -> bool:
@@ -227,8 +233,9 @@ def _relation_of(term: Term) -> str | None:
 
 def _takes_relation(terms: list[Term]) -> bool:
     """Whether the utterance's verb (or its lack of one) leaves room for a command relation."""
-    verbs = [m.value for t in terms for r in t.readings for m in r
-             if m.slot == "procedure" and m.weight >= LANGUAGE.verb]
+    verbs = [
+        m.value for t in terms for r in t.readings for m in r if m.slot == "procedure" and m.weight >= LANGUAGE.verb
+    ]
     return not verbs or any(v & (MOVE | PLACE) for v in verbs)
 
 

@@ -28,8 +28,14 @@ class CommandResult:
         return (self.command, *self.then)
 
     def to_json(self) -> dict[str, Any]:
-        out = {"kind": "command", "procedure": self.command.procedure, "args": dict(self.command.args),
-               "confidence": round(self.confidence, 4), "text": self.text, "phrases": self.phrases}
+        out = {
+            "kind": "command",
+            "procedure": self.command.procedure,
+            "args": dict(self.command.args),
+            "confidence": round(self.confidence, 4),
+            "text": self.text,
+            "phrases": self.phrases,
+        }
         if self.then:
             out[THEN] = [c.as_dict() for c in self.then]
         return out
@@ -44,8 +50,12 @@ class Clarify:
     score: float = float("-inf")
 
     def to_json(self) -> dict[str, Any]:
-        return {"kind": "clarify", "params": self.params, "question": self.question,
-                "candidates": [c.as_dict() for c in self.candidates]}
+        return {
+            "kind": "clarify",
+            "params": self.params,
+            "question": self.question,
+            "candidates": [c.as_dict() for c in self.candidates],
+        }
 
 
 @dataclass

@@ -60,8 +60,10 @@ class LiveWorld:
             log.warning("ignoring executor/state: %s", exc)
             return
         with self.lock:
-            moved = (robot.get("last_arm"), robot.get("last_object")) != (self.robot.get("last_arm"),
-                                                                          self.robot.get("last_object"))
+            moved = (robot.get("last_arm"), robot.get("last_object")) != (
+                self.robot.get("last_arm"),
+                self.robot.get("last_object"),
+            )
             self.robot, self.reach = robot, reach
             if moved:
                 self.dialogue.observe_robot()  # the robot's own account of history is newer
@@ -70,8 +72,10 @@ class LiveWorld:
     def model(self) -> Model:
         """The model of the current world (built lazily, once per change). Call with the lock held."""
         if self._model is None:
-            objects = [{**obj, "reach": self.reach.get(obj["id"], {})} if isinstance(self.reach.get(obj["id"]), dict)
-                       else obj for obj in self.objects]
+            objects = [
+                {**obj, "reach": self.reach.get(obj["id"], {})} if isinstance(self.reach.get(obj["id"]), dict) else obj
+                for obj in self.objects
+            ]
             try:
                 world = parse_world({"objects": objects, "robot": self.robot}, strict=False)
             except WorldError as exc:
@@ -85,8 +89,14 @@ def _object_fields(item: dict[str, Any]) -> dict[str, Any]:
     """The world-state fields of a perceived object; unknown colour/type words become 'unknown'."""
     color = item.get("color") if item.get("color") in COLORS else "unknown"
     kind = item.get("type") if item.get("type") in TYPES else "unknown"
-    return {"id": item.get("id"), "color": color, "type": kind, "position": _listed(item.get("position")),
-            "size": _listed(item.get("size")), "held_by": item.get("held_by")}
+    return {
+        "id": item.get("id"),
+        "color": color,
+        "type": kind,
+        "position": _listed(item.get("position")),
+        "size": _listed(item.get("size")),
+        "held_by": item.get("held_by"),
+    }
 
 
 def _listed(value: Any) -> Any:
@@ -125,8 +135,9 @@ class NluService:
     def _publish(self, result: Result, text: str) -> None:
         self.results.put({**result.to_json(), "utterance": text})
         if isinstance(result, Clarify):
-            self.bus.publish(self.bus.keys.say,
-                             {"text": result.question, "kind": "clarify", "candidates": result.labels})
+            self.bus.publish(
+                self.bus.keys.say, {"text": result.question, "kind": "clarify", "candidates": result.labels}
+            )
         elif isinstance(result, Answer):
             self.bus.publish(self.bus.keys.say, {"text": result.text, "kind": "info"})
         log.info("%r -> %s", text, result.to_json())
@@ -169,8 +180,9 @@ def _body(bus: Bus, _args: argparse.Namespace, stop: threading.Event) -> None:
     service = NluService(bus)
     keys = bus.keys
     bus.subscribe(keys.objects, service.live.on_objects, schema="objects", latest_only=True, history=True)
-    bus.subscribe(keys.executor_state, service.live.on_executor, schema="executor_state", latest_only=True,
-                  history=True)
+    bus.subscribe(
+        keys.executor_state, service.live.on_executor, schema="executor_state", latest_only=True, history=True
+    )
     bus.subscribe(keys.utterance, service.on_utterance, schema="utterance")
     bus.serve(keys.nlu_query("parse"), service.serve_parse)
     bus.serve(keys.nlu_query("ground"), service.serve_ground)

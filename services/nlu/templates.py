@@ -53,6 +53,8 @@ def sentence_templates() -> dict[str, object]:
     slots["color"] = set(COLOR_WORDS)
     slots["type"] = set(TYPE_WORDS) | {"object", "one", "thing"}
     slots["number"] = {"1", "2", "3", "..."}
-    return {"procedures": {name: list(shape) for name, shape in _SHAPES.items()},
-            "verbs": {name: sorted(set(v)) for name, v in verbs.items()},
-            "slots": {name: sorted(values) for name, values in slots.items()}}
+    return {
+        "procedures": {name: list(shape) for name, shape in _SHAPES.items()},
+        "verbs": {name: sorted(set(v)) for name, v in verbs.items()},
+        "slots": {name: sorted(values) for name, values in slots.items()},
+    }

@@ -33,12 +33,23 @@ _TOKEN = re.compile(r"[a-z0-9]+")
 _KNOWN = WORDS | FILLERS | frozenset(NUMBER_WORDS)
 # a typo is never corrected into a number word: "give" must not become "five" (and switch to action 5)
 _CHOICES = sorted(_KNOWN - frozenset(NUMBER_WORDS))
-_SUFFIXES = (("ies", "y"), ("es", ""), ("s", ""), ("ed", ""), ("ed", "e"), ("d", ""), ("ing", ""), ("ing", "e"),
-             ("er", ""), ("est", ""))
+_SUFFIXES = (
+    ("ies", "y"),
+    ("es", ""),
+    ("s", ""),
+    ("ed", ""),
+    ("ed", "e"),
+    ("d", ""),
+    ("ing", ""),
+    ("ing", "e"),
+    ("er", ""),
+    ("est", ""),
+)
 # verbs whose particle may come after the object ("pick it up", "put the cup down")
 _SPLIT_PARTICLES = {"pick": "up", "put": "down", "set": "down", "lay": "down"}
-_DIGIT_ORDINALS = {f"{i}{suffix}": word for i, (suffix, word) in
-                   enumerate(zip(("st", "nd", "rd", "th", "th"), ORDINALS), 1)}  # "2nd" -> "second"
+_DIGIT_ORDINALS = {
+    f"{i}{suffix}": word for i, (suffix, word) in enumerate(zip(("st", "nd", "rd", "th", "th"), ORDINALS), 1)
+}  # "2nd" -> "second"
 # "the cup that is next to the box": the relative clause's words say nothing the phrase does not
 _CLAUSE = re.compile(r"\b(?:that|which|who)(?: is|'s| are| s)\b")
 _ARM_WORDS = frozenset({"hand", "arm", "gripper", "claw"})
@@ -48,9 +59,9 @@ _ARM_WORDS = frozenset({"hand", "arm", "gripper", "claw"})
 class Term:
     """One recognised phrase of the utterance and its possible readings."""
 
-    words: str                      # the phrase as the user (after correction) said it
+    words: str  # the phrase as the user (after correction) said it
     readings: tuple[Reading, ...]
-    start: int                      # token position, to keep the user's order
+    start: int  # token position, to keep the user's order
 
     @property
     def number(self) -> int | None:
@@ -85,7 +96,7 @@ def read(text: str) -> Utterance:
     i = 0
     while i < len(tokens):
         for n in range(min(MAX_PHRASE_WORDS, len(tokens) - i), 0, -1):
-            phrase = " ".join(tokens[i:i + n])
+            phrase = " ".join(tokens[i : i + n])
             readings = PHRASES.get(phrase, ())
             if n == 1:
                 number = _number(phrase, tokens[i - 1] if i else "")
@@ -138,7 +149,7 @@ def _join_particles(tokens: list[str]) -> list[str]:
         if particle is None:
             continue
         for j in range(i + 2, min(i + 5, len(out))):
-            if out[j] == particle and not _ARM_WORDS.intersection(out[i + 1:j]):
+            if out[j] == particle and not _ARM_WORDS.intersection(out[i + 1 : j]):
                 out.insert(i + 1, out.pop(j))
                 break
     return out

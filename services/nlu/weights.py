@@ -48,22 +48,22 @@ class PriorWeights:
     unused_arm: float = -0.5
     unreachable: float = -2.5
     impossible: float = -6.0
-    never: float = -50.0       # a landmark the commanding hand holds: no words can make it one
-    far_side: float = -0.5     # no hand used yet: the arm on the other side of the object
+    never: float = -50.0  # a landmark the commanding hand holds: no words can make it one
+    far_side: float = -0.5  # no hand used yet: the arm on the other side of the object
 
 
 @dataclass(frozen=True)
 class LanguageWeights:
-    verb: float = 3.0          # move, pick up, grab, place, point, ...
-    option: float = 2.0        # above, up, clockwise, table, next, ...
-    arm: float = 2.0           # right hand, left arm
-    generic_arm: float = 0.3   # "your hand" without a side
-    adjective: float = 1.0     # red, leftmost, biggest, tallest, middle
-    noun: float = 0.7          # cup, box, plate, bowl
+    verb: float = 3.0  # move, pick up, grab, place, point, ...
+    option: float = 2.0  # above, up, clockwise, table, next, ...
+    arm: float = 2.0  # right hand, left arm
+    generic_arm: float = 0.3  # "your hand" without a side
+    adjective: float = 1.0  # red, leftmost, biggest, tallest, middle
+    noun: float = 0.7  # cup, box, plate, bowl
     generic_noun: float = 0.2  # object, thing, one
-    anaphor: float = 1.0       # it, that, the same one
-    number: float = 2.0        # "action 3"
-    weak: float = 0.5          # a second reading of an ambiguous word ("left" as an arm)
+    anaphor: float = 1.0  # it, that, the same one
+    number: float = 2.0  # "action 3"
+    weak: float = 0.5  # a second reading of an ambiguous word ("left" as an arm)
     beta: float = 4.0
 
 
@@ -71,18 +71,18 @@ class LanguageWeights:
 class Margins:
     """How much an object must beat the runner-up to earn a salient label (paper III-G)."""
 
-    location_m: float = 0.07   # leftmost/rightmost (y), nearest/farthest (x)
-    height_m: float = 0.05     # tallest/shortest (z extent)
+    location_m: float = 0.07  # leftmost/rightmost (y), nearest/farthest (x)
+    height_m: float = 0.05  # tallest/shortest (z extent)
     volume_m3: float = 0.0005  # biggest/smallest
-    side_m: float = 0.05       # |y| beyond which an object is on one arm's side (hand choice)
+    side_m: float = 0.05  # |y| beyond which an object is on one arm's side (hand choice)
 
 
 @dataclass(frozen=True)
 class Decision:
-    tie: float = 0.05          # log-score difference under which two commands tie
-    max_candidates: int = 8    # candidates listed in a clarification
+    tie: float = 0.05  # log-score difference under which two commands tie
+    max_candidates: int = 8  # candidates listed in a clarification
     typo_edits_short: int = 1  # edits (incl. swapped letters) tolerated in a word of up to 5 letters
-    typo_edits_long: int = 2   # ... and in a longer word
+    typo_edits_long: int = 2  # ... and in a longer word
 
 
 PRIOR = PriorWeights()

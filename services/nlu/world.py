@@ -14,8 +14,17 @@ from typing import Any
 
 from shared.contract import ARMS, COLORS, GRIPPER_STATES, TYPES
 
-__all__ = ["ARMS", "COLORS", "GRIPPER_STATES", "TYPES", "World", "WorldError", "WorldObject", "load_world",
-           "parse_world"]
+__all__ = [
+    "ARMS",
+    "COLORS",
+    "GRIPPER_STATES",
+    "TYPES",
+    "World",
+    "WorldError",
+    "WorldObject",
+    "load_world",
+    "parse_world",
+]
 
 
 class WorldError(ValueError):
@@ -77,8 +86,9 @@ def load_world(path: str | Path) -> World:
     try:
         data = json.loads(text)
     except json.JSONDecodeError as exc:
-        raise WorldError(f"world file {str(path)!r} is not valid JSON: {exc.msg} "
-                         f"at line {exc.lineno}, column {exc.colno}") from None
+        raise WorldError(
+            f"world file {str(path)!r} is not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}"
+        ) from None
     return parse_world(data)
 
 
@@ -155,8 +165,15 @@ def _parse_robot(raw: Any) -> RobotState:
     actions = raw.get("actions", []) or []
     if not isinstance(actions, list):
         raise WorldError("robot.actions must be a list of step counts")
-    return RobotState(dict(grippers), last_arm, last_object, executing,
-                      _flags(raw.get("can_move", {}), "robot.can_move"), action, tuple(actions))
+    return RobotState(
+        dict(grippers),
+        last_arm,
+        last_object,
+        executing,
+        _flags(raw.get("can_move", {}), "robot.can_move"),
+        action,
+        tuple(actions),
+    )
 
 
 def _flags(raw: Any, where: str) -> dict[str, dict[str, bool]]:
@@ -183,8 +200,11 @@ def _word(value: Any, allowed: tuple[str, ...], where: str) -> str:
 
 
 def _vector(value: Any, where: str) -> tuple[float, float, float]:
-    if (not isinstance(value, (list, tuple)) or len(value) != 3
-            or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
+    if (
+        not isinstance(value, (list, tuple))
+        or len(value) != 3
+        or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+    ):
         raise WorldError(f"{where} must be a list of three numbers, got {value!r}")
     if not all(math.isfinite(v) for v in value):
         raise WorldError(f"{where} must be finite, got {value!r}")

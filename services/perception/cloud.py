@@ -24,10 +24,10 @@ class CloudError(ValueError):
 class Cloud:
     """An organised cloud flattened to pixels: row-major, NaN where there was no return."""
 
-    xyz: np.ndarray           # (H*W, 3) float32, base frame
-    rgb: np.ndarray           # (H*W, 3) uint8
-    valid: np.ndarray         # (M,) pixel indices of the finite points
-    shape: tuple[int, int]    # (H, W): neighbours in the image
+    xyz: np.ndarray  # (H*W, 3) float32, base frame
+    rgb: np.ndarray  # (H*W, 3) uint8
+    valid: np.ndarray  # (M,) pixel indices of the finite points
+    shape: tuple[int, int]  # (H, W): neighbours in the image
 
 
 MIN_POINTS = 500

@@ -19,16 +19,16 @@ ACHROMATIC = ("white", "grey", "black")
 
 # Upper hue bounds in OpenCV's 0-180 scale; hues from the last bound wrap to red.
 HUE_BOUNDS = ((9, "red"), (21, "orange"), (35, "yellow"), (85, "green"), (128, "blue"), (163, "purple"))
-MIN_SATURATION = 70     # below this a pixel is white, grey or black
-MIN_VALUE = 45          # below this every pixel is black, whatever its hue
-WHITE_VALUE = 185       # bright-quartile value above which a pale object is white
-BLACK_VALUE = 70        # bright-quartile value below which it is black
+MIN_SATURATION = 70  # below this a pixel is white, grey or black
+MIN_VALUE = 45  # below this every pixel is black, whatever its hue
+WHITE_VALUE = 185  # bright-quartile value above which a pale object is white
+BLACK_VALUE = 70  # bright-quartile value below which it is black
 
 
 @dataclass(frozen=True)
 class ColourEstimate:
     word: str
-    share: float               # fraction of pixels that voted for the word
+    share: float  # fraction of pixels that voted for the word
     mean_rgb: tuple[int, int, int]
 
 

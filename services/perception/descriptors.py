@@ -16,11 +16,11 @@ import numpy as np
 from services.perception.colour import colour_word
 from services.perception.plane import Plane
 
-RESTING_GAP = 0.03        # m; a cluster whose lowest point is this close to the table stands on it
-ROUNDNESS_LIMIT = 0.88    # hull area / oriented-rectangle area: pi/4 = 0.785 for a disc, 1 for a box
+RESTING_GAP = 0.03  # m; a cluster whose lowest point is this close to the table stands on it
+ROUNDNESS_LIMIT = 0.88  # hull area / oriented-rectangle area: pi/4 = 0.785 for a disc, 1 for a box
 ROUND_ASPECT_LIMIT = 1.3  # a round footprint's rectangle is close to a square
-PLATE_RATIO = 0.3         # height / diameter below which a round object is a plate
-BOWL_RATIO = 0.75         # ... below which it is a bowl, above which a cup
+PLATE_RATIO = 0.3  # height / diameter below which a round object is a plate
+BOWL_RATIO = 0.75  # ... below which it is a bowl, above which a cup
 FULL_CONFIDENCE_POINTS = 150
 
 
@@ -28,12 +28,12 @@ FULL_CONFIDENCE_POINTS = 150
 class Descriptor:
     """One perceived object, in the world-state convention plus perception extras."""
 
-    position: np.ndarray      # centre of the axis-aligned bounding box, base frame
-    size: np.ndarray          # extent along x, y, z
-    box_center: np.ndarray    # oriented box on the table plane: centre,
-    box_size: np.ndarray      # length (along yaw), width, height,
-    box_yaw: float            # and heading about z (rad)
-    volume: float             # of the oriented box (m^3)
+    position: np.ndarray  # centre of the axis-aligned bounding box, base frame
+    size: np.ndarray  # extent along x, y, z
+    box_center: np.ndarray  # oriented box on the table plane: centre,
+    box_size: np.ndarray  # length (along yaw), width, height,
+    box_yaw: float  # and heading about z (rad)
+    volume: float  # of the oriented box (m^3)
     rgb: tuple[int, int, int]
     color: str
     type: str
@@ -44,13 +44,19 @@ class Descriptor:
     def as_message(self) -> dict:
         """The ``perception/objects`` item (``id``, ``held_by`` and ``visible`` come from tracking)."""
         return {
-            "color": self.color, "type": self.type,
+            "color": self.color,
+            "type": self.type,
             "position": [round(float(v), 4) for v in self.position],
             "size": [round(float(v), 4) for v in self.size],
-            "box": {"center": [round(float(v), 4) for v in self.box_center],
-                    "size": [round(float(v), 4) for v in self.box_size], "yaw": round(self.box_yaw, 4)},
-            "volume": round(self.volume, 7), "rgb": list(self.rgb),
-            "points": self.points, "confidence": round(self.confidence, 3),
+            "box": {
+                "center": [round(float(v), 4) for v in self.box_center],
+                "size": [round(float(v), 4) for v in self.box_size],
+                "yaw": round(self.box_yaw, 4),
+            },
+            "volume": round(self.volume, 7),
+            "rgb": list(self.rgb),
+            "points": self.points,
+            "confidence": round(self.confidence, 3),
         }
 
 
@@ -86,12 +92,16 @@ def describe(xyz: np.ndarray, rgb: np.ndarray, plane: Plane) -> Descriptor:
         box_size=np.array([length, width, height]),
         box_yaw=yaw,
         volume=float(length * width * height),
-        rgb=colour.mean_rgb, color=colour.word, type=kind,
-        points=count, confidence=float(confidence), bottom_on_table=resting)
+        rgb=colour.mean_rgb,
+        color=colour.word,
+        type=kind,
+        points=count,
+        confidence=float(confidence),
+        bottom_on_table=resting,
+    )
 
 
-def _type_word(hull_area: float, rect_area: float, length: float, width: float,
-               height: float) -> tuple[str, float]:
+def _type_word(hull_area: float, rect_area: float, length: float, width: float, height: float) -> tuple[str, float]:
     """Type word from the footprint's shape and the height; and how clear-cut it was (0.5-1).
 
     Round footprints (a disc fills pi/4 of its bounding square) are plates,

@@ -17,17 +17,17 @@ from scipy.optimize import linear_sum_assignment
 
 from services.perception.descriptors import Descriptor
 
-MAX_PAIRING = 0.05   # m
+MAX_PAIRING = 0.05  # m
 
 
 @dataclass
 class Score:
     found: int = 0
-    missed: list[str] = field(default_factory=list)      # true ids with no detection
-    phantoms: int = 0                                     # detections with no true object
+    missed: list[str] = field(default_factory=list)  # true ids with no detection
+    phantoms: int = 0  # detections with no true object
     centre_errors: list[float] = field(default_factory=list)
     size_errors: list[float] = field(default_factory=list)  # |error| per axis
-    wrong_words: list[str] = field(default_factory=list)    # "obj1: blue bowl seen as blue cup"
+    wrong_words: list[str] = field(default_factory=list)  # "obj1: blue bowl seen as blue cup"
 
     def add(self, other: Score) -> None:
         self.found += other.found

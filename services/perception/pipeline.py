@@ -25,7 +25,7 @@ from services.perception.support import supported
 from services.perception.table_edges import TableExtent, table_extent
 from services.perception.tracking import holding_tools
 
-TABLE_STRIDE = 8   # every 8th table point is plenty for its 2 cm outline grid
+TABLE_STRIDE = 8  # every 8th table point is plenty for its 2 cm outline grid
 
 
 @dataclass(frozen=True)
@@ -44,8 +44,12 @@ class Detection:
     table_extent: TableExtent
 
 
-def detect(message: Mapping[str, Any], state: Mapping[str, Any] | None = None,
-           settings: Settings = Settings(), earlier: Mapping[str, Any] | None = None) -> Detection:
+def detect(
+    message: Mapping[str, Any],
+    state: Mapping[str, Any] | None = None,
+    settings: Settings = Settings(),
+    earlier: Mapping[str, Any] | None = None,
+) -> Detection:
     """Objects in the ``sim/cloud`` ``message``; ``state`` (``sim/state``) masks the arms.
 
     ``earlier`` is a second state (the one just before the cloud when

@@ -24,7 +24,7 @@ class Plane:
 
     normal: np.ndarray
     offset: float
-    noise: float         # robust standard deviation of the inliers' residuals (m)
+    noise: float  # robust standard deviation of the inliers' residuals (m)
 
     def height(self, xyz: np.ndarray) -> np.ndarray:
         """Signed height of each point above the plane."""
@@ -38,18 +38,22 @@ class Plane:
 
 @dataclass(frozen=True)
 class PlaneSettings:
-    inlier_distance: float = 0.008   # m
-    max_tilt_deg: float = 8.0        # the table is level in the base frame, give or take
-    sample_size: int = 4000          # points voting on hypotheses
-    refit_size: int = 20000          # points the final least-squares fit uses
+    inlier_distance: float = 0.008  # m
+    max_tilt_deg: float = 8.0  # the table is level in the base frame, give or take
+    sample_size: int = 4000  # points voting on hypotheses
+    refit_size: int = 20000  # points the final least-squares fit uses
     hypotheses: int = 60
-    planes_tried: int = 3            # table, floor, robot deck: more is never needed
-    min_share: float = 0.25          # of the best plane's support, to count as "large"
-    min_fraction: float = 0.04       # of all points, to count as a plane at all
+    planes_tried: int = 3  # table, floor, robot deck: more is never needed
+    min_share: float = 0.25  # of the best plane's support, to count as "large"
+    min_fraction: float = 0.04  # of all points, to count as a plane at all
 
 
-def find_table(xyz: np.ndarray, settings: PlaneSettings = PlaneSettings(),
-               ignore: Callable[[np.ndarray], np.ndarray] | None = None, seed: int = 0) -> Plane:
+def find_table(
+    xyz: np.ndarray,
+    settings: PlaneSettings = PlaneSettings(),
+    ignore: Callable[[np.ndarray], np.ndarray] | None = None,
+    seed: int = 0,
+) -> Plane:
     """The table plane of ``xyz`` (N, 3); raise :class:`CloudError` when there is none.
 
     ``ignore(points) -> mask`` drops sample points that must not vote (the
@@ -80,8 +84,9 @@ def find_table(xyz: np.ndarray, settings: PlaneSettings = PlaneSettings(),
     return _refit(refit, normal, offset, settings)
 
 
-def _ransac(points: np.ndarray, settings: PlaneSettings,
-            rng: np.random.Generator) -> tuple[np.ndarray, float, int] | None:
+def _ransac(
+    points: np.ndarray, settings: PlaneSettings, rng: np.random.Generator
+) -> tuple[np.ndarray, float, int] | None:
     """Best near-horizontal plane through triples of ``points`` (vectorised over hypotheses)."""
     if len(points) < 3:
         return None

@@ -25,7 +25,7 @@ from shared.robot import ROBOT
 from shared.robot.build_urdf import Shape
 from shared.robot.build_urdf import arm as arm_model
 
-MARGIN = 0.02   # m around every shape: depth noise and the pose's own latency
+MARGIN = 0.02  # m around every shape: depth noise and the pose's own latency
 
 
 @dataclass(frozen=True)
@@ -69,9 +69,13 @@ def link_capsules() -> dict[str, tuple[tuple[np.ndarray, np.ndarray, float], ...
 
 def _rotation(quaternion: np.ndarray) -> np.ndarray:
     w, x, y, z = quaternion / np.linalg.norm(quaternion)
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def _pose(value: Any) -> np.ndarray | None:
@@ -129,7 +133,7 @@ def robot_points(xyz: np.ndarray, segments: Sequence[Segment]) -> np.ndarray:
         ab = s.b - s.a
         length2 = float(ab @ ab)
         t = np.clip((q - s.a) @ ab / length2, 0.0, 1.0) if length2 > 1e-12 else np.zeros(len(q))
-        inside[close] = ((q - (s.a + t[:, None] * ab)) ** 2).sum(axis=1) <= s.radius ** 2
+        inside[close] = ((q - (s.a + t[:, None] * ab)) ** 2).sum(axis=1) <= s.radius**2
     mask[near] = inside
     return mask
 

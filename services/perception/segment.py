@@ -25,11 +25,11 @@ from services.perception.plane import Plane
 @dataclass(frozen=True)
 class SegmentSettings:
     link_distance: float = 0.008  # m between neighbouring pixels of one object (at 640x480)
-    cell: float = 0.005           # m; top-down cell whose diagonal is below the gap to resolve
-    min_height: float = 0.006     # m above the plane; raised automatically with sensor noise
-    max_height: float = 0.45      # m; taller things are not tabletop objects
-    table_cell: float = 0.02      # m; grid for the table's own extent
-    edge_margin: float = 0.03     # m; objects may overhang the table edge this much
+    cell: float = 0.005  # m; top-down cell whose diagonal is below the gap to resolve
+    min_height: float = 0.006  # m above the plane; raised automatically with sensor noise
+    max_height: float = 0.45  # m; taller things are not tabletop objects
+    table_cell: float = 0.02  # m; grid for the table's own extent
+    edge_margin: float = 0.03  # m; objects may overhang the table edge this much
     min_points_640x480: int = 60  # smaller clusters are noise (scaled with resolution)
 
 
@@ -58,8 +58,9 @@ def table_outline(xy: np.ndarray, settings: SegmentSettings) -> np.ndarray:
     return hull * settings.table_cell + origin
 
 
-def cluster(xyz: np.ndarray, pixel: np.ndarray, shape: tuple[int, int], outline: np.ndarray,
-            settings: SegmentSettings) -> list[np.ndarray]:
+def cluster(
+    xyz: np.ndarray, pixel: np.ndarray, shape: tuple[int, int], outline: np.ndarray, settings: SegmentSettings
+) -> list[np.ndarray]:
     """Index arrays into ``xyz`` (N, 3), one per object standing over the table outline.
 
     ``pixel`` holds each point's index in the flattened (H, W) image.
@@ -102,8 +103,14 @@ def _merge_contained(xyz: np.ndarray, pieces: list[np.ndarray], min_points: int)
     hulls: list[np.ndarray] = []
     for piece in pieces:
         centre = xyz[piece, :2].mean(axis=0)
-        home = next((k for k, hull in enumerate(hulls)
-                     if cv2.pointPolygonTest(hull, (float(centre[0]), float(centre[1])), False) >= 0), None)
+        home = next(
+            (
+                k
+                for k, hull in enumerate(hulls)
+                if cv2.pointPolygonTest(hull, (float(centre[0]), float(centre[1])), False) >= 0
+            ),
+            None,
+        )
         if home is not None:
             objects[home].append(piece)
         elif len(piece) >= min_points:
@@ -112,8 +119,9 @@ def _merge_contained(xyz: np.ndarray, pieces: list[np.ndarray], min_points: int)
     return [np.concatenate(parts) for parts in objects]
 
 
-def _linked(xyz: np.ndarray, pixel: np.ndarray, lookup: np.ndarray, width: int, step: int,
-            link: float) -> tuple[np.ndarray, np.ndarray]:
+def _linked(
+    xyz: np.ndarray, pixel: np.ndarray, lookup: np.ndarray, width: int, step: int, link: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Pairs (i, j) of points whose pixels are ``step`` apart (1: right, width: below) within ``link``."""
     neighbour = pixel + step
     inside = neighbour < len(lookup)

@@ -30,19 +30,19 @@ from typing import Any
 
 import numpy as np
 
-from shared.bus import Bus
-from shared.codec import MessageError
-from shared.messages import validate
 from services.perception.cloud import CloudError, camera_position
 from services.perception.pipeline import Settings, detect
 from services.perception.robot_mask import hides, segments_from_states
 from services.perception.tracking import Tracker, TrackSettings
+from shared.bus import Bus
+from shared.codec import MessageError
+from shared.messages import validate
 
 log = logging.getLogger("hfpbd.perception")
 
 OK = "ok"
-SETTLE_DISTANCE = 0.01   # m two frames' positions may differ and still agree
-STATE_HISTORY = 50       # sim/state messages kept (2 s at 25 Hz) to find the ones around a cloud
+SETTLE_DISTANCE = 0.01  # m two frames' positions may differ and still agree
+STATE_HISTORY = 50  # sim/state messages kept (2 s at 25 Hz) to find the ones around a cloud
 
 
 @dataclass(frozen=True)
@@ -52,25 +52,30 @@ class Frame:
     number: int
     status: str
     objects: list[dict]
-    sim_time: float | None = None   # when the cloud was rendered (None: unknown)
-    steady: bool = True             # enough frames since the last scene load for new objects to be confirmed
+    sim_time: float | None = None  # when the cloud was rendered (None: unknown)
+    steady: bool = True  # enough frames since the last scene load for new objects to be confirmed
 
 
 class PerceptionService:
-    def __init__(self, bus: Bus, settings: Settings = Settings(),
-                 track_settings: TrackSettings = TrackSettings(), record_timeout: float = 5.0) -> None:
+    def __init__(
+        self,
+        bus: Bus,
+        settings: Settings = Settings(),
+        track_settings: TrackSettings = TrackSettings(),
+        record_timeout: float = 5.0,
+    ) -> None:
         self.bus = bus
         self.settings = settings
         self.tracker = Tracker(track_settings)
         self.record_timeout = record_timeout
         self._states: deque[Mapping[str, Any]] = deque(maxlen=STATE_HISTORY)
         self._scene: tuple[object, object] | None = None
-        self._working = threading.Lock()   # held while a cloud is processed and published
+        self._working = threading.Lock()  # held while a cloud is processed and published
         self._stopped = False
         self._objects: list[dict] = []
         self._table: dict | None = None
         self._frames: deque[Frame] = deque(maxlen=8)
-        self._since_load = 0              # frames processed since the tracker last forgot everything
+        self._since_load = 0  # frames processed since the tracker last forgot everything
         self._changed = threading.Condition()
         self._publisher = bus.publisher(bus.keys.objects, cached=True)
 
@@ -129,14 +134,17 @@ class PerceptionService:
         self._scene = scene if scene is not None else self._scene
         arms = segments_from_states([state, earlier])
         camera = camera_position(message)
-        self._objects = self.tracker.update(detection.objects, time.monotonic(), state,
-                                            hidden=lambda position: hides(camera, position, arms))
+        self._objects = self.tracker.update(
+            detection.objects, time.monotonic(), state, hidden=lambda position: hides(camera, position, arms)
+        )
         plane = detection.plane
         centre = detection.table_outline.mean(axis=0)
-        self._table = {"height": round(plane.z_at(float(centre[0]), float(centre[1])), 4),
-                       "normal": [round(float(v), 4) for v in plane.normal],
-                       "outline": np.round(detection.table_outline, 3).tolist(),
-                       **detection.table_extent.message()}
+        self._table = {
+            "height": round(plane.z_at(float(centre[0]), float(centre[1])), 4),
+            "normal": [round(float(v), 4) for v in plane.normal],
+            "outline": np.round(detection.table_outline, 3).tolist(),
+            **detection.table_extent.message(),
+        }
         self._publish(stamp, OK, message.get("sim_time"))
 
     def _publish(self, stamp: float, status: str, sim_time: Any = None) -> None:
@@ -162,8 +170,12 @@ class PerceptionService:
                 fresh = [f for f in self._frames if f.number > after and _rendered_since(f, now)]
                 settled = _settled(fresh)
                 if settled is not None:
-                    return {"ok": True, "objects": settled.objects, "settled": True,
-                            **({"table": self._table} if self._table else {})}
+                    return {
+                        "ok": True,
+                        "objects": settled.objects,
+                        "settled": True,
+                        **({"table": self._table} if self._table else {}),
+                    }
                 left = deadline - time.monotonic()
                 if left <= 0:
                     raise RuntimeError(_record_failure(fresh, self.record_timeout))
@@ -196,8 +208,13 @@ def _rendered_since(frame: Frame, sim_time: float | None) -> bool:
 def _settled(frames: list[Frame]) -> Frame | None:
     """The newest frame that is good, steady and agrees with the good, steady frame just before it."""
     for earlier, later in zip(reversed(frames[:-1]), reversed(frames)):
-        if earlier.status == OK and later.status == OK and earlier.steady and later.steady \
-                and _agree(earlier.objects, later.objects):
+        if (
+            earlier.status == OK
+            and later.status == OK
+            and earlier.steady
+            and later.steady
+            and _agree(earlier.objects, later.objects)
+        ):
             return later
     return None
 

@@ -17,20 +17,25 @@ import numpy as np
 
 from services.perception.descriptors import Descriptor
 
-STACK_GAP = 0.03     # m between a cluster's bottom and the top of the object it stands on
-HOLD_RADIUS = 0.15   # m from a holding gripper's tool frame to the object it holds
+STACK_GAP = 0.03  # m between a cluster's bottom and the top of the object it stands on
+HOLD_RADIUS = 0.15  # m from a holding gripper's tool frame to the object it holds
 FOOTPRINT_SHARE = 0.3  # share of a cluster's footprint that must lie over its support
 MIN_FOOTPRINT = 0.005  # m: the narrowest a cluster's top-down box counts as
 
 
-def supported(objects: Sequence[Descriptor], holding: Mapping[str, np.ndarray],
-              camera: np.ndarray) -> list[Descriptor]:
+def supported(objects: Sequence[Descriptor], holding: Mapping[str, np.ndarray], camera: np.ndarray) -> list[Descriptor]:
     """The ``objects`` that stand on the table or another object, or hang in a holding gripper.
 
     ``camera`` is the camera's position, to tell a hidden bottom from a missing one.
     """
-    return [o for o in objects if o.bottom_on_table or _near_a_gripper(o, holding)
-            or _stands_on_another(o, objects) or _bottom_hidden(o, objects, camera)]
+    return [
+        o
+        for o in objects
+        if o.bottom_on_table
+        or _near_a_gripper(o, holding)
+        or _stands_on_another(o, objects)
+        or _bottom_hidden(o, objects, camera)
+    ]
 
 
 def _near_a_gripper(obj: Descriptor, holding: Mapping[str, np.ndarray]) -> bool:

@@ -25,13 +25,20 @@ RGB = tuple[int, int, int]
 
 # Colours a scene author would pick for each colour word.
 COLOURS: dict[str, RGB] = {
-    "red": (200, 30, 30), "green": (40, 160, 50), "blue": (30, 60, 200),
-    "yellow": (220, 200, 40), "orange": (235, 120, 20), "purple": (120, 40, 160),
-    "white": (235, 235, 235), "black": (25, 25, 25), "grey": (128, 128, 128),
+    "red": (200, 30, 30),
+    "green": (40, 160, 50),
+    "blue": (30, 60, 200),
+    "yellow": (220, 200, 40),
+    "orange": (235, 120, 20),
+    "purple": (120, 40, 160),
+    "white": (235, 235, 235),
+    "black": (25, 25, 25),
+    "grey": (128, 128, 128),
 }
 TABLE_RGB: RGB = (150, 110, 70)
 FLOOR_RGB: RGB = (90, 90, 95)
 ARM_RGB: RGB = (210, 210, 215)
+
 
 @dataclass(frozen=True)
 class Box:
@@ -83,8 +90,15 @@ class Scene:
         items = []
         for index, shape in enumerate(self.objects):
             lo, hi = _aabb(shape)
-            items.append({"id": f"truth{index}", "color": shape.colour, "type": shape.kind,
-                          "position": ((lo + hi) / 2).tolist(), "size": (hi - lo).tolist()})
+            items.append(
+                {
+                    "id": f"truth{index}",
+                    "color": shape.colour,
+                    "type": shape.kind,
+                    "position": ((lo + hi) / 2).tolist(),
+                    "size": (hi - lo).tolist(),
+                }
+            )
         return items
 
 
@@ -126,15 +140,14 @@ class Camera:
 
     def rays(self) -> np.ndarray:
         """Unit ray directions (H, W, 3) in the base frame."""
-        f = ROBOT.camera.intrinsics(self.width, self.height)[0]   # the robot's head camera at this size
+        f = ROBOT.camera.intrinsics(self.width, self.height)[0]  # the robot's head camera at this size
         u, v = np.meshgrid(np.arange(self.width) + 0.5, np.arange(self.height) + 0.5)
         local = np.stack([(u - self.width / 2) / f, (v - self.height / 2) / f, np.ones_like(u)], axis=-1)
         directions = local @ self.rotation().T
         return directions / np.linalg.norm(directions, axis=-1, keepdims=True)
 
 
-def render(scene: Scene, camera: Camera = Camera(), *, noise: float = 0.0, dropout: float = 0.0,
-           seed: int = 0) -> dict:
+def render(scene: Scene, camera: Camera = Camera(), *, noise: float = 0.0, dropout: float = 0.0, seed: int = 0) -> dict:
     """Ray-cast ``scene`` and return a ``sim/cloud``-shaped message.
 
     ``noise`` is the standard deviation of range noise in metres, ``dropout``
@@ -180,13 +193,19 @@ def render(scene: Scene, camera: Camera = Camera(), *, noise: float = 0.0, dropo
     rgb = np.clip(colour * shade[:, None], 0, 255)
     rgb[~hit] = 0
     shape = (camera.height, camera.width, 3)
-    return {"stamp": 0.0, "xyz": xyz.reshape(shape).astype(np.float32),
-            "rgb": rgb.reshape(shape).astype(np.uint8), "camera_pose": camera.pose(),
-            "width": camera.width, "height": camera.height}
+    return {
+        "stamp": 0.0,
+        "xyz": xyz.reshape(shape).astype(np.float32),
+        "rgb": rgb.reshape(shape).astype(np.uint8),
+        "camera_pose": camera.pose(),
+        "width": camera.width,
+        "height": camera.height,
+    }
 
 
-def _hit_plane(origin: np.ndarray, rays: np.ndarray, z: float,
-               xs: tuple[float, float] | None, ys: tuple[float, float] | None) -> np.ndarray:
+def _hit_plane(
+    origin: np.ndarray, rays: np.ndarray, z: float, xs: tuple[float, float] | None, ys: tuple[float, float] | None
+) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         t = (z - origin[2]) / rays[:, 2]
     t = np.where(t > 1e-6, t, np.inf)
@@ -237,7 +256,7 @@ def _hit_cylinder(origin: np.ndarray, rays: np.ndarray, cyl: Cylinder) -> tuple[
     def wall(radius: float, lo: float, hi: float, far: bool) -> None:
         a = rays[:, 0] ** 2 + rays[:, 1] ** 2
         b = 2 * (o[0] * rays[:, 0] + o[1] * rays[:, 1])
-        k = o[0] ** 2 + o[1] ** 2 - radius ** 2
+        k = o[0] ** 2 + o[1] ** 2 - radius**2
         disc = b * b - 4 * a * k
         with np.errstate(invalid="ignore", divide="ignore"):
             root = np.sqrt(np.where(disc >= 0, disc, np.nan))
@@ -277,7 +296,7 @@ def _hit_capsule(origin: np.ndarray, rays: np.ndarray, cap: Capsule) -> tuple[np
         centre = a + (b - a) * s
         oc = origin - centre
         half_b = rays @ oc
-        disc = half_b ** 2 - (oc @ oc - cap.radius ** 2)
+        disc = half_b**2 - (oc @ oc - cap.radius**2)
         with np.errstate(invalid="ignore"):
             t = -half_b - np.sqrt(np.where(disc >= 0, disc, np.nan))
         t = np.where((disc >= 0) & (t > 1e-6), t, np.inf)
@@ -288,8 +307,8 @@ def _hit_capsule(origin: np.ndarray, rays: np.ndarray, cap: Capsule) -> tuple[np
 
 
 SHOULDER = {"right": (-0.05, -0.188, 1.121), "left": (-0.05, 0.188, 1.121)}
-POINTING_DOWN = (0.7071068, 0.0, 0.7071068, 0.0)   # tool x axis along -z
-UPPER_ARM, FOREARM = 0.4, 0.321                     # shoulder lift -> elbow -> wrist flex (m)
+POINTING_DOWN = (0.7071068, 0.0, 0.7071068, 0.0)  # tool x axis along -z
+UPPER_ARM, FOREARM = 0.4, 0.321  # shoulder lift -> elbow -> wrist flex (m)
 SHOULDER_LIFT_OFFSET = 0.1
 
 
@@ -302,8 +321,9 @@ def _frame(x_axis: np.ndarray, origin: np.ndarray) -> list[float]:
     return [*map(float, origin), float(qw), float(qx), float(qy), float(qz)]
 
 
-def reaching_arm(tool: tuple[float, float, float], arm: str = "right",
-                 holding: bool = False) -> tuple[list[Capsule], dict]:
+def reaching_arm(
+    tool: tuple[float, float, float], arm: str = "right", holding: bool = False
+) -> tuple[list[Capsule], dict]:
     """A PR2 arm, with the project model's link lengths, its gripper pointing down at ``tool``.
 
     Returns the capsules to render (the model's link shapes, from the same
@@ -316,12 +336,12 @@ def reaching_arm(tool: tuple[float, float, float], arm: str = "right",
     wrist = tool_p + np.array([0.0, 0.0, TOOL_OFFSET])
     reach = wrist - lift
     distance = float(np.linalg.norm(reach))
-    along = (distance ** 2 + UPPER_ARM ** 2 - FOREARM ** 2) / (2 * distance)
+    along = (distance**2 + UPPER_ARM**2 - FOREARM**2) / (2 * distance)
     up = np.cross(np.cross(reach, [0.0, 0.0, 1.0]), reach)
     up = up / np.linalg.norm(up) if np.linalg.norm(up) > 1e-9 else np.array([0.0, 0.0, 1.0])
     if up[2] < 0:
         up = -up
-    elbow = lift + reach / distance * along + up * np.sqrt(max(UPPER_ARM ** 2 - along ** 2, 0.0))
+    elbow = lift + reach / distance * along + up * np.sqrt(max(UPPER_ARM**2 - along**2, 0.0))
     down = np.array([0.0, 0.0, -1.0])
     width = 0.07 if holding else 0.08
     palm = _frame(down, wrist)

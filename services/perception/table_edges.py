@@ -20,10 +20,10 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-BIN = 0.02           # m along a side
-MIN_POINTS = 3       # per bin
-BORDER = 2           # pixels from the image border counted as "on the border"
-UNSEEN_SHARE = 0.5   # a side with at least this share of its bins' extremes on the border was not seen to end
+BIN = 0.02  # m along a side
+MIN_POINTS = 3  # per bin
+BORDER = 2  # pixels from the image border counted as "on the border"
+UNSEEN_SHARE = 0.5  # a side with at least this share of its bins' extremes on the border was not seen to end
 # side -> (axis measured, axis binned along, which end: 0 = lowest, 1 = highest)
 SIDES = {"near": (0, 1, 0), "far": (0, 1, 1), "right": (1, 0, 0), "left": (1, 0, 1)}
 
@@ -38,12 +38,15 @@ class TableExtent:
     def message(self) -> dict:
         """The ``extent`` and ``edges`` fields of ``perception/objects``' ``table``."""
         rounded = np.round(self.bounds, 4)
-        return {"extent": {"x": rounded[0].tolist(), "y": rounded[1].tolist()},
-                "edges": {side: round(value, 4) for side, value in self.edges.items()}}
+        return {
+            "extent": {"x": rounded[0].tolist(), "y": rounded[1].tolist()},
+            "edges": {side: round(value, 4) for side, value in self.edges.items()},
+        }
 
 
-def table_extent(xyz: np.ndarray, on_table: np.ndarray, image_shape: tuple[int, int],
-                 outline: np.ndarray) -> TableExtent:
+def table_extent(
+    xyz: np.ndarray, on_table: np.ndarray, image_shape: tuple[int, int], outline: np.ndarray
+) -> TableExtent:
     """The extent of the table points ``on_table`` (flat pixel indices into the organised cloud ``xyz``).
 
     Only the rim of the table's region in the image is looked at (pixels with
@@ -59,8 +62,9 @@ def table_extent(xyz: np.ndarray, on_table: np.ndarray, image_shape: tuple[int, 
     low, high = outline.min(axis=0) - BIN, outline.max(axis=0) + BIN
     keep = np.all((xy >= low) & (xy <= high), axis=1)
     xy, rows, columns = xy[keep], rows[keep], columns[keep]
-    on_border = ((rows < BORDER) | (rows >= image_shape[0] - BORDER)
-                 | (columns < BORDER) | (columns >= image_shape[1] - BORDER))
+    on_border = (
+        (rows < BORDER) | (rows >= image_shape[0] - BORDER) | (columns < BORDER) | (columns >= image_shape[1] - BORDER)
+    )
     bounds = np.zeros((2, 2))
     edges: dict[str, float] = {}
     for side, (axis, along, end) in SIDES.items():
@@ -74,8 +78,9 @@ def table_extent(xyz: np.ndarray, on_table: np.ndarray, image_shape: tuple[int, 
     return TableExtent(bounds, edges)
 
 
-def _bin_extremes(measured: np.ndarray, along: np.ndarray, on_border: np.ndarray,
-                  end: int) -> tuple[np.ndarray, np.ndarray]:
+def _bin_extremes(
+    measured: np.ndarray, along: np.ndarray, on_border: np.ndarray, end: int
+) -> tuple[np.ndarray, np.ndarray]:
     """Per bin of ``along``: the lowest (``end`` 0) or highest ``measured`` value, and whether it is on the border."""
     bins = np.floor((along - along.min()) / BIN).astype(np.int64)
     signed = measured if end else -measured

@@ -22,8 +22,7 @@ Ids are never reused.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import replace
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -39,15 +38,15 @@ NO_MATCH = 1e6
 
 @dataclass(frozen=True)
 class TrackSettings:
-    max_jump: float = 0.08        # m an object may move between two frames and keep its id
-    forget_after: float = 3.0     # s an unseen (not held) object is still reported
-    confirm_frames: int = 2       # consecutive sightings before a new object gets an id
+    max_jump: float = 0.08  # m an object may move between two frames and keep its id
+    forget_after: float = 3.0  # s an unseen (not held) object is still reported
+    confirm_frames: int = 2  # consecutive sightings before a new object gets an id
     hold_radius: float = HOLD_RADIUS  # m from a holding gripper's tool frame to its object
     colour_penalty: float = 0.03  # m-equivalent cost of a colour-word change
-    partial_share: float = 0.5    # a sighting with fewer points than this share is partial
-    gone_frames: int = 3          # unseen frames in clear view, while new objects appear, before removal
-    overlap_share: float = 0.5    # share of a cluster's footprint on a track's that makes it that object
-    confident: float = 0.6        # a sighting at least this confident sets an object's words and size
+    partial_share: float = 0.5  # a sighting with fewer points than this share is partial
+    gone_frames: int = 3  # unseen frames in clear view, while new objects appear, before removal
+    overlap_share: float = 0.5  # share of a cluster's footprint on a track's that makes it that object
+    confident: float = 0.6  # a sighting at least this confident sets an object's words and size
 
 
 @dataclass
@@ -56,14 +55,14 @@ class Track:
     last_seen: float
     first_seen: float
     hits: int = 1
-    id: str = ""                       # empty until confirmed
+    id: str = ""  # empty until confirmed
     held_by: str | None = None
     hold_offset: np.ndarray | None = None
     visible: bool = True
-    missed: int = 0                    # consecutive frames unseen in clear view
+    missed: int = 0  # consecutive frames unseen in clear view
     identity: Descriptor | None = None  # last confident full sighting
-    near_hand: bool = False            # a gripper is at it: partly hidden by the fingers
-    shown: Descriptor | None = None    # the whole object as last published
+    near_hand: bool = False  # a gripper is at it: partly hidden by the fingers
+    shown: Descriptor | None = None  # the whole object as last published
 
     @property
     def confirmed(self) -> bool:
@@ -82,9 +81,13 @@ class Tracker:
         """Forget every object (a new scene was loaded); ids still never come back."""
         self.tracks = []
 
-    def update(self, detections: list[Descriptor], now: float,
-               state: Mapping[str, Any] | None = None,
-               hidden: Callable[[np.ndarray], bool] | None = None) -> list[dict]:
+    def update(
+        self,
+        detections: list[Descriptor],
+        now: float,
+        state: Mapping[str, Any] | None = None,
+        hidden: Callable[[np.ndarray], bool] | None = None,
+    ) -> list[dict]:
         """Fold one frame's detections in; return the published object list.
 
         ``hidden(position)`` says whether something (an arm) blocks the
@@ -99,8 +102,9 @@ class Tracker:
                 track.descriptor.box_center = track.descriptor.position.copy()
         matches, unmatched = self._match(detections)
         for track, detection in matches:
-            track.near_hand = any(float(np.linalg.norm(detection.position - hand)) <= self.settings.hold_radius
-                                  for hand in hands)
+            track.near_hand = any(
+                float(np.linalg.norm(detection.position - hand)) <= self.settings.hold_radius for hand in hands
+            )
             self._refresh(track, detection, now)
         seen = {id(track) for track, _ in matches}
         for track in self.tracks:
@@ -108,7 +112,7 @@ class Tracker:
             if track.visible or track.held_by is not None:
                 track.missed = 0
             elif hidden is not None and hidden(track.descriptor.position):
-                track.last_seen, track.missed = now, 0   # behind an arm: not gone, just out of sight
+                track.last_seen, track.missed = now, 0  # behind an arm: not gone, just out of sight
             else:
                 track.missed += 1
         fresh = [d for d in unmatched if not self._inside_held(d, tools) and not self._piece_of_known(d)]
@@ -127,8 +131,14 @@ class Tracker:
         """The confirmed objects as ``perception/objects`` items, by id number."""
         items = []
         for track in sorted((t for t in self.tracks if t.confirmed), key=lambda t: int(t.id[3:])):
-            items.append({"id": track.id, **(track.shown or track.descriptor).as_message(),
-                          "held_by": track.held_by, "visible": track.visible})
+            items.append(
+                {
+                    "id": track.id,
+                    **(track.shown or track.descriptor).as_message(),
+                    "held_by": track.held_by,
+                    "visible": track.visible,
+                }
+            )
         return items
 
     # -- internals ---------------------------------------------------------
@@ -164,17 +174,29 @@ class Tracker:
         if known is None or known is current:
             return current
         partial = current.points < self.settings.partial_share * known.points
-        if track.held_by is None and not track.near_hand and current.confidence >= self.settings.confident \
-                and not partial:
+        if (
+            track.held_by is None
+            and not track.near_hand
+            and current.confidence >= self.settings.confident
+            and not partial
+        ):
             return current
-        shown = replace(current, color=known.color, type=known.type, size=known.size.copy(),
-                        box_size=known.box_size.copy(), volume=known.volume, rgb=known.rgb,
-                        confidence=max(current.confidence, known.confidence))
+        shown = replace(
+            current,
+            color=known.color,
+            type=known.type,
+            size=known.size.copy(),
+            box_size=known.box_size.copy(),
+            volume=known.volume,
+            rgb=known.rgb,
+            confidence=max(current.confidence, known.confidence),
+        )
         if partial and track.held_by is None:
             last = track.shown if track.shown is not None else known
             shift = covering_shift(last.position, known.size, current.position, current.size)
-            shown = replace(shown, position=last.position + shift, box_center=last.box_center + shift,
-                            box_yaw=last.box_yaw)
+            shown = replace(
+                shown, position=last.position + shift, box_center=last.box_center + shift, box_yaw=last.box_yaw
+            )
         return shown
 
     def _match(self, detections: list[Descriptor]) -> tuple[list[tuple[Track, Descriptor]], list[Descriptor]]:
@@ -189,12 +211,16 @@ class Tracker:
                 distance = min(float(np.linalg.norm(view.position - det.position)) for view in views)
                 if track.held_by is None and not self._could_be_part_of(det, track):
                     continue
-                on_footprint = track.held_by is None and max(
-                    footprint_share(det, view) for view in views) >= s.overlap_share
+                on_footprint = (
+                    track.held_by is None and max(footprint_share(det, view) for view in views) >= s.overlap_share
+                )
                 if distance > gate and not on_footprint:
                     continue
-                cost[i, j] = (distance + 0.5 * float(np.linalg.norm(track.descriptor.size - det.size))
-                              + (s.colour_penalty if track.descriptor.color != det.color else 0.0))
+                cost[i, j] = (
+                    distance
+                    + 0.5 * float(np.linalg.norm(track.descriptor.size - det.size))
+                    + (s.colour_penalty if track.descriptor.color != det.color else 0.0)
+                )
         rows, cols = linear_sum_assignment(cost)
         pairs = [(self.tracks[r], detections[c]) for r, c in zip(rows, cols) if cost[r, c] < NO_MATCH]
         taken = {c for r, c in zip(rows, cols) if cost[r, c] < NO_MATCH}
@@ -212,9 +238,15 @@ class Tracker:
             return
         track.descriptor = detection
         known = track.identity
-        if not track.near_hand and detection.confidence >= self.settings.confident and (
-                known is None or detection.points >= self.settings.partial_share * known.points
-                or moved >= self.settings.max_jump):
+        if (
+            not track.near_hand
+            and detection.confidence >= self.settings.confident
+            and (
+                known is None
+                or detection.points >= self.settings.partial_share * known.points
+                or moved >= self.settings.max_jump
+            )
+        ):
             track.identity = detection
 
     def _piece_of_known(self, detection: Descriptor) -> bool:
@@ -225,10 +257,13 @@ class Tracker:
         piece lies on the box but not on that piece.
         """
         share = self.settings.overlap_share
-        return any(t.confirmed and t.held_by is None and self._could_be_part_of(detection, t)
-                   and any(footprint_share(detection, view) >= share
-                           for view in (*_views(t), t.identity) if view is not None)
-                   for t in self.tracks)
+        return any(
+            t.confirmed
+            and t.held_by is None
+            and self._could_be_part_of(detection, t)
+            and any(footprint_share(detection, view) >= share for view in (*_views(t), t.identity) if view is not None)
+            for t in self.tracks
+        )
 
     def _could_be_part_of(self, detection: Descriptor, track: Track) -> bool:
         """An arm hides part of an object but does not change its colour.
@@ -241,13 +276,17 @@ class Tracker:
         between two neighbours.
         """
         known = track.identity or track.descriptor
-        return (detection.color == known.color or detection.confidence < self.settings.confident
-                or detection.points >= self.settings.partial_share * known.points)
+        return (
+            detection.color == known.color
+            or detection.confidence < self.settings.confident
+            or detection.points >= self.settings.partial_share * known.points
+        )
 
     def _inside_held(self, detection: Descriptor, tools: dict[str, np.ndarray]) -> bool:
         """A blob at a holding gripper is the held object's visible part, not a new object."""
-        return any(float(np.linalg.norm(detection.position - tool)) <= self.settings.hold_radius
-                   for tool in tools.values())
+        return any(
+            float(np.linalg.norm(detection.position - tool)) <= self.settings.hold_radius for tool in tools.values()
+        )
 
     def _keep(self, track: Track, now: float, newest: float) -> bool:
         """Whether a track stays; ``newest`` is when the most recent object first appeared."""
@@ -268,8 +307,11 @@ def _views(track: Track) -> tuple[Descriptor, ...]:
     on the far side of the plate, lies neither near that piece nor on it;
     it does lie on the whole plate.
     """
-    return (track.descriptor,) if track.shown is None or track.shown is track.descriptor \
+    return (
+        (track.descriptor,)
+        if track.shown is None or track.shown is track.descriptor
         else (track.descriptor, track.shown)
+    )
 
 
 def holding_tools(state: Mapping[str, Any] | None) -> dict[str, np.ndarray]:
@@ -311,8 +353,7 @@ def tool_positions(state: Mapping[str, Any] | None) -> list[np.ndarray]:
     return positions
 
 
-def covering_shift(center: np.ndarray, size: np.ndarray, part_center: np.ndarray,
-                   part_size: np.ndarray) -> np.ndarray:
+def covering_shift(center: np.ndarray, size: np.ndarray, part_center: np.ndarray, part_size: np.ndarray) -> np.ndarray:
     """The smallest move of the box (``center``, ``size``) after which it covers the box of a part.
 
     Along an axis where the part is longer than the whole (a cluster that

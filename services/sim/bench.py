@@ -24,8 +24,14 @@ from services.sim.world import SimWorld
 from shared.codec import encode
 from shared.robot import ROBOT
 
-TASK_SCENES = ["default", "task1_stack_cups", "task2_side_by_side", "task3_in_box", "task4_large_box",
-               "task5_plate_edge"]
+TASK_SCENES = [
+    "default",
+    "task1_stack_cups",
+    "task2_side_by_side",
+    "task3_in_box",
+    "task4_large_box",
+    "task5_plate_edge",
+]
 RESOLUTIONS = [(640, 480), (320, 240)]
 
 
@@ -70,18 +76,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--scenes", nargs="+", default=TASK_SCENES, help="scenes to run (default: the paper's tasks)")
     args = parser.parse_args(list(sys.argv[1:] if argv is None else argv))
     print(f"sim bench: {args.seconds:g} s simulated per case, clouds at {args.rate:g} Hz, one thread, arm moving")
-    print(f"{'scene':<20} {'camera':>8} {'RTF':>6} {'render ms':>10} {'p95':>6} {'cloud ms':>9} "
-          f"{'physics ms/s':>13} {'max cloud Hz':>13}")
+    print(
+        f"{'scene':<20} {'camera':>8} {'RTF':>6} {'render ms':>10} {'p95':>6} {'cloud ms':>9} "
+        f"{'physics ms/s':>13} {'max cloud Hz':>13}"
+    )
     worst = {}
     for width, height in RESOLUTIONS:
         world = SimWorld(width=width, height=height)
-        world.capture()    # shader compilation is a one-off start-up cost, not a per-frame one
+        world.capture()  # shader compilation is a one-off start-up cost, not a per-frame one
         for scene in args.scenes:
             r = measure(world, scene, args.seconds, args.rate)
             worst[(width, height)] = min(worst.get((width, height), np.inf), r["rtf"])
-            print(f"{scene:<20} {width:>4}x{height:<3} {r['rtf']:>6.2f} {r['render_ms']:>10.1f} "
-                  f"{r['render_p95_ms']:>6.1f} {r['cloud_ms']:>9.1f} {r['physics_ms_per_s']:>13.1f} "
-                  f"{r['max_cloud_hz']:>13.1f}")
+            print(
+                f"{scene:<20} {width:>4}x{height:<3} {r['rtf']:>6.2f} {r['render_ms']:>10.1f} "
+                f"{r['render_p95_ms']:>6.1f} {r['cloud_ms']:>9.1f} {r['physics_ms_per_s']:>13.1f} "
+                f"{r['max_cloud_hz']:>13.1f}"
+            )
     for (width, height), rtf in worst.items():
         verdict = "meets" if rtf >= 1.0 else "MISSES"
         print(f"{width}x{height}: worst RTF {rtf:.2f} at {args.rate:g} Hz clouds — {verdict} the RTF ≥ 1.0 target")

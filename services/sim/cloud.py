@@ -18,7 +18,7 @@ def cloud_arrays(capture: Capture) -> tuple[np.ndarray, np.ndarray]:
     """(H, W, 3) float32 xyz in the base frame (NaN = no return) and (H, W, 3) uint8 rgb."""
     position = capture.position
     camera_xyz = position[..., :3]
-    distance = -camera_xyz[..., 2]                  # OpenGL camera looks along -z
+    distance = -camera_xyz[..., 2]  # OpenGL camera looks along -z
     valid = (position[..., 3] < 1.0) & (distance >= ROBOT.camera.near) & (distance <= ROBOT.camera.far)
     rotation = capture.model_matrix[:3, :3].astype(np.float32)
     translation = capture.model_matrix[:3, 3].astype(np.float32)
@@ -31,6 +31,15 @@ def cloud_arrays(capture: Capture) -> tuple[np.ndarray, np.ndarray]:
 def cloud_message(capture: Capture, stamp: float) -> dict:
     xyz, rgb = cloud_arrays(capture)
     height, width = xyz.shape[:2]
-    return {"stamp": stamp, "sim_time": capture.sim_time, "scene": capture.scene,
-            "scene_generation": capture.scene_generation, "xyz": xyz, "rgb": rgb,
-            "camera_pose": capture.camera_pose, "width": width, "height": height, "frame": "base"}
+    return {
+        "stamp": stamp,
+        "sim_time": capture.sim_time,
+        "scene": capture.scene,
+        "scene_generation": capture.scene_generation,
+        "xyz": xyz,
+        "rgb": rgb,
+        "camera_pose": capture.camera_pose,
+        "width": width,
+        "height": height,
+        "frame": "base",
+    }

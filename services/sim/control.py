@@ -52,8 +52,11 @@ def array(value: Any, field: str) -> np.ndarray:
 
 
 def _limits(joints: Mapping[str, JointInfo], names: list[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    return (np.array([joints[n].lower for n in names]), np.array([joints[n].upper for n in names]),
-            np.array([joints[n].velocity for n in names]))
+    return (
+        np.array([joints[n].lower for n in names]),
+        np.array([joints[n].upper for n in names]),
+        np.array([joints[n].velocity for n in names]),
+    )
 
 
 def contact_flag(request: Mapping[str, Any]) -> bool:
@@ -72,7 +75,9 @@ def arm_request(request: Mapping[str, Any], joints: Mapping[str, JointInfo]) -> 
         given = request["joints"]
         if not isinstance(given, list) or given != names:
             unknown = [n for n in given if n not in names] if isinstance(given, list) else given
-            raise ValueError(f"joints must be the {arm} arm's 7 joints in order {names}; unknown or misplaced: {unknown}")
+            raise ValueError(
+                f"joints must be the {arm} arm's 7 joints in order {names}; unknown or misplaced: {unknown}"
+            )
     lower, upper, velocity = _limits(joints, names)
     if "positions" in request:
         goal = array(request["positions"], "positions")
@@ -103,8 +108,10 @@ def head_request(request: Mapping[str, Any], joints: Mapping[str, JointInfo]) ->
             raise ValueError("look_at must be three finite numbers [x, y, z]")
         return point
     pan_info, tilt_info = joints["head_pan_joint"], joints["head_tilt_joint"]
-    return (number(request, "pan", pan_info.lower, pan_info.upper),
-            number(request, "tilt", tilt_info.lower, tilt_info.upper))
+    return (
+        number(request, "pan", pan_info.lower, pan_info.upper),
+        number(request, "tilt", tilt_info.lower, tilt_info.upper),
+    )
 
 
 def torso_request(request: Mapping[str, Any], joints: Mapping[str, JointInfo]) -> float:

@@ -16,11 +16,11 @@ from typing import Protocol
 import numpy as np
 from scipy.interpolate import PchipInterpolator
 
-SPEED_FRACTION = 0.4       # default moves use this share of each joint's velocity limit
-MIN_DURATION = 0.4         # s; even tiny moves take a moment
-SETTLE_TOLERANCE = 0.02    # rad or m: "arrived"
-SETTLE_TIMEOUT = 1.5       # s after the reference ends before a motion is declared blocked
-CONTACT_SETTLE = 0.3       # s a contact motion must rest against an object before it counts as done
+SPEED_FRACTION = 0.4  # default moves use this share of each joint's velocity limit
+MIN_DURATION = 0.4  # s; even tiny moves take a moment
+SETTLE_TOLERANCE = 0.02  # rad or m: "arrived"
+SETTLE_TIMEOUT = 1.5  # s after the reference ends before a motion is declared blocked
+CONTACT_SETTLE = 0.3  # s a contact motion must rest against an object before it counts as done
 
 
 class Trajectory(Protocol):
@@ -33,8 +33,9 @@ class Trajectory(Protocol):
 class MinimumJerk:
     """A rest-to-rest move (the smoothest profile: zero velocity and acceleration at both ends)."""
 
-    def __init__(self, start: np.ndarray, goal: np.ndarray, velocity_limits: np.ndarray,
-                 speed_fraction: float = SPEED_FRACTION) -> None:
+    def __init__(
+        self, start: np.ndarray, goal: np.ndarray, velocity_limits: np.ndarray, speed_fraction: float = SPEED_FRACTION
+    ) -> None:
         self.start = np.asarray(start, dtype=float)
         self.goal = np.asarray(goal, dtype=float)
         # peak velocity of a minimum-jerk move is 1.875 × the average
@@ -74,11 +75,11 @@ class Motion:
     """A trajectory for some joints, started at ``start_time`` (sim seconds)."""
 
     motion_id: str
-    part: str                      # "right", "left", "head", "torso", "right_gripper", ...
+    part: str  # "right", "left", "head", "torso", "right_gripper", ...
     joints: list[str]
     trajectory: Trajectory
     start_time: float
-    contact: bool = False          # may end blocked against an object (a press): see contact_outcome
+    contact: bool = False  # may end blocked against an object (a press): see contact_outcome
     goal: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
@@ -98,9 +99,7 @@ class Motion:
         if elapsed < SETTLE_TIMEOUT:
             return None
         worst = int(np.argmax(error))
-        return "failed", (f"{self.part} was blocked: {self.joints[worst]} stopped "
-                          f"{error[worst]:.3f} from its goal")
-
+        return "failed", (f"{self.part} was blocked: {self.joints[worst]} stopped {error[worst]:.3f} from its goal")
 
     def contact_outcome(self, now: float, actual: np.ndarray, touching: list[str]) -> tuple[str, str] | None:
         """Like :meth:`outcome`, but a joint blocked while the arm rests against an object is success.
@@ -121,12 +120,15 @@ class Motion:
         return finished
 
 
-def check_waypoints(times: np.ndarray, points: np.ndarray, joints: list[str],
-                    lower: np.ndarray, upper: np.ndarray, velocity: np.ndarray) -> None:
+def check_waypoints(
+    times: np.ndarray, points: np.ndarray, joints: list[str], lower: np.ndarray, upper: np.ndarray, velocity: np.ndarray
+) -> None:
     """Refuse a trajectory that is malformed, outside the joint limits or faster than the joints can go."""
     if times.ndim != 1 or points.ndim != 2 or points.shape != (len(times), len(joints)):
-        raise ValueError(f"points must be (N, {len(joints)}) and times (N,), "
-                         f"got points {list(points.shape)} and times {list(times.shape)}")
+        raise ValueError(
+            f"points must be (N, {len(joints)}) and times (N,), "
+            f"got points {list(points.shape)} and times {list(times.shape)}"
+        )
     if len(times) == 0:
         raise ValueError("a trajectory needs at least one point")
     if not (np.isfinite(times).all() and np.isfinite(points).all()):
@@ -139,12 +141,15 @@ def check_waypoints(times: np.ndarray, points: np.ndarray, joints: list[str],
         ratio = speeds / velocity
         if ratio.max() > 1.05:
             step, joint = np.unravel_index(int(np.argmax(ratio)), ratio.shape)
-            raise ValueError(f"too fast: {joints[joint]} would move at {speeds[step, joint]:.2f}/s "
-                             f"between points {step} and {step + 1}, its limit is {velocity[joint]:.2f}/s")
+            raise ValueError(
+                f"too fast: {joints[joint]} would move at {speeds[step, joint]:.2f}/s "
+                f"between points {step} and {step + 1}, its limit is {velocity[joint]:.2f}/s"
+            )
 
 
-def check_limits(points: np.ndarray, joints: list[str], lower: np.ndarray, upper: np.ndarray,
-                 tolerance: float = 1e-3) -> None:
+def check_limits(
+    points: np.ndarray, joints: list[str], lower: np.ndarray, upper: np.ndarray, tolerance: float = 1e-3
+) -> None:
     points = np.atleast_2d(points)
     if not np.isfinite(points).all():
         raise ValueError("joint positions contain NaN or infinite values")
@@ -152,5 +157,7 @@ def check_limits(points: np.ndarray, joints: list[str], lower: np.ndarray, upper
     high = points > upper + tolerance
     if low.any() or high.any():
         row, column = np.argwhere(low | high)[0]
-        raise ValueError(f"{joints[column]} = {points[row, column]:.4f} is outside its limits "
-                         f"[{lower[column]:.4f}, {upper[column]:.4f}]")
+        raise ValueError(
+            f"{joints[column]} = {points[row, column]:.4f} is outside its limits "
+            f"[{lower[column]:.4f}, {upper[column]:.4f}]"
+        )

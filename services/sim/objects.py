@@ -18,9 +18,9 @@ from scipy.spatial.transform import Rotation
 from services.sim.layout import TABLE_THICKNESS, TABLE_TOP_Z, TABLE_X, TABLE_Y
 from services.sim.scene_file import ObjectSpec
 
-WALL = 0.006          # wall thickness of cups, bowls and containers
-FLOOR = 0.008         # floor thickness
-PANELS = 16           # wall panels around a round object
+WALL = 0.006  # wall thickness of cups, bowls and containers
+FLOOR = 0.008  # floor thickness
+PANELS = 16  # wall panels around a round object
 TABLE_RGB = (0.62, 0.58, 0.54)
 TABLE_FRICTION = 0.5
 
@@ -40,7 +40,7 @@ class Piece:
         return math.pi * self.half[0] ** 2 * 2.0 * self.half[2]
 
 
-_UPRIGHT = Rotation.from_euler("y", 90, degrees=True)   # SAPIEN cylinders lie along x
+_UPRIGHT = Rotation.from_euler("y", 90, degrees=True)  # SAPIEN cylinders lie along x
 
 
 def _quat_wxyz(rotation: Rotation) -> list[float]:
@@ -76,8 +76,10 @@ def pieces_of(spec: ObjectSpec) -> list[Piece]:
         return [_cylinder(radius, FLOOR / 2, bottom + FLOOR / 2), *_ring(radius, radius, bottom + FLOOR, sz / 2)]
     if spec.type == "bowl":
         radius = min(sx, sy) / 2
-        return [_cylinder(radius * 0.55, FLOOR / 2, bottom + FLOOR / 2),
-                *_ring(radius * 0.55, radius, bottom + FLOOR, sz / 2)]
+        return [
+            _cylinder(radius * 0.55, FLOOR / 2, bottom + FLOOR / 2),
+            *_ring(radius * 0.55, radius, bottom + FLOOR, sz / 2),
+        ]
     if spec.type == "plate":
         return [_cylinder(min(sx, sy) / 2, sz / 2, 0.0)]
     if spec.open_top:
@@ -145,8 +147,8 @@ def world_aabb(entity: sapien.Entity) -> np.ndarray:
         pose = entity.pose * shape.get_local_pose()
         rotation = Rotation.from_quat(np.roll(pose.q, -1)).as_matrix()
         if isinstance(shape, sapien.physx.PhysxCollisionShapeCylinder):
-            axis = rotation[:, 0]   # a SAPIEN cylinder runs along its local x
-            half = shape.half_length * np.abs(axis) + shape.radius * np.sqrt(np.clip(1.0 - axis ** 2, 0.0, None))
+            axis = rotation[:, 0]  # a SAPIEN cylinder runs along its local x
+            half = shape.half_length * np.abs(axis) + shape.radius * np.sqrt(np.clip(1.0 - axis**2, 0.0, None))
         else:
             half = np.abs(rotation) @ np.asarray(shape.half_size, dtype=float)
         lows.append(pose.p - half)

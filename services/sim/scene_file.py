@@ -38,7 +38,7 @@ COLOURS: dict[str, tuple[float, float, float]] = {
     "grey": (0.50, 0.50, 0.50),
 }
 
-DEFAULT_REGION = {"x": (0.45, 0.65), "y": (-0.18, 0.18)}   # reachable top-down by both arms
+DEFAULT_REGION = {"x": (0.45, 0.65), "y": (-0.18, 0.18)}  # reachable top-down by both arms
 
 
 class SceneError(ValueError):
@@ -58,7 +58,7 @@ class ObjectSpec:
     position: tuple[float, float, float]
     yaw: float = 0.0
     friction: float = 0.8
-    open_top: bool = False            # boxes only: a container with walls and a floor
+    open_top: bool = False  # boxes only: a container with walls and a floor
 
     @property
     def footprint_radius(self) -> float:
@@ -131,8 +131,9 @@ def parse_scene(document: Any, source: str = "scene", default_name: str = "scene
                 raise SceneError(f"{source}: random.{axis} must be [low, high] with low < high")
             region[axis] = (low, high)
     gap = float(placement.get("gap", 0.03))
-    return SceneSpec(str(document.get("name", default_name)), str(document.get("description", "")),
-                     objects, region, gap)
+    return SceneSpec(
+        str(document.get("name", default_name)), str(document.get("description", "")), objects, region, gap
+    )
 
 
 def _numbers(value: Any, count: int | tuple[int, ...], where: str) -> list[float]:
@@ -172,8 +173,18 @@ def _parse_object(item: Any, index: int, source: str) -> ObjectSpec:
     friction = float(item.get("friction", 0.8))
     if not 0.0 <= friction <= 3.0:
         raise SceneError(f"{where}: friction must be in [0, 3], got {friction}")
-    return ObjectSpec(str(object_id), kind, color, rgb, size, mass, tuple(xyz),
-                      float(item.get("yaw", 0.0)), friction, bool(item.get("open_top", False)))
+    return ObjectSpec(
+        str(object_id),
+        kind,
+        color,
+        rgb,
+        size,
+        mass,
+        tuple(xyz),
+        float(item.get("yaw", 0.0)),
+        friction,
+        bool(item.get("open_top", False)),
+    )
 
 
 def with_positions(scene: SceneSpec, positions: dict[str, Any]) -> SceneSpec:
@@ -195,7 +206,7 @@ def randomized(scene: SceneSpec, seed: int, attempts: int = 2000) -> SceneSpec:
     objects resting on the table are shuffled.
     """
     rng = np.random.default_rng(seed)
-    placed: list[tuple[float, float, float]] = []   # x, y, radius
+    placed: list[tuple[float, float, float]] = []  # x, y, radius
     moved: dict[str, tuple[float, float, float]] = {}
     on_table = [s for s in scene.objects if abs(s.position[2] - (TABLE_TOP_Z + s.size[2] / 2)) < 0.01]
     for spec in sorted(on_table, key=lambda s: -s.footprint_radius):

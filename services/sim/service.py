@@ -42,10 +42,10 @@ from shared.bus import Bus
 
 log = logging.getLogger("hfpbd.sim")
 
-STATE_RATE = 25.0        # Hz
-TRUTH_RATE = 10.0        # Hz
-REQUEST_TIMEOUT = 10.0   # s a handler waits for the loop to apply a command
-RTF_WINDOW = 3.0         # s of wall time the published real-time factor is averaged over
+STATE_RATE = 25.0  # Hz
+TRUTH_RATE = 10.0  # Hz
+REQUEST_TIMEOUT = 10.0  # s a handler waits for the loop to apply a command
+RTF_WINDOW = 3.0  # s of wall time the published real-time factor is averaged over
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -53,9 +53,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=None, help="place the scene's objects at random with this seed")
     parser.add_argument("--width", type=int, default=640, help="head camera width in pixels (default: %(default)s)")
     parser.add_argument("--height", type=int, default=480, help="head camera height in pixels (default: %(default)s)")
-    parser.add_argument("--cloud-rate", type=float, default=5.0, help="point clouds per wall second (default: %(default)s)")
-    parser.add_argument("--speed", type=float, default=1.0,
-                        help="simulated seconds per wall second; 0 = as fast as possible (default: %(default)s)")
+    parser.add_argument(
+        "--cloud-rate", type=float, default=5.0, help="point clouds per wall second (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--speed",
+        type=float,
+        default=1.0,
+        help="simulated seconds per wall second; 0 = as fast as possible (default: %(default)s)",
+    )
     parser.add_argument("--paused", action="store_true", help="start paused (advance with sim/control/step)")
 
 
@@ -124,7 +130,7 @@ class SimRunner:
                 else:
                     self._step()
                     if self.speed > 0 and (now - wall0) * self.speed - (world.sim_time - sim0) > 0.5:
-                        wall0, sim0 = now, world.sim_time   # too far behind: do not sprint to catch up
+                        wall0, sim0 = now, world.sim_time  # too far behind: do not sprint to catch up
                 now = time.monotonic()
                 self._rtf_window.append((now, world.sim_time))
                 while now - self._rtf_window[0][0] > RTF_WINDOW:
@@ -165,8 +171,16 @@ class SimRunner:
 
     # -- publishing ------------------------------------------------------------------
     def publish_event(self, motion_id: str, status: str, message: str) -> None:
-        self.bus.publish(self.bus.keys.sim_events, {"motion_id": motion_id, "status": status, "message": message,
-                                                    "sim_time": self.world.sim_time, "stamp": time.time()})
+        self.bus.publish(
+            self.bus.keys.sim_events,
+            {
+                "motion_id": motion_id,
+                "status": status,
+                "message": message,
+                "sim_time": self.world.sim_time,
+                "stamp": time.time(),
+            },
+        )
 
     def replaced(self, old: Motion | None, new_id: str) -> None:
         if old is not None:
@@ -185,8 +199,14 @@ class SimRunner:
         self._state_pub.put(state)
 
     def publish_truth(self) -> None:
-        self._truth_pub.put({"stamp": time.time(), "sim_time": self.world.sim_time,
-                             "scene": self.world.scene_name, "objects": self.world.truth()})
+        self._truth_pub.put(
+            {
+                "stamp": time.time(),
+                "sim_time": self.world.sim_time,
+                "scene": self.world.scene_name,
+                "objects": self.world.truth(),
+            }
+        )
 
     def _offer_frame(self, frame: Capture | None) -> None:
         """Hand a frame to the cloud thread, replacing one it has not started on (newest wins)."""
@@ -224,6 +244,7 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
             else:
                 runner.replaced(world.move_joints(side, names, goal, motion_id), motion_id)
             return motion_id
+
         return {"ok": True, "motion_id": runner.call(start)}
 
     def gripper(request: dict) -> dict:
@@ -233,6 +254,7 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
             motion_id = world.new_motion_id()
             runner.replaced(world.move_gripper(side, width, force, motion_id), motion_id)
             return motion_id
+
         return {"ok": True, "motion_id": runner.call(start)}
 
     def head(request: dict) -> dict:
@@ -241,9 +263,12 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
         def start() -> str:
             pan, tilt = world.head_angles_for(goal) if isinstance(goal, np.ndarray) else goal
             motion_id = world.new_motion_id()
-            runner.replaced(world.move_joints("head", ["head_pan_joint", "head_tilt_joint"],
-                                              np.array([pan, tilt]), motion_id), motion_id)
+            runner.replaced(
+                world.move_joints("head", ["head_pan_joint", "head_tilt_joint"], np.array([pan, tilt]), motion_id),
+                motion_id,
+            )
             return motion_id
+
         return {"ok": True, "motion_id": runner.call(start)}
 
     def torso(request: dict) -> dict:
@@ -253,6 +278,7 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
             motion_id = world.new_motion_id()
             runner.replaced(world.move_joints("torso", ["torso_lift_joint"], np.array([height]), motion_id), motion_id)
             return motion_id
+
         return {"ok": True, "motion_id": runner.call(start)}
 
     def stop(request: dict) -> dict:
@@ -263,6 +289,7 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
             for motion in stopped:
                 runner.publish_event(motion.motion_id, "stopped", "stopped on request")
             return [m.motion_id for m in stopped]
+
         return {"ok": True, "stopped": runner.call(halt)}
 
     def scene(request: dict) -> dict:
@@ -275,6 +302,7 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
             world.settle(0.3)
             runner.publish_truth()
             return world.truth()
+
         return {"ok": True, "scene": spec.name, "objects": runner.call(load)}
 
     def pause(request: dict) -> dict:
@@ -285,6 +313,7 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
         def apply() -> float:
             runner.paused = paused
             return world.sim_time
+
         return {"ok": True, "paused": paused, "sim_time": runner.call(apply)}
 
     def step(request: dict) -> dict:
@@ -292,19 +321,29 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
 
         def apply() -> float:
             if not runner.paused:
-                raise ValueError("step needs the simulation paused (sim/control/pause {\"paused\": true})")
+                raise ValueError('step needs the simulation paused (sim/control/pause {"paused": true})')
             sim_time = runner.step_paused(steps)
             runner.publish_state()
             runner.publish_truth()
             return sim_time
+
         return {"ok": True, "sim_time": runner.call(apply)}
 
     def snapshot(request: dict) -> dict:
         image = runner.call(world.overview_rgb)
         return {"ok": True, "png": png_bytes(image)}
 
-    handlers = {"arm": arm, "gripper": gripper, "head": head, "torso": torso, "stop": stop, "scene": scene,
-                "pause": pause, "step": step, "snapshot": snapshot}
+    handlers = {
+        "arm": arm,
+        "gripper": gripper,
+        "head": head,
+        "torso": torso,
+        "stop": stop,
+        "scene": scene,
+        "pause": pause,
+        "step": step,
+        "snapshot": snapshot,
+    }
     for name, handler in handlers.items():
         bus.serve(keys.sim_control(name), handler)
 
@@ -323,10 +362,16 @@ def run(bus: Bus, args: argparse.Namespace, stop: threading.Event) -> None:
     world.load(scene)
     world.settle(0.3)
     log.info("scene %s loaded: %s", scene.name, ", ".join(scene.ids))
-    world.capture()   # the first frame compiles shaders (seconds on a CPU); do it before going live
+    world.capture()  # the first frame compiles shaders (seconds on a CPU); do it before going live
     runner = SimRunner(world, bus, args.cloud_rate, args.speed, args.paused)
     serve_controls(bus, runner)
     bus.declare_alive("sim")
-    log.info("simulating at %s real time, clouds %dx%d at %.1f Hz, arms %s",
-             "max" if args.speed <= 0 else f"{args.speed:g}x", args.width, args.height, args.cloud_rate, ARMS)
+    log.info(
+        "simulating at %s real time, clouds %dx%d at %.1f Hz, arms %s",
+        "max" if args.speed <= 0 else f"{args.speed:g}x",
+        args.width,
+        args.height,
+        args.cloud_rate,
+        ARMS,
+    )
     runner.run(stop)

@@ -32,12 +32,12 @@ _HEAD_CHAIN = ("base_footprint_joint", ROBOT.torso_joint, *ROBOT.head_joints, "h
 _ORIGINS = {joint.name: np.array(joint.xyz, float) for joint in model()[1] if joint.name in _HEAD_CHAIN}
 
 TIMESTEP = 1.0 / 250.0
-GRIPPER_SPEED = 0.08                     # gap closing/opening speed (m/s)
+GRIPPER_SPEED = 0.08  # gap closing/opening speed (m/s)
 PAD_FRICTION = 1.5
-GRIPPER_SETTLE_TRAVEL = 0.0005          # m: the pads have stopped when the opening changes less than this
-GRIPPER_SETTLE_TIME = 0.15               # s ... over this long
-ROBOT_IGNORE_BIT = 1 << 30               # collision group 2 bit shared by all robot shapes
-SQUEEZE_ALIGNMENT = 0.7                  # |cos| between a pad contact's normal and the closing axis for a squeeze
+GRIPPER_SETTLE_TRAVEL = 0.0005  # m: the pads have stopped when the opening changes less than this
+GRIPPER_SETTLE_TIME = 0.15  # s ... over this long
+ROBOT_IGNORE_BIT = 1 << 30  # collision group 2 bit shared by all robot shapes
+SQUEEZE_ALIGNMENT = 0.7  # |cos| between a pad contact's normal and the closing axis for a squeeze
 
 # joint drives: (stiffness, damping, force limit); gravity is off for the robot's
 # links (a real PR2 is counterbalanced), so the drives only fight contacts and loads
@@ -62,14 +62,14 @@ class JointInfo:
 class Capture:
     """One head-camera frame as the renderer gives it (converted to a cloud elsewhere)."""
 
-    position: np.ndarray        # (H, W, 4) camera-frame xyz (OpenGL axes) + depth
-    color: np.ndarray           # (H, W, 4) float 0..1
-    model_matrix: np.ndarray    # (4, 4) OpenGL camera frame -> world
-    camera_pose: list[float]    # camera link pose (x forward, y left, z up), base frame
+    position: np.ndarray  # (H, W, 4) camera-frame xyz (OpenGL axes) + depth
+    color: np.ndarray  # (H, W, 4) float 0..1
+    model_matrix: np.ndarray  # (4, 4) OpenGL camera frame -> world
+    camera_pose: list[float]  # camera link pose (x forward, y left, z up), base frame
     sim_time: float
-    scene: str = ""             # the scene shown and which load of it, so a frame rendered
-    scene_generation: int = 0   # just before a reload is never taken for the new scene
-    segmentation: np.ndarray | None = None   # (H, W) entity ids (tests only)
+    scene: str = ""  # the scene shown and which load of it, so a frame rendered
+    scene_generation: int = 0  # just before a reload is never taken for the new scene
+    segmentation: np.ndarray | None = None  # (H, W) entity ids (tests only)
 
 
 def pose_list(pose: sapien.Pose) -> list[float]:
@@ -158,8 +158,16 @@ class SimWorld:
 
     def _mount_camera(self, width: int, height: int) -> sapien.render.RenderCameraComponent:
         spec = ROBOT.camera
-        camera = self.scene.add_mounted_camera("head_camera", self.links[spec.link].entity, sapien.Pose(), width,
-                                               height, spec.vertical_fov(width, height), 0.05, spec.far + 1.0)
+        camera = self.scene.add_mounted_camera(
+            "head_camera",
+            self.links[spec.link].entity,
+            sapien.Pose(),
+            width,
+            height,
+            spec.vertical_fov(width, height),
+            0.05,
+            spec.far + 1.0,
+        )
         return camera
 
     @staticmethod
@@ -199,11 +207,16 @@ class SimWorld:
         base, lift, pan_joint, tilt_joint, camera = (_ORIGINS[name] for name in _HEAD_CHAIN)
         pan_axis = base + lift + pan_joint + np.array([0.0, 0.0, torso])
         offset = target - pan_axis
-        pan = float(np.clip(math.atan2(offset[1], offset[0]), self.joints["head_pan_joint"].lower,
-                            self.joints["head_pan_joint"].upper))
+        pan = float(
+            np.clip(
+                math.atan2(offset[1], offset[0]),
+                self.joints["head_pan_joint"].lower,
+                self.joints["head_pan_joint"].upper,
+            )
+        )
         ahead = math.hypot(offset[0], offset[1]) - tilt_joint[0]
         rise = offset[2]
-        cam_x, cam_z = camera[0], camera[2]     # the camera's small sideways offset is neglected
+        cam_x, cam_z = camera[0], camera[2]  # the camera's small sideways offset is neglected
 
         def miss(tilt: float) -> float:
             c, s = math.cos(tilt), math.sin(tilt)
@@ -232,10 +245,11 @@ class SimWorld:
         velocity = np.array([self.joints[n].velocity for n in names])
         return self.start_motion(Motion(motion_id, part, names, MinimumJerk(start, goal, velocity), self.sim_time))
 
-    def follow_waypoints(self, part: str, names: list[str], times: np.ndarray, points: np.ndarray,
-                         motion_id: str, contact: bool = False) -> Motion | None:
+    def follow_waypoints(
+        self, part: str, names: list[str], times: np.ndarray, points: np.ndarray, motion_id: str, contact: bool = False
+    ) -> Motion | None:
         """Follow timed waypoints; ``contact``: the motion may end pressed against an object (a press)."""
-        if times[0] > 0:   # start from where the joints are now
+        if times[0] > 0:  # start from where the joints are now
             times = np.concatenate([[0.0], times])
             points = np.vstack([self.joint_targets(names), points])
         else:
@@ -253,8 +267,11 @@ class SimWorld:
             joint.set_drive_properties(*FINGER_DRIVE, force)
         # pads move at a fixed speed; the force limit, not the reference, stops them on contact
         velocity = np.full(2, 1.875 * GRIPPER_SPEED / 2)  # minimum jerk: peak = 1.875 × mean
-        return self.start_motion(GripperMotion(motion_id, f"{arm}_gripper", names,
-                                               MinimumJerk(start, goal, velocity, 1.0), self.sim_time, arm=arm))
+        return self.start_motion(
+            GripperMotion(
+                motion_id, f"{arm}_gripper", names, MinimumJerk(start, goal, velocity, 1.0), self.sim_time, arm=arm
+            )
+        )
 
     def stop(self, parts: list[str]) -> list[Motion]:
         """Stop the motions of ``parts`` where the joints are now."""
@@ -266,7 +283,7 @@ class SimWorld:
                 continue
             stopped.append(motion)
             if isinstance(motion, GripperMotion):
-                continue     # a gripper keeps squeezing what it holds
+                continue  # a gripper keeps squeezing what it holds
             for name, value in zip(motion.joints, self.qpos(motion.joints)):
                 active[self.joints[name].index].set_drive_target(float(value))
                 active[self.joints[name].index].set_drive_velocity_target(0.0)
@@ -354,9 +371,14 @@ class SimWorld:
         for contact in self.scene.get_contacts() if contacts is None else contacts:
             names = [body.entity.name for body in contact.bodies]
             for mine, other in (names, names[::-1]):
-                if mine in pads and other in self.objects and any(
+                if (
+                    mine in pads
+                    and other in self.objects
+                    and any(
                         point.separation < 0.002 and abs(float(np.dot(point.normal, closing))) > SQUEEZE_ALIGNMENT
-                        for point in contact.points):
+                        for point in contact.points
+                    )
+                ):
                     faces[mine].add(other)
         return set.intersection(*faces.values())
 
@@ -395,11 +417,18 @@ class SimWorld:
         for arm in ARMS:
             left, right = (touching[name] for name in self.pad_links(arm))
             both = sorted(self.squeezed(arm, contacts))
-            grippers[arm] = {"width": self.gripper_width(arm), "effort": self.gripper_effort(arm),
-                             "holding": both[0] if both else None, "contact": sorted(left | right),
-                             "force": self.grip_force[arm]}
-        links = {name: pose_list(link.entity_pose) for name, link in self.links.items()
-                 if name[:2] in ("r_", "l_") and (link.collision_shapes or name.endswith("tool_frame"))}
+            grippers[arm] = {
+                "width": self.gripper_width(arm),
+                "effort": self.gripper_effort(arm),
+                "holding": both[0] if both else None,
+                "contact": sorted(left | right),
+                "force": self.grip_force[arm],
+            }
+        links = {
+            name: pose_list(link.entity_pose)
+            for name, link in self.links.items()
+            if name[:2] in ("r_", "l_") and (link.collision_shapes or name.endswith("tool_frame"))
+        }
         return {
             "sim_time": self.sim_time,
             "joints": joints,
@@ -419,15 +448,19 @@ class SimWorld:
         for object_id, entity in self.objects.items():
             spec = self.specs[object_id]
             box = object_builder.world_aabb(entity)
-            out.append({
-                "id": object_id, "color": spec.color, "type": spec.type,
-                "position": [float(v) for v in (box[0] + box[1]) / 2],
-                "size": [float(v) for v in box[1] - box[0]],
-                "dimensions": list(spec.size),
-                "pose": pose_list(entity.pose),
-                "aabb": box.tolist(),
-                "entity_id": int(entity.per_scene_id),
-            })
+            out.append(
+                {
+                    "id": object_id,
+                    "color": spec.color,
+                    "type": spec.type,
+                    "position": [float(v) for v in (box[0] + box[1]) / 2],
+                    "size": [float(v) for v in box[1] - box[0]],
+                    "dimensions": list(spec.size),
+                    "pose": pose_list(entity.pose),
+                    "aabb": box.tolist(),
+                    "entity_id": int(entity.per_scene_id),
+                }
+            )
         return out
 
     def capture(self, segmentation: bool = False) -> Capture:
@@ -463,7 +496,7 @@ class GripperMotion(Motion):
     def __init__(self, *args, arm: str, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         self.arm = arm
-        self._watch: tuple[float, float] | None = None     # (time, width) when the pads were last seen moving
+        self._watch: tuple[float, float] | None = None  # (time, width) when the pads were last seen moving
 
     def gripper_outcome(self, now: float, world: SimWorld) -> tuple[str, str] | None:
         if now - self.start_time < self.trajectory.duration:

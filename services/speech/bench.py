@@ -30,7 +30,14 @@ from services.speech import espeak
 from services.speech.audio import RATE, read_wav, silence
 from services.speech.corpus import Item, corpus, held_out
 from services.speech.grammar import SceneWords
-from services.speech.recogniser import ACOUSTIC_SCALE, OFF_GRAMMAR_PRIOR, PER_MEANING, Hypothesis, Recogniser, posteriors
+from services.speech.recogniser import (
+    ACOUSTIC_SCALE,
+    OFF_GRAMMAR_PRIOR,
+    PER_MEANING,
+    Hypothesis,
+    Recogniser,
+    posteriors,
+)
 from services.speech.vocabulary import nlu_vocabulary
 
 SCALES = (0.0, 0.01, 0.03, 0.1, 0.3, 1.0)
@@ -57,8 +64,12 @@ def _command(result: Result) -> dict | None:
     return result.command.as_dict() if isinstance(result, CommandResult) else None
 
 
-def rescored(outcome: Outcome, scale: float = ACOUSTIC_SCALE, off_grammar: float = OFF_GRAMMAR_PRIOR,
-             nlu_weight: float = NLU_WEIGHT) -> Choice | None:
+def rescored(
+    outcome: Outcome,
+    scale: float = ACOUSTIC_SCALE,
+    off_grammar: float = OFF_GRAMMAR_PRIOR,
+    nlu_weight: float = NLU_WEIGHT,
+) -> Choice | None:
     """The NLU's choice from the n-best as the speech service would send it at these weights."""
     members = {h.text for h in outcome.hypotheses if h.in_grammar}
     results = {h.text: r for h, r in zip(outcome.hypotheses, outcome.results)}
@@ -75,8 +86,10 @@ def _rejections(outcomes: list[Outcome], choices: list[Choice | None], below: fl
     rejected = [choice is not None and choice.rejected(below) for choice in choices]
     wrong = sum(r and not _right(o, c) for o, c, r in zip(outcomes, choices, rejected))
     rest = [_right(o, c) for o, c, r in zip(outcomes, choices, rejected) if not r]
-    return (f"{sum(rejected)} not acted on ({wrong} of them wrong); "
-            f"accuracy among the rest {sum(rest) / max(1, len(rest)):.2%}")
+    return (
+        f"{sum(rejected)} not acted on ({wrong} of them wrong); "
+        f"accuracy among the rest {sum(rest) / max(1, len(rest)):.2%}"
+    )
 
 
 def run(items: list[Item], vocabulary: str, out: Path) -> list[Outcome]:
@@ -98,18 +111,24 @@ def run(items: list[Item], vocabulary: str, out: Path) -> list[Outcome]:
 
 def report(outcomes: list[Outcome], vocabulary: str, title: str = "speech benchmark") -> bool:
     n = len(outcomes)
-    errors = sum(Levenshtein.distance(_words(o.item.text), _words(o.hypotheses[0].text if o.hypotheses else ""))
-                 for o in outcomes)
+    errors = sum(
+        Levenshtein.distance(_words(o.item.text), _words(o.hypotheses[0].text if o.hypotheses else ""))
+        for o in outcomes
+    )
     reference_words = sum(len(_words(o.item.text)) for o in outcomes)
     exact = sum(bool(o.hypotheses) and o.hypotheses[0].text == o.item.text for o in outcomes)
     top1 = sum(bool(o.results) and _command(o.results[0]) == o.item.expected for o in outcomes)
     in_nbest = sum(any(_command(r) == o.item.expected for r in o.results) for o in outcomes)
     rtf = [o.decode_s / o.seconds for o in outcomes]
     audio = sum(o.seconds for o in outcomes)
-    print(f"{title}: {n} utterances, {len({o.item.expected['procedure'] for o in outcomes})} procedures, "
-          f"{len({o.item.scene for o in outcomes})} scenes, {len({o.item.voice for o in outcomes})} voices, "
-          f"{len({o.item.speed for o in outcomes})} speeds; grammar: {vocabulary} vocabulary")
-    print(f"  word error rate (top hypothesis)         {errors / reference_words:7.2%}  ({errors} errors / {reference_words} words)")
+    print(
+        f"{title}: {n} utterances, {len({o.item.expected['procedure'] for o in outcomes})} procedures, "
+        f"{len({o.item.scene for o in outcomes})} scenes, {len({o.item.voice for o in outcomes})} voices, "
+        f"{len({o.item.speed for o in outcomes})} speeds; grammar: {vocabulary} vocabulary"
+    )
+    print(
+        f"  word error rate (top hypothesis)         {errors / reference_words:7.2%}  ({errors} errors / {reference_words} words)"
+    )
     print(f"  sentence exactly right                   {exact / n:7.2%}")
     print(f"  command accuracy, top hypothesis         {top1 / n:7.2%}")
     for scale in SCALES:
@@ -130,15 +149,19 @@ def report(outcomes: list[Outcome], vocabulary: str, title: str = "speech benchm
         print(f"  ... share of the n-best < {below:<5g}: {_rejections(outcomes, choices, below)}{mark}")
     print(f"  right command anywhere in the n-best     {in_nbest / n:7.2%}")
     print(f"  n-best length                            mean {statistics.mean(len(o.hypotheses) for o in outcomes):.2f}")
-    print(f"  decode time per second of audio          mean {statistics.mean(rtf):.3f} s, "
-          f"p95 {float(np.percentile(rtf, 95)):.3f} s, max {max(rtf):.3f} s ({audio:.0f} s of audio)")
+    print(
+        f"  decode time per second of audio          mean {statistics.mean(rtf):.3f} s, "
+        f"p95 {float(np.percentile(rtf, 95)):.3f} s, max {max(rtf):.3f} s ({audio:.0f} s of audio)"
+    )
     best = sum(_right(o, c) for o, c in zip(outcomes, choices)) / n
     print(f"  command accuracy, n-best rescored        {best:7.2%}; {_rejections(outcomes, choices, REJECT_BELOW)}")
     print(f"  target command accuracy >= {TARGET_ACCURACY:.0%}: {'met' if best >= TARGET_ACCURACY else 'NOT met'}")
     for o, c in zip(outcomes, choices):
         if not _right(o, c):
-            print(f"  miss [{o.item.voice} {o.item.speed}]{' (not acted on)' if c is not None and c.rejected() else ''} "
-                  f"said {o.item.text!r}, heard {[h.text for h in o.hypotheses] or 'nothing'}")
+            print(
+                f"  miss [{o.item.voice} {o.item.speed}]{' (not acted on)' if c is not None and c.rejected() else ''} "
+                f"said {o.item.text!r}, heard {[h.text for h in o.hypotheses] or 'nothing'}"
+            )
     return best >= TARGET_ACCURACY
 
 
@@ -146,12 +169,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="hfpbd bench speech", description=__doc__.splitlines()[0])
     parser.add_argument("--vocabulary", choices=("core", "full"), default="core")
     parser.add_argument("--limit", type=int, default=None, help="only the first N utterances")
-    parser.add_argument("--held-out", action="store_true",
-                        help="the held-out set (other voices and speeds) on which the weights are chosen")
+    parser.add_argument(
+        "--held-out",
+        action="store_true",
+        help="the held-out set (other voices and speeds) on which the weights are chosen",
+    )
     args = parser.parse_args(argv)
     if not espeak.available():
         print("hfpbd bench speech: espeak-ng is not installed (Debian package espeak-ng)", file=sys.stderr)
         return 2
     with tempfile.TemporaryDirectory(prefix="hfpbd-speech-bench-") as folder:
-        outcomes = run((held_out() if args.held_out else corpus())[:args.limit], args.vocabulary, Path(folder))
+        outcomes = run((held_out() if args.held_out else corpus())[: args.limit], args.vocabulary, Path(folder))
     return 0 if report(outcomes, args.vocabulary, "held-out set" if args.held_out else "speech benchmark") else 1

@@ -30,24 +30,39 @@ _PLATE = [0.20, 0.20, 0.02]
 
 # scene name -> (objects, {placeholder: (words, object id)})
 SCENES: dict[str, tuple[list[dict[str, Any]], dict[str, tuple[str, str]]]] = {
-    "cups": ([
-        {"id": "obj0", "color": "red", "type": "cup", "position": [0.55, -0.15, 0.77], "size": _CUP},
-        {"id": "obj1", "color": "blue", "type": "cup", "position": [0.60, 0.15, 0.77], "size": _CUP},
-        {"id": "obj2", "color": "green", "type": "box", "position": [0.50, 0.00, 0.76], "size": _BOX},
-        {"id": "obj3", "color": "white", "type": "plate", "position": [0.70, 0.00, 0.73], "size": _PLATE},
-    ], {"a": ("the red cup", "obj0"), "b": ("the blue cup", "obj1"), "c": ("the green box", "obj2")}),
-    "colours": ([
-        {"id": "obj0", "color": "yellow", "type": "bowl", "position": [0.55, 0.10, 0.76], "size": [0.14, 0.14, 0.07]},
-        {"id": "obj1", "color": "red", "type": "box", "position": [0.65, -0.10, 0.76], "size": _BOX},
-        {"id": "obj2", "color": "purple", "type": "cup", "position": [0.50, -0.20, 0.77], "size": _CUP},
-        {"id": "obj3", "color": "orange", "type": "plate", "position": [0.70, 0.20, 0.73], "size": _PLATE},
-    ], {"a": ("the yellow bowl", "obj0"), "b": ("the red box", "obj1"), "c": ("the purple cup", "obj2")}),
-    "labels": ([
-        {"id": "obj0", "color": "red", "type": "cup", "position": [0.55, 0.25, 0.77], "size": _CUP},
-        {"id": "obj1", "color": "red", "type": "cup", "position": [0.55, -0.05, 0.77], "size": _CUP},
-        {"id": "obj2", "color": "blue", "type": "box", "position": [0.65, 0.05, 0.78], "size": [0.14, 0.14, 0.12]},
-        {"id": "obj3", "color": "blue", "type": "box", "position": [0.50, -0.25, 0.75], "size": [0.05, 0.05, 0.05]},
-    ], {"a": ("the leftmost cup", "obj0"), "b": ("the biggest box", "obj2"), "c": ("the smallest box", "obj3")}),
+    "cups": (
+        [
+            {"id": "obj0", "color": "red", "type": "cup", "position": [0.55, -0.15, 0.77], "size": _CUP},
+            {"id": "obj1", "color": "blue", "type": "cup", "position": [0.60, 0.15, 0.77], "size": _CUP},
+            {"id": "obj2", "color": "green", "type": "box", "position": [0.50, 0.00, 0.76], "size": _BOX},
+            {"id": "obj3", "color": "white", "type": "plate", "position": [0.70, 0.00, 0.73], "size": _PLATE},
+        ],
+        {"a": ("the red cup", "obj0"), "b": ("the blue cup", "obj1"), "c": ("the green box", "obj2")},
+    ),
+    "colours": (
+        [
+            {
+                "id": "obj0",
+                "color": "yellow",
+                "type": "bowl",
+                "position": [0.55, 0.10, 0.76],
+                "size": [0.14, 0.14, 0.07],
+            },
+            {"id": "obj1", "color": "red", "type": "box", "position": [0.65, -0.10, 0.76], "size": _BOX},
+            {"id": "obj2", "color": "purple", "type": "cup", "position": [0.50, -0.20, 0.77], "size": _CUP},
+            {"id": "obj3", "color": "orange", "type": "plate", "position": [0.70, 0.20, 0.73], "size": _PLATE},
+        ],
+        {"a": ("the yellow bowl", "obj0"), "b": ("the red box", "obj1"), "c": ("the purple cup", "obj2")},
+    ),
+    "labels": (
+        [
+            {"id": "obj0", "color": "red", "type": "cup", "position": [0.55, 0.25, 0.77], "size": _CUP},
+            {"id": "obj1", "color": "red", "type": "cup", "position": [0.55, -0.05, 0.77], "size": _CUP},
+            {"id": "obj2", "color": "blue", "type": "box", "position": [0.65, 0.05, 0.78], "size": [0.14, 0.14, 0.12]},
+            {"id": "obj3", "color": "blue", "type": "box", "position": [0.50, -0.25, 0.75], "size": [0.05, 0.05, 0.05]},
+        ],
+        {"a": ("the leftmost cup", "obj0"), "b": ("the biggest box", "obj2"), "c": ("the smallest box", "obj3")},
+    ),
 }
 
 # robot state name -> the world's robot fields
@@ -65,8 +80,18 @@ STATES: dict[str, dict[str, Any]] = {
 TEMPLATES: list[tuple[str, str, str, dict[str, Any]]] = [
     ("move your right hand above {a}", "right", "move_rel_dest", {"arm": "right", "relation": "above", "object": "a"}),
     ("move your left arm next to {b}", "right", "move_rel_dest", {"arm": "left", "relation": "next_to", "object": "b"}),
-    ("move your right hand behind {c}", "right", "move_rel_dest", {"arm": "right", "relation": "behind", "object": "c"}),
-    ("move your left hand in front of {a}", "left", "move_rel_dest", {"arm": "left", "relation": "in_front_of", "object": "a"}),
+    (
+        "move your right hand behind {c}",
+        "right",
+        "move_rel_dest",
+        {"arm": "right", "relation": "behind", "object": "c"},
+    ),
+    (
+        "move your left hand in front of {a}",
+        "left",
+        "move_rel_dest",
+        {"arm": "left", "relation": "in_front_of", "object": "a"},
+    ),
     ("move your right arm to the side", "right", "move_abs_dest", {"arm": "right", "destination": "side"}),
     ("tuck your left arm", "right", "move_abs_dest", {"arm": "left", "destination": "side"}),
     ("move your right hand up", "right", "move_abs_dir", {"arm": "right", "direction": "up"}),
@@ -74,8 +99,18 @@ TEMPLATES: list[tuple[str, str, str, dict[str, Any]]] = [
     ("raise your left arm", "right", "move_abs_dir", {"arm": "left", "direction": "up"}),
     ("move your right hand forward", "right", "move_abs_dir", {"arm": "right", "direction": "forward"}),
     ("move your left arm backward", "left", "move_abs_dir", {"arm": "left", "direction": "backward"}),
-    ("move your right hand towards {b}", "right", "move_rel_dir", {"arm": "right", "direction": "towards", "object": "b"}),
-    ("move your left hand away from {a}", "left", "move_rel_dir", {"arm": "left", "direction": "away_from", "object": "a"}),
+    (
+        "move your right hand towards {b}",
+        "right",
+        "move_rel_dir",
+        {"arm": "right", "direction": "towards", "object": "b"},
+    ),
+    (
+        "move your left hand away from {a}",
+        "left",
+        "move_rel_dir",
+        {"arm": "left", "direction": "away_from", "object": "a"},
+    ),
     ("pick up {a} with your right hand", "right", "pick_up", {"arm": "right", "object": "a"}),
     ("pick up {b} with your left hand", "right", "pick_up", {"arm": "left", "object": "b"}),
     ("grab {c}", "right", "pick_up", {"arm": "right", "object": "c"}),
@@ -83,7 +118,12 @@ TEMPLATES: list[tuple[str, str, str, dict[str, Any]]] = [
     ("place it on the table", "holding", "place_abs", {"arm": "right", "destination": "table"}),
     ("place it here", "holding", "place_abs", {"arm": "right", "destination": "here"}),
     ("place it on top of {b}", "holding", "place_rel", {"arm": "right", "relation": "on_top_of", "object": "b"}),
-    ("place it next to {c} with your right hand", "holding", "place_rel", {"arm": "right", "relation": "next_to", "object": "c"}),
+    (
+        "place it next to {c} with your right hand",
+        "holding",
+        "place_rel",
+        {"arm": "right", "relation": "next_to", "object": "c"},
+    ),
     ("point to {a} with your left hand", "right", "point_to", {"arm": "left", "object": "a"}),
     ("point at {b}", "right", "point_to", {"arm": "right", "object": "b"}),
     ("look at {c}", "right", "look_at", {"object": "c"}),
@@ -126,8 +166,16 @@ def corpus(voices: tuple[str, ...] = VOICES, speeds: tuple[int, ...] = SPEEDS, r
             world = {"objects": copy.deepcopy(objects), "robot": copy.deepcopy(STATES[state])}
             if state == "holding":
                 world["objects"][0]["held_by"] = "right"
-            items.append(Item(scene, text, world, {"procedure": procedure, "args": expected_args},
-                              voices[n % len(voices)], speeds[(n // len(voices)) % len(speeds)]))
+            items.append(
+                Item(
+                    scene,
+                    text,
+                    world,
+                    {"procedure": procedure, "args": expected_args},
+                    voices[n % len(voices)],
+                    speeds[(n // len(voices)) % len(speeds)],
+                )
+            )
     return items
 
 

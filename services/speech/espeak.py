@@ -58,7 +58,9 @@ def _run(command: list[str]) -> None:
     except subprocess.TimeoutExpired:
         raise EspeakError(f"{ESPEAK} did not finish within {TIMEOUT_S:g} s") from None
     # espeak-ng exits 0 even when it cannot open the audio device; its error is on stderr
-    errors = [line for line in result.stderr.splitlines() if "error" in line.lower() and not line.startswith("ALSA lib")]
+    errors = [
+        line for line in result.stderr.splitlines() if "error" in line.lower() and not line.startswith("ALSA lib")
+    ]
     if result.returncode != 0 or errors:
         detail = (errors or result.stderr.strip().splitlines() or [f"exit code {result.returncode}"])[-1]
         raise EspeakError(f"{ESPEAK} failed: {detail}")

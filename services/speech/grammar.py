@@ -63,9 +63,11 @@ class SceneWords:
     @classmethod
     def of(cls, objects: Iterable[dict]) -> SceneWords:
         items = [o for o in objects if isinstance(o, dict)]
-        return cls(frozenset(str(o["color"]) for o in items if o.get("color") not in (None, "unknown")),
-                   frozenset(str(o["type"]) for o in items if o.get("type") not in (None, "unknown")),
-                   salient_labels(items))
+        return cls(
+            frozenset(str(o["color"]) for o in items if o.get("color") not in (None, "unknown")),
+            frozenset(str(o["type"]) for o in items if o.get("type") not in (None, "unknown")),
+            salient_labels(items),
+        )
 
 
 def salient_labels(objects: list[dict]) -> frozenset[str]:
@@ -135,10 +137,13 @@ class _Builder:
         self.object = self._object(scene)
         number = self.rules.define("number", vocabulary.numbers.values())
         target_word = self.group("target_word", "target", PROCEDURES["switch_action"]["target"])
-        self.target = self.rules.define("target", [
-            _seq(self.the, target_word, _optional(self.literal("action"))) if target_word else "",
-            _seq(_optional(self.literal("action")), number) if number else "",
-        ])
+        self.target = self.rules.define(
+            "target",
+            [
+                _seq(self.the, target_word, _optional(self.literal("action"))) if target_word else "",
+                _seq(_optional(self.literal("action")), number) if number else "",
+            ],
+        )
         self.number = number
 
     def literal(self, phrase: str) -> str:
@@ -213,7 +218,7 @@ class _Builder:
         return self.rules.define(f"command_{procedure}", alternatives)
 
     def _split_particles(self, procedure: str, shape: str, phrases: Iterable[str], said: set[str]) -> list[str]:
-        """"pick the cup up": a verb ending in a particle, the object in between."""
+        """ "pick the cup up": a verb ending in a particle, the object in between."""
         if not shape.startswith("<verb> <object>"):
             return []
         out = []
@@ -230,8 +235,11 @@ def build_jsgf(vocabulary: SpeechVocabulary, scene: SceneWords = SceneWords()) -
     builder = _Builder(vocabulary, scene)
     bodies = [body for procedure in PROCEDURES if (body := builder.command(procedure))]
     polite = builder.rules.define("polite", (w for w in ("please",) if w in vocabulary.fillers))
-    lines = ["#JSGF V1.0;", f"grammar {GRAMMAR_NAME};",
-             f"public <command> = {_seq(_optional(polite), '(' + ' | '.join(bodies) + ')', _optional(polite))};"]
+    lines = [
+        "#JSGF V1.0;",
+        f"grammar {GRAMMAR_NAME};",
+        f"public <command> = {_seq(_optional(polite), '(' + ' | '.join(bodies) + ')', _optional(polite))};",
+    ]
     lines += [f"<{name}> = {body};" for name, body in builder.rules.bodies.items()]
     return "\n".join(lines) + "\n"
 
@@ -302,7 +310,7 @@ def sentence_matcher(jsgf: str) -> re.Pattern[str]:
                 token = chosen[i]
                 if token in ("(", "["):
                     end = closing(chosen, i)
-                    out += f"(?:{pattern(chosen[i + 1:end])})" + ("?" if token == "[" else "")
+                    out += f"(?:{pattern(chosen[i + 1 : end])})" + ("?" if token == "[" else "")
                     i = end + 1
                     continue
                 if token.startswith("<"):

@@ -9,38 +9,65 @@ import threading
 from collections.abc import Sequence
 from pathlib import Path
 
-from shared.bus import Bus
-from shared.service import run_service, wait_until_stopped
 from services.speech.audio import AudioError, read_wav
 from services.speech.recogniser import PER_MEANING, Recogniser
 from services.speech.service import Settings, SpeechService
 from services.speech.vad import UtteranceSplitter
 from services.speech.vocabulary import nlu_vocabulary
 from services.speech.voice import Speaker
+from shared.bus import Bus
+from shared.service import run_service, wait_until_stopped
 
 DESCRIPTION = "Spoken commands in (microphone, WAV files, speech/audio stream), spoken feedback out (espeak-ng)."
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--trigger", choices=("vad", "ptt"), default="vad",
-                        help="vad: every utterance heard is decoded; ptt: only audio while push-to-talk is held")
-    parser.add_argument("--microphone", choices=("auto", "on", "off"), default="auto",
-                        help="auto: use one if present, else say so once (default); on: fail without one")
+    parser.add_argument(
+        "--trigger",
+        choices=("vad", "ptt"),
+        default="vad",
+        help="vad: every utterance heard is decoded; ptt: only audio while push-to-talk is held",
+    )
+    parser.add_argument(
+        "--microphone",
+        choices=("auto", "on", "off"),
+        default="auto",
+        help="auto: use one if present, else say so once (default); on: fail without one",
+    )
     parser.add_argument("--device", default=None, help="input device name or number (default: the system's)")
-    parser.add_argument("--wav", type=Path, action="append", default=[], metavar="FILE",
-                        help="decode this WAV file as if it were spoken now (repeatable)")
-    parser.add_argument("--vocabulary", choices=("core", "full"), default="core",
-                        help="core: the three usual phrases per meaning (more accurate, faster); full: every NLU phrase")
+    parser.add_argument(
+        "--wav",
+        type=Path,
+        action="append",
+        default=[],
+        metavar="FILE",
+        help="decode this WAV file as if it were spoken now (repeatable)",
+    )
+    parser.add_argument(
+        "--vocabulary",
+        choices=("core", "full"),
+        default="core",
+        help="core: the three usual phrases per meaning (more accurate, faster); full: every NLU phrase",
+    )
     parser.add_argument("--no-voice", action="store_true", help="do not speak the robot's words")
     parser.add_argument("--voice", default="en-us", help="espeak-ng voice (default en-us)")
     parser.add_argument("--voice-speed", type=int, default=160, help="words per minute (default 160)")
-    parser.add_argument("--voice-dir", type=Path, default=None,
-                        help="write each spoken sentence as a WAV file here instead of playing it")
+    parser.add_argument(
+        "--voice-dir",
+        type=Path,
+        default=None,
+        help="write each spoken sentence as a WAV file here instead of playing it",
+    )
 
 
 def body(bus: Bus, args: argparse.Namespace, stop: threading.Event) -> None:
-    settings = Settings(trigger=args.trigger, microphone=args.microphone, device=args.device,
-                        per_meaning=None if args.vocabulary == "full" else PER_MEANING, wav_files=tuple(args.wav))
+    settings = Settings(
+        trigger=args.trigger,
+        microphone=args.microphone,
+        device=args.device,
+        per_meaning=None if args.vocabulary == "full" else PER_MEANING,
+        wav_files=tuple(args.wav),
+    )
     speaker = None
     if not args.no_voice:
         if args.voice_dir is not None:
@@ -58,7 +85,9 @@ def body(bus: Bus, args: argparse.Namespace, stop: threading.Event) -> None:
 
 def decode_files(argv: Sequence[str]) -> int:
     """Print one JSON line per utterance heard in each file: its n-best list."""
-    parser = argparse.ArgumentParser(prog="hfpbd speech decode", description="Decode WAV files with the command grammar.")
+    parser = argparse.ArgumentParser(
+        prog="hfpbd speech decode", description="Decode WAV files with the command grammar."
+    )
     parser.add_argument("files", nargs="+", type=Path)
     parser.add_argument("--vocabulary", choices=("core", "full"), default="core")
     args = parser.parse_args(argv)
@@ -74,8 +103,15 @@ def decode_files(argv: Sequence[str]) -> int:
         splitter = UtteranceSplitter()
         for utterance in splitter.feed(pcm) + splitter.flush():
             hypotheses = recogniser.decode(utterance)
-            print(json.dumps({"file": str(path), "text": hypotheses[0].text if hypotheses else None,
-                              "nbest": [h.to_json() for h in hypotheses]}))
+            print(
+                json.dumps(
+                    {
+                        "file": str(path),
+                        "text": hypotheses[0].text if hypotheses else None,
+                        "nbest": [h.to_json() for h in hypotheses],
+                    }
+                )
+            )
     return status
 
 

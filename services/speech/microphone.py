@@ -29,12 +29,19 @@ class Microphone:
         try:
             import sounddevice
         except (ImportError, OSError) as exc:
-            raise MicrophoneUnavailable(f"audio capture is not available ({exc}; Debian package libportaudio2)") from None
+            raise MicrophoneUnavailable(
+                f"audio capture is not available ({exc}; Debian package libportaudio2)"
+            ) from None
         self._on_audio = on_audio
         try:
             self._stream: Any = sounddevice.InputStream(
-                samplerate=RATE, channels=1, dtype="int16", blocksize=int(RATE * BLOCK_S),
-                device=device, callback=self._callback)
+                samplerate=RATE,
+                channels=1,
+                dtype="int16",
+                blocksize=int(RATE * BLOCK_S),
+                device=device,
+                callback=self._callback,
+            )
             self._stream.start()
         except Exception as exc:  # PortAudioError, ValueError: no (such) input device
             raise MicrophoneUnavailable(f"no microphone could be opened ({exc})") from None

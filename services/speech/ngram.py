@@ -43,7 +43,7 @@ def _expand(rules: dict[str, list[str]], tokens: list[str], rng: random.Random) 
         if token in ("(", "["):
             end = closing(chosen, i)
             if token == "(" or rng.random() < 0.5:
-                words += _expand(rules, chosen[i + 1:end], rng)
+                words += _expand(rules, chosen[i + 1 : end], rng)
             i = end + 1
             continue
         if token.startswith("<"):
@@ -61,12 +61,13 @@ def arpa(sentences: Iterable[str], order: int = 3, discount: float = DISCOUNT) -
         words = [BOS, *sentence.split(), EOS]
         for n in range(1, order + 1):
             for i in range(len(words) - n + 1):
-                gram = tuple(words[i:i + n])
+                gram = tuple(words[i : i + n])
                 if n == 1 or gram[0] != EOS:
                     counts[n][gram] += 1
     unigram_total = sum(c for g, c in counts[1].items() if g != (BOS,))
     logprob: dict[tuple[str, ...], float] = {
-        g: (-99.0 if g == (BOS,) else math.log10(c / unigram_total)) for g, c in counts[1].items()}
+        g: (-99.0 if g == (BOS,) else math.log10(c / unigram_total)) for g, c in counts[1].items()
+    }
     backoff: dict[tuple[str, ...], float] = {}
     for n in range(2, order + 1):
         followers: dict[tuple[str, ...], list[tuple[str, int]]] = defaultdict(list)

@@ -32,8 +32,8 @@ from __future__ import annotations
 import itertools
 import math
 import tempfile
-from pathlib import Path
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from pocketsphinx import Decoder
@@ -83,10 +83,16 @@ class Recogniser:
     Not thread-safe: one thread decodes (the service's decoding worker).
     """
 
-    def __init__(self, vocabulary: SpeechVocabulary, scene: SceneWords = SceneWords(),
-                 per_meaning: int | None = PER_MEANING, nbest: int = NBEST,
-                 acoustic_scale: float = ACOUSTIC_SCALE, ngram: bool = True,
-                 frame_rates: tuple[int, ...] = FRAME_RATES) -> None:
+    def __init__(
+        self,
+        vocabulary: SpeechVocabulary,
+        scene: SceneWords = SceneWords(),
+        per_meaning: int | None = PER_MEANING,
+        nbest: int = NBEST,
+        acoustic_scale: float = ACOUSTIC_SCALE,
+        ngram: bool = True,
+        frame_rates: tuple[int, ...] = FRAME_RATES,
+    ) -> None:
         self._decoder = Decoder(lm=None, loglevel="FATAL", topn=TOP_GAUSSIANS)
         self._frame_rates = frame_rates
         self._nbest = nbest
@@ -188,8 +194,11 @@ class Recogniser:
             self._decoder.reinit_feat()
         per_base = _BASE_RATE / rate
         # a grammar result that is no sentence of the grammar is the search's best partial path: a mishearing
-        scored = {text: loglik * per_base for text, loglik in self._pass(self._search, audio).items()
-                  if in_grammar(self._matcher, text)}
+        scored = {
+            text: loglik * per_base
+            for text, loglik in self._pass(self._search, audio).items()
+            if in_grammar(self._matcher, text)
+        }
         if self._ngram_search is not None:
             for text, loglik in self._pass(self._ngram_search, audio).items():
                 scored.setdefault(text, loglik * per_base)
@@ -220,8 +229,12 @@ class Recogniser:
         return math.log(score) * _SCORE_UNIT
 
 
-def posteriors(logliks: dict[str, float], scale: float, members: set[str] | None = None,
-               off_grammar_prior: float = OFF_GRAMMAR_PRIOR) -> list[Hypothesis]:
+def posteriors(
+    logliks: dict[str, float],
+    scale: float,
+    members: set[str] | None = None,
+    off_grammar_prior: float = OFF_GRAMMAR_PRIOR,
+) -> list[Hypothesis]:
     """Probabilities within the list, the decoder's first choice first.
 
     Softmax of the scaled log-likelihoods, each times its prior: 1 for a
@@ -239,7 +252,8 @@ def posteriors(logliks: dict[str, float], scale: float, members: set[str] | None
     priors = np.array([1.0 if text in members else off_grammar_prior for text in logliks])
     weights = np.where(finite, np.exp(values - values[finite].max()), 0.0) * priors
     probabilities = weights / weights.sum()
-    hyps = [Hypothesis(text, float(p), loglik, text in members)
-            for (text, loglik), p in zip(logliks.items(), probabilities)]
+    hyps = [
+        Hypothesis(text, float(p), loglik, text in members) for (text, loglik), p in zip(logliks.items(), probabilities)
+    ]
     rest = sorted((h for h in hyps[1:] if h.score >= MIN_POSTERIOR), key=lambda h: -h.score)
     return [hyps[0], *rest]

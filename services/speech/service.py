@@ -19,9 +19,6 @@ from typing import Any
 
 import numpy as np
 
-from shared.bus import Bus, BusTimeout, RemoteError
-from shared.codec import MessageError
-from shared.messages import validate
 from services.speech.audio import RATE, AudioError, read_wav, resample, silence
 from services.speech.grammar import SceneWords
 from services.speech.microphone import Microphone, MicrophoneUnavailable
@@ -29,6 +26,9 @@ from services.speech.recogniser import Hypothesis, Recogniser
 from services.speech.vad import UtteranceSplitter
 from services.speech.vocabulary import SpeechVocabulary, nlu_vocabulary
 from services.speech.voice import Speaker
+from shared.bus import Bus, BusTimeout, RemoteError
+from shared.codec import MessageError
+from shared.messages import validate
 
 log = logging.getLogger("hfpbd.speech")
 
@@ -42,10 +42,10 @@ STREAM_IDLE_S = 1.0
 
 @dataclass
 class Settings:
-    trigger: str = "vad"             # vad: utterances found by voice activity; ptt: only while talk is pressed
-    microphone: str = "auto"         # auto, on (a missing microphone is an error), off
+    trigger: str = "vad"  # vad: utterances found by voice activity; ptt: only while talk is pressed
+    microphone: str = "auto"  # auto, on (a missing microphone is an error), off
     device: str | None = None
-    per_meaning: int | None = 3      # phrases per meaning in the grammar; None: the whole vocabulary
+    per_meaning: int | None = 3  # phrases per meaning in the grammar; None: the whole vocabulary
     wav_files: tuple[Path, ...] = ()
 
 
@@ -119,7 +119,7 @@ class SpeechService:
         pcm = np.concatenate([read_wav(path), silence(0.5)])
         step = int(RATE * WAV_CHUNK_S)
         for start in range(0, len(pcm), step):
-            self.feed(pcm[start:start + step])
+            self.feed(pcm[start : start + step])
         self.end_of_stream()
 
     def _on_microphone(self, pcm: np.ndarray) -> None:
@@ -210,8 +210,12 @@ class SpeechService:
         started = time.monotonic()
         hypotheses = self.recogniser.decode(pcm)
         self.decoded += 1
-        log.info("decoded %.1f s of audio in %.2f s: %s", len(pcm) / RATE, time.monotonic() - started,
-                 " | ".join(f"{h.text} ({h.score:.2f})" for h in hypotheses) or "nothing")
+        log.info(
+            "decoded %.1f s of audio in %.2f s: %s",
+            len(pcm) / RATE,
+            time.monotonic() - started,
+            " | ".join(f"{h.text} ({h.score:.2f})" for h in hypotheses) or "nothing",
+        )
         if not hypotheses:
             self._tell(NOT_HEARD, "info")
             return
@@ -263,8 +267,11 @@ class SpeechService:
             if self.settings.microphone == "on":
                 raise
             self.microphone_problem = str(exc)
-            self._tell(f"No microphone: {exc}. Speech works from WAV files and the speech/audio stream; "
-                       "typing works as always.", "info")
+            self._tell(
+                f"No microphone: {exc}. Speech works from WAV files and the speech/audio stream; "
+                "typing works as always.",
+                "info",
+            )
 
     def _tell(self, text: str, kind: str) -> None:
         """Something the user must know: logged here and shown (and spoken) like the robot's words."""
@@ -272,16 +279,18 @@ class SpeechService:
         self._say.put({"text": text, "kind": kind})
 
     def _publish_status(self) -> None:
-        self._status.put({
-            "stamp": time.time(),
-            "microphone": self.microphone is not None,
-            "microphone_problem": self.microphone_problem,
-            "voice": self.speaker is not None and self.speaker.working,
-            "voice_problem": self.speaker.problem if self.speaker is not None else None,
-            "trigger": self.settings.trigger,
-            "talking": self._talk is not None,
-            "grammar_words": len(self.recogniser.vocabulary.words()),
-        })
+        self._status.put(
+            {
+                "stamp": time.time(),
+                "microphone": self.microphone is not None,
+                "microphone_problem": self.microphone_problem,
+                "voice": self.speaker is not None and self.speaker.working,
+                "voice_problem": self.speaker.problem if self.speaker is not None else None,
+                "trigger": self.settings.trigger,
+                "talking": self._talk is not None,
+                "grammar_words": len(self.recogniser.vocabulary.words()),
+            }
+        )
 
 
 def utterance_message(hypotheses: list[Hypothesis]) -> dict[str, Any]:

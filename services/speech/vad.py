@@ -35,7 +35,7 @@ class UtteranceSplitter:
         done: list[np.ndarray] = []
         whole = len(data) // self._frame * self._frame
         for start in range(0, whole, self._frame):
-            speech = self._endpointer.process(data[start:start + self._frame].tobytes())
+            speech = self._endpointer.process(data[start : start + self._frame].tobytes())
             if speech is None:
                 continue
             self._speech.append(speech)

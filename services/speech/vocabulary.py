@@ -54,7 +54,9 @@ class SpeechVocabulary:
 
     def core(self, per_meaning: int) -> SpeechVocabulary:
         """At most ``per_meaning`` phrases per meaning, the lexicon's first (most usual) ones."""
-        verbs = {proc: {implied: ps[:per_meaning] for implied, ps in groups.items()} for proc, groups in self.verbs.items()}
+        verbs = {
+            proc: {implied: ps[:per_meaning] for implied, ps in groups.items()} for proc, groups in self.verbs.items()
+        }
         options = {key: ps[:per_meaning] for key, ps in self.options.items()}
         return SpeechVocabulary(verbs, options, dict(self.numbers), self.fillers, self.known)
 
@@ -64,6 +66,7 @@ class SpeechVocabulary:
         Why: two spellings of one sound split the recogniser's probability
         between them and make the n-best list repeat itself.
         """
+
         def keep(phrases: tuple[str, ...]) -> tuple[str, ...]:
             first: dict[str, str] = {}
             for phrase in phrases:
@@ -71,8 +74,9 @@ class SpeechVocabulary:
             return tuple(first.values())
 
         verbs = {proc: {implied: keep(ps) for implied, ps in groups.items()} for proc, groups in self.verbs.items()}
-        return SpeechVocabulary(verbs, {key: keep(ps) for key, ps in self.options.items()}, dict(self.numbers),
-                                self.fillers, self.known)
+        return SpeechVocabulary(
+            verbs, {key: keep(ps) for key, ps in self.options.items()}, dict(self.numbers), self.fillers, self.known
+        )
 
     def restricted(self, known: Iterable[str]) -> SpeechVocabulary:
         """Only the phrases whose every word is in ``known`` (e.g. the recogniser's dictionary)."""
@@ -81,12 +85,15 @@ class SpeechVocabulary:
         def keep(phrases: Iterable[str]) -> tuple[str, ...]:
             return tuple(p for p in phrases if all(w in allowed for w in p.split()))
 
-        verbs = {proc: {implied: kept for implied, ps in groups.items() if (kept := keep(ps))}
-                 for proc, groups in self.verbs.items()}
+        verbs = {
+            proc: {implied: kept for implied, ps in groups.items() if (kept := keep(ps))}
+            for proc, groups in self.verbs.items()
+        }
         options = {key: kept for key, ps in self.options.items() if (kept := keep(ps))}
         numbers = {n: w for n, w in self.numbers.items() if w in allowed}
-        return SpeechVocabulary(verbs, options, numbers, frozenset(w for w in self.fillers if w in allowed),
-                                self.known & allowed)
+        return SpeechVocabulary(
+            verbs, options, numbers, frozenset(w for w in self.fillers if w in allowed), self.known & allowed
+        )
 
 
 def nlu_vocabulary(phrases: Iterable[str] | None = None) -> SpeechVocabulary:
@@ -109,6 +116,7 @@ def nlu_vocabulary(phrases: Iterable[str] | None = None) -> SpeechVocabulary:
                     verbs.setdefault(procedure, {}).setdefault(implied, []).append(phrase)
             elif len(reading) == 1:
                 options.setdefault((head.slot, str(head.value)), []).append(phrase)
+
     def plain_first(phrases: list[str]) -> tuple[str, ...]:
         return tuple(sorted(phrases, key=lambda p: len(PHRASES[p])))  # stable: lexicon order within a rank
 

@@ -55,7 +55,9 @@ class Speaker:
                     espeak.play(text, self.voice, self.speed)
                     self.spoken += 1
             except espeak.EspeakError as exc:
-                self.problem = f"cannot speak: {exc} (is there an audio output?); spoken feedback is off, the text still shows"
+                self.problem = (
+                    f"cannot speak: {exc} (is there an audio output?); spoken feedback is off, the text still shows"
+                )
                 log.warning("%s", self.problem)
             finally:
                 self.speaking.clear()

@@ -11,5 +11,15 @@ from shared.robot.pr2 import PR2
 
 ROBOT: RobotDescription = robot_description(PR2.uid)
 
-__all__ = ["ROBOT", "PR2", "CameraSpec", "GripperSpec", "GripperState", "Keyframe", "RobotDescription",
-           "register_robot", "registered_robots", "robot_description"]
+__all__ = [
+    "ROBOT",
+    "PR2",
+    "CameraSpec",
+    "GripperSpec",
+    "GripperState",
+    "Keyframe",
+    "RobotDescription",
+    "register_robot",
+    "registered_robots",
+    "robot_description",
+]

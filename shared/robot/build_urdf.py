@@ -43,6 +43,7 @@ TWO_PI = 2.0 * math.pi
 
 # --- model description ------------------------------------------------------
 
+
 @dataclass
 class Shape:
     """A primitive: ``box`` (size xyz) or ``cylinder`` (radius, length along ``axis``)."""
@@ -50,7 +51,7 @@ class Shape:
     kind: str
     dims: tuple[float, ...]
     xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    axis: str = "z"          # cylinders only
+    axis: str = "z"  # cylinders only
 
     def rpy(self) -> tuple[float, float, float]:
         return {"z": (0.0, 0.0, 0.0), "x": (0.0, math.pi / 2, 0.0), "y": (math.pi / 2, 0.0, 0.0)}[self.axis]
@@ -77,7 +78,7 @@ class Link:
 @dataclass
 class Joint:
     name: str
-    kind: str                # revolute, prismatic, fixed
+    kind: str  # revolute, prismatic, fixed
     parent: str
     child: str
     xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -108,10 +109,18 @@ def body() -> tuple[list[Link], list[Joint]]:
     """Base, torso, head and the Kinect-like camera."""
     links = [
         Link("base_footprint"),
-        Link("base_link", 116.0, [box(0.668, 0.668, 0.23, (0, 0, 0.115)),
-                                  box(0.08, 0.42, 0.43, (-0.25, 0, 0.445))], DARK),
-        Link("torso_lift_link", 36.2, [span_box((-0.212, -0.017), (-0.165, 0.165), (-0.45, 0.157)),
-                                       span_box((-0.29, 0.11), (-0.26, 0.26), (0.157, 0.31))], LIGHT),
+        Link(
+            "base_link", 116.0, [box(0.668, 0.668, 0.23, (0, 0, 0.115)), box(0.08, 0.42, 0.43, (-0.25, 0, 0.445))], DARK
+        ),
+        Link(
+            "torso_lift_link",
+            36.2,
+            [
+                span_box((-0.212, -0.017), (-0.165, 0.165), (-0.45, 0.157)),
+                span_box((-0.29, 0.11), (-0.26, 0.26), (0.157, 0.31)),
+            ],
+            LIGHT,
+        ),
         Link("head_pan_link", 6.34, [span_box((-0.113, 0.145), (-0.161, 0.161), (-0.066, 0.079))], DARK),
         Link("head_tilt_link", 4.48, [span_box((-0.184, 0.077), (-0.148, 0.148), (-0.062, 0.155))], DARK),
         Link(CAMERA_LINK, 0.1, [box(0.06, 0.28, 0.04)], (0.1, 0.1, 0.1)),
@@ -119,15 +128,50 @@ def body() -> tuple[list[Link], list[Joint]]:
     ]
     joints = [
         Joint("base_footprint_joint", "fixed", "base_footprint", "base_link", (0, 0, 0.051)),
-        Joint(TORSO_JOINT, "prismatic", "base_link", "torso_lift_link", (-0.05, 0, 0.739675),
-              axis=Z, lower=0.0, upper=0.33, velocity=0.05, effort=10000.0),
-        Joint("head_pan_joint", "revolute", "torso_lift_link", "head_pan_link", (-0.01707, 0, 0.38145),
-              axis=Z, lower=-3.007, upper=3.007, velocity=6.0, effort=2.645),
-        Joint("head_tilt_joint", "revolute", "head_pan_link", "head_tilt_link", (0.068, 0, 0),
-              axis=Y, lower=-0.471, upper=1.396, velocity=5.0, effort=18.0),
+        Joint(
+            TORSO_JOINT,
+            "prismatic",
+            "base_link",
+            "torso_lift_link",
+            (-0.05, 0, 0.739675),
+            axis=Z,
+            lower=0.0,
+            upper=0.33,
+            velocity=0.05,
+            effort=10000.0,
+        ),
+        Joint(
+            "head_pan_joint",
+            "revolute",
+            "torso_lift_link",
+            "head_pan_link",
+            (-0.01707, 0, 0.38145),
+            axis=Z,
+            lower=-3.007,
+            upper=3.007,
+            velocity=6.0,
+            effort=2.645,
+        ),
+        Joint(
+            "head_tilt_joint",
+            "revolute",
+            "head_pan_link",
+            "head_tilt_link",
+            (0.068, 0, 0),
+            axis=Y,
+            lower=-0.471,
+            upper=1.396,
+            velocity=5.0,
+            effort=18.0,
+        ),
         Joint("head_mount_kinect_rgb_joint", "fixed", "head_tilt_link", CAMERA_LINK, (-0.14707, -0.0175, 0.29195)),
-        Joint("head_mount_kinect_rgb_optical_frame_joint", "fixed", CAMERA_LINK, CAMERA_OPTICAL_FRAME,
-              rpy=(-math.pi / 2, 0.0, -math.pi / 2)),
+        Joint(
+            "head_mount_kinect_rgb_optical_frame_joint",
+            "fixed",
+            CAMERA_LINK,
+            CAMERA_OPTICAL_FRAME,
+            rpy=(-math.pi / 2, 0.0, -math.pi / 2),
+        ),
     ]
     return links, joints
 
@@ -154,28 +198,112 @@ def arm(side: str) -> tuple[list[Link], list[Joint]]:
         Link(f"{p}_gripper_tool_frame"),
     ]
     joints = [
-        Joint(f"{p}_shoulder_pan_joint", "revolute", "torso_lift_link", f"{p}_shoulder_pan_link",
-              (0, side_sign * 0.188, 0),
-              axis=Z, lower=pan_limits[0], upper=pan_limits[1], velocity=2.088, effort=30.0),
-        Joint(f"{p}_shoulder_lift_joint", "revolute", f"{p}_shoulder_pan_link", f"{p}_shoulder_lift_link", (0.1, 0, 0),
-              axis=Y, lower=-0.5236, upper=1.3963, velocity=2.082, effort=30.0),
-        Joint(f"{p}_upper_arm_roll_joint", "revolute", f"{p}_shoulder_lift_link", f"{p}_upper_arm_roll_link",
-              axis=X, lower=roll_limits[0], upper=roll_limits[1], velocity=3.27, effort=30.0),
+        Joint(
+            f"{p}_shoulder_pan_joint",
+            "revolute",
+            "torso_lift_link",
+            f"{p}_shoulder_pan_link",
+            (0, side_sign * 0.188, 0),
+            axis=Z,
+            lower=pan_limits[0],
+            upper=pan_limits[1],
+            velocity=2.088,
+            effort=30.0,
+        ),
+        Joint(
+            f"{p}_shoulder_lift_joint",
+            "revolute",
+            f"{p}_shoulder_pan_link",
+            f"{p}_shoulder_lift_link",
+            (0.1, 0, 0),
+            axis=Y,
+            lower=-0.5236,
+            upper=1.3963,
+            velocity=2.082,
+            effort=30.0,
+        ),
+        Joint(
+            f"{p}_upper_arm_roll_joint",
+            "revolute",
+            f"{p}_shoulder_lift_link",
+            f"{p}_upper_arm_roll_link",
+            axis=X,
+            lower=roll_limits[0],
+            upper=roll_limits[1],
+            velocity=3.27,
+            effort=30.0,
+        ),
         Joint(f"{p}_upper_arm_joint", "fixed", f"{p}_upper_arm_roll_link", f"{p}_upper_arm_link"),
-        Joint(f"{p}_elbow_flex_joint", "revolute", f"{p}_upper_arm_link", f"{p}_elbow_flex_link", (0.4, 0, 0),
-              axis=Y, lower=-2.3213, upper=0.0, velocity=3.3, effort=30.0),
-        Joint(f"{p}_forearm_roll_joint", "revolute", f"{p}_elbow_flex_link", f"{p}_forearm_roll_link",
-              axis=X, lower=-TWO_PI, upper=TWO_PI, velocity=3.6, effort=30.0),
+        Joint(
+            f"{p}_elbow_flex_joint",
+            "revolute",
+            f"{p}_upper_arm_link",
+            f"{p}_elbow_flex_link",
+            (0.4, 0, 0),
+            axis=Y,
+            lower=-2.3213,
+            upper=0.0,
+            velocity=3.3,
+            effort=30.0,
+        ),
+        Joint(
+            f"{p}_forearm_roll_joint",
+            "revolute",
+            f"{p}_elbow_flex_link",
+            f"{p}_forearm_roll_link",
+            axis=X,
+            lower=-TWO_PI,
+            upper=TWO_PI,
+            velocity=3.6,
+            effort=30.0,
+        ),
         Joint(f"{p}_forearm_joint", "fixed", f"{p}_forearm_roll_link", f"{p}_forearm_link"),
-        Joint(f"{p}_wrist_flex_joint", "revolute", f"{p}_forearm_link", f"{p}_wrist_flex_link", (0.321, 0, 0),
-              axis=Y, lower=-2.18, upper=0.0, velocity=3.078, effort=10.0),
-        Joint(f"{p}_wrist_roll_joint", "revolute", f"{p}_wrist_flex_link", f"{p}_wrist_roll_link",
-              axis=X, lower=-TWO_PI, upper=TWO_PI, velocity=3.6, effort=10.0),
+        Joint(
+            f"{p}_wrist_flex_joint",
+            "revolute",
+            f"{p}_forearm_link",
+            f"{p}_wrist_flex_link",
+            (0.321, 0, 0),
+            axis=Y,
+            lower=-2.18,
+            upper=0.0,
+            velocity=3.078,
+            effort=10.0,
+        ),
+        Joint(
+            f"{p}_wrist_roll_joint",
+            "revolute",
+            f"{p}_wrist_flex_link",
+            f"{p}_wrist_roll_link",
+            axis=X,
+            lower=-TWO_PI,
+            upper=TWO_PI,
+            velocity=3.6,
+            effort=10.0,
+        ),
         Joint(f"{p}_gripper_palm_joint", "fixed", f"{p}_wrist_roll_link", f"{p}_gripper_palm_link"),
-        Joint(f"{p}_gripper_l_finger_joint", "prismatic", f"{p}_gripper_palm_link", f"{p}_gripper_l_finger_link",
-              axis=Y, lower=0.0, upper=FINGER_TRAVEL, velocity=0.1, effort=100.0),
-        Joint(f"{p}_gripper_r_finger_joint", "prismatic", f"{p}_gripper_palm_link", f"{p}_gripper_r_finger_link",
-              axis=(0.0, -1.0, 0.0), lower=0.0, upper=FINGER_TRAVEL, velocity=0.1, effort=100.0),
+        Joint(
+            f"{p}_gripper_l_finger_joint",
+            "prismatic",
+            f"{p}_gripper_palm_link",
+            f"{p}_gripper_l_finger_link",
+            axis=Y,
+            lower=0.0,
+            upper=FINGER_TRAVEL,
+            velocity=0.1,
+            effort=100.0,
+        ),
+        Joint(
+            f"{p}_gripper_r_finger_joint",
+            "prismatic",
+            f"{p}_gripper_palm_link",
+            f"{p}_gripper_r_finger_link",
+            axis=(0.0, -1.0, 0.0),
+            lower=0.0,
+            upper=FINGER_TRAVEL,
+            velocity=0.1,
+            effort=100.0,
+        ),
         Joint(f"{p}_gripper_tool_joint", "fixed", f"{p}_gripper_palm_link", tool_frame(side), (TOOL_OFFSET, 0, 0)),
     ]
     return links, joints
@@ -191,6 +319,7 @@ def model() -> tuple[list[Link], list[Joint]]:
 
 
 # --- URDF -------------------------------------------------------------------
+
 
 def _fmt(values: tuple[float, ...] | np.ndarray) -> str:
     return " ".join(f"{v:.6g}" for v in values)
@@ -214,16 +343,18 @@ def _link_element(robot: ET.Element, link: Link) -> None:
     if link.shapes:
         # each shape carries an equal share of the mass; parallel-axis about the centre
         share = mass / len(link.shapes)
-        diag = sum(s.inertia(share)
-                   + share * (np.sum((np.array(s.xyz) - centre) ** 2) - (np.array(s.xyz) - centre) ** 2)
-                   for s in link.shapes)
+        diag = sum(
+            s.inertia(share) + share * (np.sum((np.array(s.xyz) - centre) ** 2) - (np.array(s.xyz) - centre) ** 2)
+            for s in link.shapes
+        )
     else:
         diag = np.full(3, 1e-5)
     inertial = ET.SubElement(element, "inertial")
     ET.SubElement(inertial, "origin", xyz=_fmt(centre), rpy="0 0 0")
     ET.SubElement(inertial, "mass", value=f"{mass:.6g}")
-    ET.SubElement(inertial, "inertia", ixx=f"{diag[0]:.6g}", ixy="0", ixz="0",
-                  iyy=f"{diag[1]:.6g}", iyz="0", izz=f"{diag[2]:.6g}")
+    ET.SubElement(
+        inertial, "inertia", ixx=f"{diag[0]:.6g}", ixy="0", ixz="0", iyy=f"{diag[1]:.6g}", iyz="0", izz=f"{diag[2]:.6g}"
+    )
     for index, shape in enumerate(link.shapes):
         visual = _shape_element(element, "visual", shape)
         material = ET.SubElement(visual, "material", name=f"{link.name}_{index}")
@@ -238,8 +369,14 @@ def _joint_element(robot: ET.Element, joint: Joint) -> None:
     ET.SubElement(element, "origin", xyz=_fmt(joint.xyz), rpy=_fmt(joint.rpy))
     if joint.kind != "fixed":
         ET.SubElement(element, "axis", xyz=_fmt(joint.axis))
-        ET.SubElement(element, "limit", lower=f"{joint.lower:.6g}", upper=f"{joint.upper:.6g}",
-                      velocity=f"{joint.velocity:.6g}", effort=f"{joint.effort:.6g}")
+        ET.SubElement(
+            element,
+            "limit",
+            lower=f"{joint.lower:.6g}",
+            upper=f"{joint.upper:.6g}",
+            velocity=f"{joint.velocity:.6g}",
+            effort=f"{joint.effort:.6g}",
+        )
         ET.SubElement(element, "dynamics", damping="0.1", friction="0.0")
 
 
@@ -255,6 +392,7 @@ def urdf_text(links: list[Link], joints: list[Joint]) -> str:
 
 
 # --- SRDF -------------------------------------------------------------------
+
 
 def _adjacent_pairs(links: list[Link], joints: list[Joint]) -> set[frozenset[str]]:
     """Pairs of links with geometry joined by one joint, looking through geometry-less links."""
@@ -307,8 +445,9 @@ def _near_pairs(links: list[Link], joints: list[Joint]) -> set[frozenset[str]]:
     return pairs
 
 
-def _sampled_pairs(known: set[frozenset[str]], samples: int,
-                   seed: int) -> tuple[set[frozenset[str]], set[frozenset[str]]]:
+def _sampled_pairs(
+    known: set[frozenset[str]], samples: int, seed: int
+) -> tuple[set[frozenset[str]], set[frozenset[str]]]:
     """Link pairs colliding at the zero pose ("default") and in ≥ 95 % of random poses ("always").
 
     The planner is loaded with the ``known`` pairs already disabled (an SRDF
@@ -350,8 +489,17 @@ def _srdf_document(reasons: dict[frozenset[str], str]) -> str:
 
 def srdf_text(links: list[Link], joints: list[Joint], samples: int = 400, seed: int = 0) -> str:
     """The collision matrix: adjacent links, the fixed body, and pairs found colliding by sampling."""
-    body_links = {"base_link", "torso_lift_link", "head_pan_link", "head_tilt_link", CAMERA_LINK,
-                  "r_shoulder_pan_link", "l_shoulder_pan_link", "r_shoulder_lift_link", "l_shoulder_lift_link"}
+    body_links = {
+        "base_link",
+        "torso_lift_link",
+        "head_pan_link",
+        "head_tilt_link",
+        CAMERA_LINK,
+        "r_shoulder_pan_link",
+        "l_shoulder_pan_link",
+        "r_shoulder_lift_link",
+        "l_shoulder_lift_link",
+    }
     # the shoulders sit in the torso and the head on it: their contacts with the
     # body are part of the build (the real robot nests them), not something a planner can avoid
     reasons = {pair: "Near" for pair in _near_pairs(links, joints)}

@@ -24,8 +24,8 @@ class RobotDescription:
     srdf_path: ClassVar[Path]
     arms: ClassVar[tuple[str, ...]]
     torso_joint: ClassVar[str]
-    head_joints: ClassVar[tuple[str, str]]          # pan, tilt
-    working_torso: ClassVar[float]                  # torso height the robot works at
+    head_joints: ClassVar[tuple[str, str]]  # pan, tilt
+    working_torso: ClassVar[float]  # torso height the robot works at
     gripper: ClassVar[GripperSpec]
     camera: ClassVar[CameraSpec]
     keyframes: ClassVar[dict[str, Keyframe]]
@@ -53,8 +53,11 @@ class RobotDescription:
 
     def arm_pose_map(self, name: str) -> dict[str, float]:
         """Joint name -> position of both arms in the named posture."""
-        return {joint: value for arm in self.arms
-                for joint, value in zip(self.arm_joint_names(arm), self.arm_pose(name, arm), strict=True)}
+        return {
+            joint: value
+            for arm in self.arms
+            for joint, value in zip(self.arm_joint_names(arm), self.arm_pose(name, arm), strict=True)
+        }
 
 
 _REGISTRY: dict[str, type[RobotDescription]] = {}
@@ -64,11 +67,13 @@ Description = TypeVar("Description", bound=type[RobotDescription])
 
 def register_robot() -> Callable[[Description], Description]:
     """Class decorator: make the description findable by its ``uid``."""
+
     def register(cls: Description) -> Description:
         if cls.uid in _REGISTRY:
             raise ValueError(f"a robot description {cls.uid!r} is already registered")
         _REGISTRY[cls.uid] = cls
         return cls
+
     return register
 
 

@@ -33,11 +33,11 @@ class GripperSpec:
     them (``holding``); otherwise the hand is ``open``.
     """
 
-    max_opening: float                 # m between the pads, fully open
-    open_width: float                  # m, what "open" commands
-    closed_below: float                # m: an opening under this means the pads met
-    hold_effort: float                 # N: squeezing at least this hard, fingers apart, holds something
-    default_effort: float              # N per pad, the usual grip
+    max_opening: float  # m between the pads, fully open
+    open_width: float  # m, what "open" commands
+    closed_below: float  # m: an opening under this means the pads met
+    hold_effort: float  # N: squeezing at least this hard, fingers apart, holds something
+    default_effort: float  # N per pad, the usual grip
     effort_range: tuple[float, float]  # N per pad a grip may ask for
 
     def state(self, opening: float, effort: float) -> GripperState:
@@ -51,11 +51,11 @@ class GripperSpec:
 class CameraSpec:
     """The head camera as the robot mounts it: frames, field of view, range and native resolution."""
 
-    link: str                          # x forward, y left, z up (how SAPIEN cameras look)
-    optical_frame: str                 # z forward, x right, y down
-    horizontal_fov: float              # rad
-    near: float                        # m: nearer than this returns nothing
-    far: float                         # m: farther than this returns nothing
+    link: str  # x forward, y left, z up (how SAPIEN cameras look)
+    optical_frame: str  # z forward, x right, y down
+    horizontal_fov: float  # rad
+    near: float  # m: nearer than this returns nothing
+    far: float  # m: farther than this returns nothing
     width: int = 640
     height: int = 480
 

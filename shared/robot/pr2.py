@@ -18,16 +18,23 @@ from shared.robot.parts import CameraSpec, GripperSpec, Keyframe
 ROBOT_DIR = Path(__file__).resolve().parent
 ARMS = ("right", "left")
 ARM_PREFIX = {"right": "r", "left": "l"}
-ARM_JOINT_SUFFIXES = ("shoulder_pan_joint", "shoulder_lift_joint", "upper_arm_roll_joint",
-                      "elbow_flex_joint", "forearm_roll_joint", "wrist_flex_joint", "wrist_roll_joint")
+ARM_JOINT_SUFFIXES = (
+    "shoulder_pan_joint",
+    "shoulder_lift_joint",
+    "upper_arm_roll_joint",
+    "elbow_flex_joint",
+    "forearm_roll_joint",
+    "wrist_flex_joint",
+    "wrist_roll_joint",
+)
 TORSO_JOINT = "torso_lift_joint"
 HEAD_JOINTS = ("head_pan_joint", "head_tilt_joint")
-TOOL_OFFSET = 0.18          # wrist roll axis -> tool frame, along the gripper's x
-FINGER_TRAVEL = 0.045       # each pad; the gap is twice the joint position
+TOOL_OFFSET = 0.18  # wrist roll axis -> tool frame, along the gripper's x
+FINGER_TRAVEL = 0.045  # each pad; the gap is twice the joint position
 CAMERA_LINK = "head_mount_kinect_rgb_link"
 CAMERA_OPTICAL_FRAME = "head_mount_kinect_rgb_optical_frame"
 
-WORKING_TORSO = 0.33        # torso fully up: shoulders at 1.121 m, 0.40 m above a 0.72 m table
+WORKING_TORSO = 0.33  # torso fully up: shoulders at 1.121 m, 0.40 m above a 0.72 m table
 # Where the head looks to see the work area: 0.6 m ahead (the middle of both arms' reach at the
 # working torso height), on a table of standard height (0.72 m).
 WORK_GAZE = (0.60, 0.0, 0.72)
@@ -60,8 +67,10 @@ def tool_frame(arm: str) -> str:
 def _arm_posture(name: str) -> dict[str, float]:
     right = _RIGHT_ARM_POSES[name]
     left = tuple(m * v for m, v in zip(_MIRROR, right, strict=True))
-    return {**dict(zip(arm_joint_names("right"), right, strict=True)),
-            **dict(zip(arm_joint_names("left"), left, strict=True))}
+    return {
+        **dict(zip(arm_joint_names("right"), right, strict=True)),
+        **dict(zip(arm_joint_names("left"), left, strict=True)),
+    }
 
 
 def _keyframes() -> dict[str, Keyframe]:
@@ -83,10 +92,17 @@ class PR2(RobotDescription):
     torso_joint = TORSO_JOINT
     head_joints = HEAD_JOINTS
     working_torso = WORKING_TORSO
-    gripper = GripperSpec(max_opening=2 * FINGER_TRAVEL, open_width=OPEN_WIDTH, closed_below=0.0025,
-                          hold_effort=10.0, default_effort=30.0, effort_range=(1.0, 100.0))
-    camera = CameraSpec(link=CAMERA_LINK, optical_frame=CAMERA_OPTICAL_FRAME, horizontal_fov=math.radians(57.0),
-                        near=0.4, far=4.5)
+    gripper = GripperSpec(
+        max_opening=2 * FINGER_TRAVEL,
+        open_width=OPEN_WIDTH,
+        closed_below=0.0025,
+        hold_effort=10.0,
+        default_effort=30.0,
+        effort_range=(1.0, 100.0),
+    )
+    camera = CameraSpec(
+        link=CAMERA_LINK, optical_frame=CAMERA_OPTICAL_FRAME, horizontal_fov=math.radians(57.0), near=0.4, far=4.5
+    )
     keyframes = _keyframes()
 
     def arm_joint_names(self, arm: str) -> list[str]:

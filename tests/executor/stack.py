@@ -38,10 +38,16 @@ class Stack:
         self.hub.subscribe(keys.say, self._on_say)
         self.runs = 0  # states seen with a command running, counted so no start or end is missed
         self.hub.subscribe(keys.executor_state, self._on_state, history=True)
-        self.hub.subscribe(keys.truth, lambda m: self._store("truth", {o["id"]: o for o in m["objects"]}), latest_only=True)
+        self.hub.subscribe(
+            keys.truth, lambda m: self._store("truth", {o["id"]: o for o in m["objects"]}), latest_only=True
+        )
         self.hub.subscribe(keys.sim_state, lambda m: self._store("robot", m), latest_only=True)
-        self.hub.subscribe(keys.objects, lambda m: self._store("objects", {o["id"]: o for o in m["objects"]}),
-                           latest_only=True, history=True)
+        self.hub.subscribe(
+            keys.objects,
+            lambda m: self._store("objects", {o["id"]: o for o in m["objects"]}),
+            latest_only=True,
+            history=True,
+        )
 
     # -- processes -------------------------------------------------------------------
     def start(self) -> None:
@@ -107,30 +113,55 @@ class Stack:
         expected = len(self.truth)
         # every object of the scene seen, and the previous scene's objects forgotten (perception keeps
         # an unseen object for a few seconds, and the executor rightly treats it as an obstacle until then)
-        self.wait_for(lambda: sum(o.get("type") != "unknown" and o.get("visible", True)
-                                  for o in self.objects.values()) >= expected
-                      and all(o.get("visible", True) for o in self.objects.values()), 30, "perception to see the scene")
+        self.wait_for(
+            lambda: (
+                sum(o.get("type") != "unknown" and o.get("visible", True) for o in self.objects.values()) >= expected
+                and all(o.get("visible", True) for o in self.objects.values())
+            ),
+            30,
+            "perception to see the scene",
+        )
         self.idle()
 
     def idle(self, timeout: float = 90.0) -> dict[str, Any]:
-        return self.wait_for(lambda: self.state if self.state and not self.state["robot"]["busy"] else None,
-                             timeout, "the executor to be idle")
+        return self.wait_for(
+            lambda: self.state if self.state and not self.state["robot"]["busy"] else None,
+            timeout,
+            "the executor to be idle",
+        )
 
-    def command(self, procedure: str, args: dict[str, Any] | None = None, *, phrases: dict[str, str] | None = None,
-                utterance: str = "", wait: bool = True, timeout: float = 120.0,
-                then: list[dict[str, Any]] | None = None) -> list[dict[str, Any]]:
+    def command(
+        self,
+        procedure: str,
+        args: dict[str, Any] | None = None,
+        *,
+        phrases: dict[str, str] | None = None,
+        utterance: str = "",
+        wait: bool = True,
+        timeout: float = 120.0,
+        then: list[dict[str, Any]] | None = None,
+    ) -> list[dict[str, Any]]:
         """Send a command as the NLU does (``then``: further steps); return what the robot said about it."""
         start, runs = len(self.lines), self.runs
-        message = {"kind": "command", "procedure": procedure, "args": args or {}, "phrases": phrases or {},
-                   "text": utterance, "utterance": utterance or procedure.replace("_", " ")}
+        message = {
+            "kind": "command",
+            "procedure": procedure,
+            "args": args or {},
+            "phrases": phrases or {},
+            "text": utterance,
+            "utterance": utterance or procedure.replace("_", " "),
+        }
         if then is not None:
             message["then"] = then
         self.hub.publish(self.hub.keys.nlu_result, message)
         if not wait:
             return []
         # the command is accepted (a busy state) or refused (an error line) within a moment, then runs to its end
-        self.wait_for(lambda: self.runs > runs or any(line["kind"] == "error" for line in self.lines[start:]), 10,
-                      f"{procedure} to start")
+        self.wait_for(
+            lambda: self.runs > runs or any(line["kind"] == "error" for line in self.lines[start:]),
+            10,
+            f"{procedure} to start",
+        )
         self.idle(timeout)
         time.sleep(0.3)  # the last line and the next truth sample arrive just after the state
         return self.lines[start:]

@@ -33,8 +33,13 @@ def test_list_gives_every_step_in_the_users_words(tmp_path: Path) -> None:
 
 
 def test_a_step_without_words_never_shows_an_object_id(tmp_path: Path) -> None:
-    words = step_words({"procedure": "place_rel", "args": {"arm": "right", "relation": "next_to", "object": "obj3"},
-                        "landmark": {**LANDMARK, "id": "obj3", "color": "blue", "type": "box"}})
+    words = step_words(
+        {
+            "procedure": "place_rel",
+            "args": {"arm": "right", "relation": "next_to", "object": "obj3"},
+            "landmark": {**LANDMARK, "id": "obj3", "color": "blue", "type": "box"},
+        }
+    )
     assert "obj3" not in words and "blue box" in words
 
 
@@ -51,14 +56,20 @@ def test_move_step_puts_it_at_the_new_place(tmp_path: Path, step: int, to: int, 
     assert [s["utterance"] for s in store.get(1)["steps"]] == [SAID[i] for i in expected]
 
 
-@pytest.mark.parametrize("request_, reason", [
-    ({"op": "delete_step", "number": 1, "step": 4}, "there is no step 4 in action 1: its steps are numbered 1 to 3"),
-    ({"op": "move_step", "number": 1, "step": 1, "to": 0}, "cannot move step 1 to 0: action 1 has steps 1 to 3"),
-    ({"op": "move_step", "number": 1, "step": 1}, "needs a whole number for 'to', not None"),
-    ({"op": "delete_step", "number": 2, "step": 1}, "there is no action 2: the actions are numbered 1 to 1"),
-    ({"op": "execute", "number": 1, "step": 9}, "there is no step 9 in action 1"),
-    ({"op": "undo_everything"}, "use list, show, rename, delete, delete_step, move_step or execute"),
-])
+@pytest.mark.parametrize(
+    "request_, reason",
+    [
+        (
+            {"op": "delete_step", "number": 1, "step": 4},
+            "there is no step 4 in action 1: its steps are numbered 1 to 3",
+        ),
+        ({"op": "move_step", "number": 1, "step": 1, "to": 0}, "cannot move step 1 to 0: action 1 has steps 1 to 3"),
+        ({"op": "move_step", "number": 1, "step": 1}, "needs a whole number for 'to', not None"),
+        ({"op": "delete_step", "number": 2, "step": 1}, "there is no action 2: the actions are numbered 1 to 1"),
+        ({"op": "execute", "number": 1, "step": 9}, "there is no step 9 in action 1"),
+        ({"op": "undo_everything"}, "use list, show, rename, delete, delete_step, move_step or execute"),
+    ],
+)
 def test_bad_requests_say_why_and_change_nothing(tmp_path: Path, request_: dict, reason: str) -> None:
     store = _store(tmp_path)
     with pytest.raises(StoreError, match=reason.replace("(", r"\(").replace(")", r"\)")):

@@ -27,10 +27,14 @@ def teach(stack: Stack) -> None:
     stack.load_scene("default")
     said = stack.command("create_action", utterance="create a new action")
     assert texts(said, "info")[-1].startswith("Created action ")
-    stack.command("pick_up", {"arm": "right", "object": stack.pid("obj0")}, phrases={"verb": "grab"},
-                  utterance="grab the red cup")
-    stack.command("place_rel", {"arm": "right", "relation": "left_of", "object": stack.pid("obj1")},
-                  utterance="put it left of the blue cup")
+    stack.command(
+        "pick_up", {"arm": "right", "object": stack.pid("obj0")}, phrases={"verb": "grab"}, utterance="grab the red cup"
+    )
+    stack.command(
+        "place_rel",
+        {"arm": "right", "relation": "left_of", "object": stack.pid("obj1")},
+        utterance="put it left of the blue cup",
+    )
     assert 0.02 < red_left_of_blue(stack) < 0.09
 
 
@@ -97,9 +101,18 @@ def test_commands_during_a_motion_are_refused_not_dropped(stack: Stack) -> None:
     stack.command("move_rel_dest", {"arm": "right", "relation": "above", "object": stack.pid("obj0")}, wait=False)
     stack.wait_for(lambda: stack.state["robot"]["busy"], 10, "the move to start")
     start = len(stack.lines)
-    stack.hub.publish(stack.hub.keys.nlu_result, {"kind": "command", "procedure": "close", "args": {"arm": "left"},
-                                                  "phrases": {}, "text": "", "utterance": "close your left hand"})
-    refusal = stack.wait_for(lambda: [l for l in stack.lines[start:] if l["kind"] == "error"], 10, "a refusal")
+    stack.hub.publish(
+        stack.hub.keys.nlu_result,
+        {
+            "kind": "command",
+            "procedure": "close",
+            "args": {"arm": "left"},
+            "phrases": {},
+            "text": "",
+            "utterance": "close your left hand",
+        },
+    )
+    refusal = stack.wait_for(lambda: [line for line in stack.lines[start:] if line["kind"] == "error"], 10, "a refusal")
     assert refusal[0]["text"].startswith("I'm still busy with move rel dest")
     stack.idle()
     assert stack.state["robot"]["grippers"]["left"] == "open"
@@ -111,10 +124,13 @@ def test_direct_commands_and_action_queries(stack: Stack) -> None:
     stack.idle()
     listed = stack.hub.request(stack.hub.keys.executor_control("actions"), {"op": "list"})
     newest = listed["actions"][-1]["number"]
-    renamed = stack.hub.request(stack.hub.keys.executor_control("actions"), {"op": "rename", "number": newest, "name": "wave"})
+    renamed = stack.hub.request(
+        stack.hub.keys.executor_control("actions"), {"op": "rename", "number": newest, "name": "wave"}
+    )
     assert renamed["name"] == "wave"
     bad = stack.hub.request(stack.hub.keys.executor_control("command"), {"procedure": "dance", "args": {}})
     assert (bad["ok"], bad["message"]) == (False, "I don't know how to do 'dance'.")
     from shared.bus import RemoteError
+
     with pytest.raises(RemoteError, match="there is no action 99"):
         stack.hub.request(stack.hub.keys.executor_control("actions"), {"op": "show", "number": 99})

@@ -60,7 +60,9 @@ def test_a_plate_on_the_table_is_too_wide_to_grasp(stack: Stack, plate: list[flo
     with stack.unchanged_arms():
         said = stack.command("pick_up", {"arm": "right", "object": stack.pid("obj0")})
     errors = texts(said, "error")
-    assert len(errors) == 1 and errors[0].endswith("plate is too wide to grasp; push it over the table edge first."), errors
+    assert len(errors) == 1 and errors[0].endswith("plate is too wide to grasp; push it over the table edge first."), (
+        errors
+    )
 
 
 @pytest.mark.parametrize("box", [[0.58, 0.0], [0.60, 0.04]])
@@ -78,7 +80,8 @@ def test_two_hands_squeeze_the_box_and_lift_it(stack: Stack, box: list[float]) -
     lifted = bottom(stack, "obj0")
     assert lifted > 0.10, f"the box is only {lifted:.3f} m above the table"
     grippers = stack.robot["grippers"]
-    assert grippers["right"]["holding"] is None and grippers["left"]["holding"] is None, \
+    assert grippers["right"]["holding"] is None and grippers["left"]["holding"] is None, (
         "a box squeezed between two hands is held by neither gripper alone"
+    )
     time.sleep(1.0)
     assert bottom(stack, "obj0") > 0.10, "the box slipped"

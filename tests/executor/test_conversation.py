@@ -17,24 +17,42 @@ def refer(oid: str) -> str:
 
 
 def test_a_compound_is_its_steps_in_order_with_their_own_words() -> None:
-    steps = check_compound({"kind": "command", "procedure": "pick_up", "args": {"arm": "right", "object": "obj0"},
-                            "phrases": {"verb": "put"}, "text": "pick up the red cup",
-                            "then": [{"procedure": "place_rel", "phrases": {"relation": "on"},
-                                      "args": {"arm": "right", "relation": "on_top_of", "object": "obj1"}}]})
+    steps = check_compound(
+        {
+            "kind": "command",
+            "procedure": "pick_up",
+            "args": {"arm": "right", "object": "obj0"},
+            "phrases": {"verb": "put"},
+            "text": "pick up the red cup",
+            "then": [
+                {
+                    "procedure": "place_rel",
+                    "phrases": {"relation": "on"},
+                    "args": {"arm": "right", "relation": "on_top_of", "object": "obj1"},
+                }
+            ],
+        }
+    )
     assert [(s.procedure, s.args) for s in steps] == [
         ("pick_up", {"arm": "right", "object": "obj0"}),
-        ("place_rel", {"arm": "right", "relation": "on_top_of", "object": "obj1"})]
+        ("place_rel", {"arm": "right", "relation": "on_top_of", "object": "obj1"}),
+    ]
     assert steps[0].phrases == {} and steps[1].phrases == {"relation": "on"}  # "put" is not how to say pick up
     assert steps[0].text == "pick up the red cup" and steps[1].text == ""
 
 
-@pytest.mark.parametrize("then, message", [
-    ([{"procedure": "place_rel", "args": {"arm": "right", "relation": "under", "object": "obj1"}}],
-     "I can't do step 2 of that: 'under' is not a relation I know"),
-    ([{"procedure": "execute", "args": {}}], "I can't do step 2 of that: execute has to be said on its own."),
-    (["place it"], "Step 2 of the command is not a command."),
-    ({"procedure": "open"}, "must be a list"),
-])
+@pytest.mark.parametrize(
+    "then, message",
+    [
+        (
+            [{"procedure": "place_rel", "args": {"arm": "right", "relation": "under", "object": "obj1"}}],
+            "I can't do step 2 of that: 'under' is not a relation I know",
+        ),
+        ([{"procedure": "execute", "args": {}}], "I can't do step 2 of that: execute has to be said on its own."),
+        (["place it"], "Step 2 of the command is not a command."),
+        ({"procedure": "open"}, "must be a list"),
+    ],
+)
 def test_a_bad_later_step_refuses_the_whole_compound(then: object, message: str) -> None:
     with pytest.raises(CommandError) as caught:
         check_compound({"procedure": "open", "args": {"arm": "left"}, "then": then})
@@ -42,8 +60,12 @@ def test_a_bad_later_step_refuses_the_whole_compound(then: object, message: str)
 
 
 def test_both_hands_only_where_the_contract_allows_them() -> None:
-    for procedure, args in [("open", {}), ("close", {}), ("move_abs_dir", {"direction": "up"}),
-                            ("move_abs_dest", {"destination": "side"})]:
+    for procedure, args in [
+        ("open", {}),
+        ("close", {}),
+        ("move_abs_dir", {"direction": "up"}),
+        ("move_abs_dest", {"destination": "side"}),
+    ]:
         assert check(procedure, {"arm": "both", **args})["arm"] == "both"
     with pytest.raises(CommandError) as caught:
         check("pick_up", {"arm": "both", "object": "obj0"})
@@ -53,10 +75,12 @@ def test_both_hands_only_where_the_contract_allows_them() -> None:
 def test_distances_are_metres_within_the_limits() -> None:
     assert check("move_abs_dir", {"arm": "right", "direction": "up", "distance": 0.05})["distance"] == 0.05
     assert "distance" not in check("move_abs_dir", {"arm": "right", "direction": "up"})
-    for bad, message in [(0.5, "I can move 1 to 30 centimetres at a time, not 50."),
-                         (0.001, "I can move 1 to 30 centimetres at a time, not 0."),
-                         ("far", "The distance must be a number of metres."),
-                         (True, "The distance must be a number of metres.")]:
+    for bad, message in [
+        (0.5, "I can move 1 to 30 centimetres at a time, not 50."),
+        (0.001, "I can move 1 to 30 centimetres at a time, not 0."),
+        ("far", "The distance must be a number of metres."),
+        (True, "The distance must be a number of metres."),
+    ]:
         with pytest.raises(CommandError) as caught:
             check("move_rel_dir", {"arm": "left", "direction": "towards", "object": "obj0", "distance": bad})
         assert str(caught.value) == message
@@ -64,13 +88,23 @@ def test_distances_are_metres_within_the_limits() -> None:
         check("rotate", {"arm": "left", "direction": "cw", "distance": 0.1})
 
 
-@pytest.mark.parametrize("procedure, args, expected", [
-    ("move_abs_dir", {"arm": "both", "direction": "up"}, "Moving both hands up."),
-    ("open", {"arm": "both"}, "Opening both hands."),
-    ("move_abs_dir", {"arm": "right", "direction": "up", "distance": 0.05}, "Moving your right hand 5 centimetres up."),
-    ("move_rel_dir", {"arm": "left", "direction": "towards", "object": "obj1", "distance": 0.01},
-     "Moving your left hand 1 centimetre towards the plate."),
-])
+@pytest.mark.parametrize(
+    "procedure, args, expected",
+    [
+        ("move_abs_dir", {"arm": "both", "direction": "up"}, "Moving both hands up."),
+        ("open", {"arm": "both"}, "Opening both hands."),
+        (
+            "move_abs_dir",
+            {"arm": "right", "direction": "up", "distance": 0.05},
+            "Moving your right hand 5 centimetres up.",
+        ),
+        (
+            "move_rel_dir",
+            {"arm": "left", "direction": "towards", "object": "obj1", "distance": 0.01},
+            "Moving your left hand 1 centimetre towards the plate.",
+        ),
+    ],
+)
 def test_narration_of_both_hands_and_distances(procedure: str, args: dict, expected: str) -> None:
     assert wording.narration(procedure, args, {}, refer) == expected
 
@@ -100,7 +134,7 @@ def arms() -> dict[str, ArmKinematics]:
 
 def test_arms_swinging_into_each_other_are_caught_and_apart_they_pass(arms: dict[str, ArmKinematics]) -> None:
     side = {arm: np.asarray(ROBOT.arm_pose("side", arm), float) for arm in arms}
-    for arm, kin in arms.items():
+    for kin in arms.values():
         for each in arms:
             kin.set_joints(dict(zip(joint_names(each), side[each])))
     # shoulder pans swung towards the middle and past it: the forearms cross in front of the body

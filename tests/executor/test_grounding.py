@@ -9,7 +9,13 @@ from services.executor.grounding import descriptor, reground
 pytestmark = pytest.mark.unit
 
 
-def obj(oid: str, color: str, kind: str, size: tuple[float, float, float], pos: tuple[float, float, float] = (0.6, 0.0, 0.77)) -> dict:
+def obj(
+    oid: str,
+    color: str,
+    kind: str,
+    size: tuple[float, float, float],
+    pos: tuple[float, float, float] = (0.6, 0.0, 0.77),
+) -> dict:
     return {"id": oid, "color": color, "type": kind, "size": list(size), "position": list(pos)}
 
 
@@ -18,8 +24,10 @@ BLUE_BOX = obj("b", "blue", "box", (0.12, 0.08, 0.06))
 
 
 def test_landmarks_follow_their_descriptors_not_their_old_ids() -> None:
-    now = [obj("obj7", "blue", "box", (0.12, 0.08, 0.06), (0.5, 0.3, 0.75)),
-           obj("obj3", "red", "cup", (0.072, 0.069, 0.10), (0.7, -0.2, 0.77))]
+    now = [
+        obj("obj7", "blue", "box", (0.12, 0.08, 0.06), (0.5, 0.3, 0.75)),
+        obj("obj3", "red", "cup", (0.072, 0.069, 0.10), (0.7, -0.2, 0.77)),
+    ]
     result = reground([descriptor(RED_CUP), descriptor(BLUE_BOX)], now)
     assert result.mapping == {"a": "obj3", "b": "obj7"}
     assert result.missing == {}
@@ -32,12 +40,24 @@ def test_two_alike_landmarks_get_two_different_objects() -> None:
     assert sorted(result.mapping.values()) == ["x", "y"]
 
 
-@pytest.mark.parametrize("now, words", [
-    ([obj("x", "blue", "cup", (0.07, 0.07, 0.1))], "There is no red cup on the table any more (the closest I see is a blue cup)."),
-    ([obj("x", "red", "box", (0.07, 0.07, 0.1))], "There is no red cup on the table any more (the closest I see is a red box)."),
-    ([obj("x", "red", "cup", (0.20, 0.20, 0.3))], "There is no red cup of the size I was taught on the table any more"),
-    ([], "I can't see any objects, so I can't find the red cup."),
-])
+@pytest.mark.parametrize(
+    "now, words",
+    [
+        (
+            [obj("x", "blue", "cup", (0.07, 0.07, 0.1))],
+            "There is no red cup on the table any more (the closest I see is a blue cup).",
+        ),
+        (
+            [obj("x", "red", "box", (0.07, 0.07, 0.1))],
+            "There is no red cup on the table any more (the closest I see is a red box).",
+        ),
+        (
+            [obj("x", "red", "cup", (0.20, 0.20, 0.3))],
+            "There is no red cup of the size I was taught on the table any more",
+        ),
+        ([], "I can't see any objects, so I can't find the red cup."),
+    ],
+)
 def test_too_different_objects_are_rejected_naming_what_is_missing(now: list[dict], words: str) -> None:
     result = reground([descriptor(RED_CUP)], now)
     assert result.mapping == {}

@@ -34,7 +34,9 @@ def arms() -> dict[str, ArmKinematics]:
     return {arm: ArmKinematics(arm) for arm in ("right", "left")}
 
 
-def cup(oid: str, x: float, y: float, color: str = "red", size: tuple[float, float, float] = (0.07, 0.07, 0.10)) -> dict:
+def cup(
+    oid: str, x: float, y: float, color: str = "red", size: tuple[float, float, float] = (0.07, 0.07, 0.10)
+) -> dict:
     return {"id": oid, "color": color, "type": "cup", "position": [x, y, TABLE_TOP_Z + size[2] / 2], "size": list(size)}
 
 
@@ -82,8 +84,13 @@ def test_reach_follows_objects_that_move(arms: dict[str, ArmKinematics]) -> None
 def test_a_held_object_is_carried_around_obstacles(arms: dict[str, ArmKinematics]) -> None:
     """Moving a cup in hand over a tall box: no pose along the plan makes the cup (or arm) hit it."""
     kin = arms["right"]
-    tall = {"id": "wall", "color": "green", "type": "box", "position": [0.55, -0.10, TABLE_TOP_Z + 0.075],
-            "size": [0.10, 0.08, 0.15]}
+    tall = {
+        "id": "wall",
+        "color": "green",
+        "type": "box",
+        "position": [0.55, -0.10, TABLE_TOP_Z + 0.075],
+        "size": [0.10, 0.08, 0.15],
+    }
     scene = scene_with(tall, cup("held", 0.55, -0.30))
     snap = scene.snapshot()
     kin.set_joints(snap.joints())
@@ -119,16 +126,22 @@ def test_planning_gives_up_when_the_user_says_stop() -> None:
     """A path that needs the random planner (a tall box between the hand and its goal) is abandoned on stop."""
     cancel = threading.Event()
     kin = ArmKinematics("right", cancel=cancel)
-    wall = {"id": "wall", "color": "green", "type": "box", "position": [0.55, -0.10, TABLE_TOP_Z + 0.09],
-            "size": [0.20, 0.04, 0.18]}
+    wall = {
+        "id": "wall",
+        "color": "green",
+        "type": "box",
+        "position": [0.55, -0.10, TABLE_TOP_Z + 0.09],
+        "size": [0.20, 0.04, 0.18],
+    }
     snap = scene_with(wall).snapshot()
     sync(kin, snap, None)
     here = kin.ik(geo.make_pose([0.55, -0.25, TABLE_TOP_Z + 0.10], geo.facing([1.0, 0.0, 0.0])))
     there = kin.ik(geo.make_pose([0.55, 0.05, TABLE_TOP_Z + 0.10], geo.facing([1.0, 0.0, 0.0])))
     assert here is not None and there is not None
     kin.set_arm(here)
-    assert kin._joint_line(kin.arm_q, there) is None and kin._via_ready(there) is None \
-        and kin._via_lifts(there) is None, "not a random planner's case"
+    assert (
+        kin._joint_line(kin.arm_q, there) is None and kin._via_ready(there) is None and kin._via_lifts(there) is None
+    ), "not a random planner's case"
     cancel.set()
     started = time.perf_counter()
     assert kin.plan_to(there) is None and kin.cancelled
@@ -157,8 +170,13 @@ def test_the_model_fingers_are_set_for_a_block_only(arms: dict[str, ArmKinematic
 def test_a_press_starts_with_a_stretch_clear_for_the_open_fingers(arms: dict[str, ArmKinematics]) -> None:
     """The part of a press travelled while the fingers close ends before the object and is clear with them open."""
     kin = arms["right"]
-    box = {"id": "box", "color": "orange", "type": "box", "position": [0.58, 0.0, TABLE_TOP_Z + 0.09],
-           "size": [0.20, 0.30, 0.18]}
+    box = {
+        "id": "box",
+        "color": "orange",
+        "type": "box",
+        "position": [0.58, 0.0, TABLE_TOP_Z + 0.09],
+        "size": [0.20, 0.30, 0.18],
+    }
     sync(kin, scene_with(box).snapshot(), None)
     start = kin.ik(geo.make_pose([0.58, -0.23, TABLE_TOP_Z + 0.09], geo.facing([1.0, 0.0, 0.0])))
     assert start is not None
@@ -170,7 +188,7 @@ def test_a_press_starts_with_a_stretch_clear_for_the_open_fingers(arms: dict[str
     lead = kin.free_lead(move)
     assert lead is not None and (len(lead) - 1) * CONTACT_STEP >= MIN_LEAD
     assert len(lead) <= move.lead < len(move.path)
-    assert np.array_equal(lead, move.path[:len(lead)])
+    assert np.array_equal(lead, move.path[: len(lead)])
     assert all(kin.collisions(q) == [] for q in lead)
 
 
@@ -193,8 +211,13 @@ def test_a_hand_above_what_it_released_lifts_before_swinging_away(arms: dict[str
 def test_a_cup_just_grasped_beside_the_plate_is_carried_away(arms: dict[str, ArmKinematics]) -> None:
     """The carried box overlaps the padded table and plate at the grasp: the plan still leaves, then stays clear."""
     kin = arms["right"]
-    plate = {"id": "plate", "color": "white", "type": "plate", "position": [0.63, 0.0, TABLE_TOP_Z + 0.008],
-             "size": [0.16, 0.16, 0.015]}
+    plate = {
+        "id": "plate",
+        "color": "white",
+        "type": "plate",
+        "position": [0.63, 0.0, TABLE_TOP_Z + 0.008],
+        "size": [0.16, 0.16, 0.015],
+    }
     scene = scene_with(plate, cup("red", 0.55, -0.12), cup("blue", 0.55, 0.12, color="blue"), pose="side")
     snap = scene.snapshot()
     sync(kin, snap, None)
@@ -215,7 +238,7 @@ def test_a_cup_just_grasped_beside_the_plate_is_carried_away(arms: dict[str, Arm
     trajectory = kin.plan_to(found[1])
     assert trajectory is not None
     lifted = next(i for i, q in enumerate(trajectory.points) if not kin.collisions(q))
-    assert kin.fk(trajectory.points[lifted])[2] - kin.fk(grasp_q)[2] < 0.05   # it only lifted clear of the contacts
+    assert kin.fk(trajectory.points[lifted])[2] - kin.fk(grasp_q)[2] < 0.05  # it only lifted clear of the contacts
     assert all(kin.collisions(q) == [] for q in trajectory.points[lifted:])
 
 
@@ -227,19 +250,26 @@ def test_perceptions_sighting_of_the_held_cup_is_no_obstacle(arms: dict[str, Arm
     tool = kin.fk()
     held = Held("cup", Box(tool[:3] + [0.01, 0.0, -0.01], np.array([0.07, 0.07, 0.10])), tool)
     height = float(tool[2] - TABLE_TOP_Z)
-    sighting = {"id": "again", "color": "red", "type": "cup", "held_by": "left",
-                "position": [tool[0], tool[1], TABLE_TOP_Z + height / 2], "size": [0.08, 0.08, height]}
+    sighting = {
+        "id": "again",
+        "color": "red",
+        "type": "cup",
+        "held_by": "left",
+        "position": [tool[0], tool[1], TABLE_TOP_Z + height / 2],
+        "size": [0.08, 0.08, height],
+    }
     scene.update_objects([sighting])
     snap = scene.snapshot()
     assert snap.supported("again")
     sync(kin, snap, None)
-    assert kin.collisions(kin.arm_q) != []   # as an obstacle it would hold the hand fast
+    assert kin.collisions(kin.arm_q) != []  # as an obstacle it would hold the hand fast
     sync(kin, snap, held)
     assert kin.collisions(kin.arm_q) == []
 
 
 def test_a_cup_out_of_one_hands_reach_is_refused_with_how_far_and_the_other_hand(
-        arms: dict[str, ArmKinematics]) -> None:
+    arms: dict[str, ArmKinematics],
+) -> None:
     scene = scene_with(cup("c", 0.85, 0.45), pose="side")
     procedures = Procedures(scene, None, arms, list)  # type: ignore[arg-type]
     with pytest.raises(StepFailed) as refused:

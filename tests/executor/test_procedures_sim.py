@@ -130,12 +130,17 @@ def test_place_on_the_table_lowers_until_the_cup_stands(scene: Stack) -> None:
     assert scene.position("obj1")[2] == pytest.approx(0.72 + CUP_HEIGHT / 2, abs=0.01)
 
 
-@pytest.mark.parametrize("procedure, args, expected", [
-    ("place_abs", {"arm": "right", "destination": "table"}, "My right hand isn't holding anything to place."),
-    ("pick_up", {"arm": "right", "object": "obj99"}, "I don't know any object called 'obj99'"),
-    ("move_rel_dest", {"arm": "left", "relation": "under", "object": "obj0"}, "'under' is not a relation I know"),
-])
-def test_impossible_commands_are_refused_without_motion(scene: Stack, procedure: str, args: dict, expected: str) -> None:
+@pytest.mark.parametrize(
+    "procedure, args, expected",
+    [
+        ("place_abs", {"arm": "right", "destination": "table"}, "My right hand isn't holding anything to place."),
+        ("pick_up", {"arm": "right", "object": "obj99"}, "I don't know any object called 'obj99'"),
+        ("move_rel_dest", {"arm": "left", "relation": "under", "object": "obj0"}, "'under' is not a relation I know"),
+    ],
+)
+def test_impossible_commands_are_refused_without_motion(
+    scene: Stack, procedure: str, args: dict, expected: str
+) -> None:
     with scene.unchanged_arms():
         said = scene.command(procedure, args)
     errors = texts(said, "error")

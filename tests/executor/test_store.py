@@ -11,12 +11,17 @@ from pathlib import Path
 
 import pytest
 
-from services.executor.actions_cli import apply_action_op, main as actions_main
+from services.executor.actions_cli import apply_action_op
+from services.executor.actions_cli import main as actions_main
 from services.executor.store import FILE_NAME, ActionStore, StoreError, atomic_write_text
 
 ROOT = Path(__file__).resolve().parents[2]
-STEP = {"procedure": "pick_up", "args": {"arm": "right", "object": "obj0"}, "utterance": "grab the red cup",
-        "landmark": {"id": "obj0", "color": "red", "type": "cup", "size": [0.07, 0.07, 0.1], "position": [0.6, 0, 0.77]}}
+STEP = {
+    "procedure": "pick_up",
+    "args": {"arm": "right", "object": "obj0"},
+    "utterance": "grab the red cup",
+    "landmark": {"id": "obj0", "color": "red", "type": "cup", "size": [0.07, 0.07, 0.1], "position": [0.6, 0, 0.77]},
+}
 
 
 def test_steps_survive_a_restart(tmp_path: Path) -> None:
@@ -134,8 +139,14 @@ def test_command_line_list_show_rename_delete(tmp_path: Path, capsys: pytest.Cap
 
 def test_hfpbd_command_reaches_the_actions_tool(tmp_path: Path) -> None:
     ActionStore(tmp_path).create()
-    result = subprocess.run([sys.executable, "-m", "hfpbd.cli", "executor", "actions", "list"], cwd=ROOT,
-                            capture_output=True, text=True, env={**os.environ, "HFPBD_DATA_DIR": str(tmp_path)}, timeout=60)
+    result = subprocess.run(
+        [sys.executable, "-m", "hfpbd.cli", "executor", "actions", "list"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        env={**os.environ, "HFPBD_DATA_DIR": str(tmp_path)},
+        timeout=60,
+    )
     assert result.returncode == 0, result.stderr
     assert "(unnamed)" in result.stdout
 

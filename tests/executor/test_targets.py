@@ -18,7 +18,9 @@ from shared.robot import ROBOT
 pytestmark = pytest.mark.unit
 
 CUP = np.array([0.07, 0.07, 0.10])
-SIDE_GRASP = geo.make_pose([0.55, -0.10, 0.84], geo.facing([1.0, -0.2, 0.0]))  # level, pointing ahead and a little right
+SIDE_GRASP = geo.make_pose(
+    [0.55, -0.10, 0.84], geo.facing([1.0, -0.2, 0.0])
+)  # level, pointing ahead and a little right
 
 
 def standing(x: float, y: float, size: np.ndarray = CUP) -> Box:
@@ -46,8 +48,9 @@ def test_side_placements_stand_the_object_beside_the_landmark_upright(relation: 
         assert np.allclose(hover[:3] - release[:3], [0.0, 0.0, targets.HOVER])
 
 
-@pytest.mark.parametrize(("size", "centres"), [((0.08, 0.08, 0.10), 1), ((0.20, 0.20, 0.10), 5)],
-                         ids=["cup-on-a-cup", "into-a-wide-box"])
+@pytest.mark.parametrize(
+    ("size", "centres"), [((0.08, 0.08, 0.10), 1), ((0.20, 0.20, 0.10), 5)], ids=["cup-on-a-cup", "into-a-wide-box"]
+)
 def test_on_top_placements_keep_the_whole_object_over_the_top(size: tuple[float, float, float], centres: int) -> None:
     landmark, held = standing(0.58, 0.10, np.array(size)), held_cup()
     pairs = targets.place_relation("on_top_of", landmark, held.tool_pose, held, TABLE_TOP_Z)
@@ -70,8 +73,10 @@ def test_a_turned_heading_reaches_where_the_grasp_heading_does_not() -> None:
     kin = ArmKinematics("right")
     scene = Scene()
     red, blue = standing(0.54, -0.11), standing(0.47, 0.0)
-    scene.update_objects([{"id": "blue", "color": "blue", "type": "cup", "position": blue.center.tolist(),
-                           "size": blue.size.tolist()}], table_truth())
+    scene.update_objects(
+        [{"id": "blue", "color": "blue", "type": "cup", "position": blue.center.tolist(), "size": blue.size.tolist()}],
+        table_truth(),
+    )
     scene.update_robot({"joints": {ROBOT.torso_joint: ROBOT.working_torso, **ROBOT.arm_pose_map("side")}})
     sync(kin, scene.snapshot(), None)
     red_cup = {"id": "red", "type": "cup", "position": red.center.tolist(), "size": red.size.tolist()}

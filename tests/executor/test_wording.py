@@ -15,44 +15,70 @@ def refer(oid: str) -> str:
     return {"obj0": "the red cup", "obj1": "the blue box"}[oid]
 
 
-@pytest.mark.parametrize("procedure, args, phrases, expected", [
-    ("pick_up", {"arm": "right", "object": "obj0"}, {"verb": "grab"}, "Grabbing the red cup with your right hand."),
-    ("pick_up", {"arm": "left", "object": "obj0"}, {}, "Picking up the red cup with your left hand."),
-    ("move_rel_dest", {"arm": "right", "relation": "above", "object": "obj1"}, {}, "Moving your right hand above the blue box."),
-    ("move_rel_dest", {"arm": "left", "relation": "left_of", "object": "obj1"}, {"verb": "put", "relation": "beside"},
-     "Putting your left hand beside the blue box."),
-    ("move_abs_dir", {"arm": "right", "direction": "up"}, {"verb": "lift"}, "Lifting your right hand up."),
-    ("move_abs_dest", {"arm": "left", "destination": "side"}, {}, "Moving your left hand to the side."),
-    ("place_rel", {"arm": "right", "relation": "next_to", "object": "obj1"}, {"verb": "drop"},
-     "Dropping the red cup next to the blue box with your right hand."),
-    ("look_at", {"object": "obj1"}, {}, "Looking at the blue box."),
-    ("rotate", {"arm": "right", "direction": "cw"}, {"verb": "turn"}, "Turning your right hand clockwise."),
-    ("open", {"arm": "left"}, {}, "Opening your left hand."),
-    ("move_abs_dir", {"arm": "left", "direction": "right"}, {"verb": "move", "arm": "your left", "direction": "to the right"},
-     "Moving your left hand to the right."),
-    ("move_abs_dir", {"arm": "right", "direction": "up"}, {"arm": "right arm"}, "Moving your right arm up."),
-])
+@pytest.mark.parametrize(
+    "procedure, args, phrases, expected",
+    [
+        ("pick_up", {"arm": "right", "object": "obj0"}, {"verb": "grab"}, "Grabbing the red cup with your right hand."),
+        ("pick_up", {"arm": "left", "object": "obj0"}, {}, "Picking up the red cup with your left hand."),
+        (
+            "move_rel_dest",
+            {"arm": "right", "relation": "above", "object": "obj1"},
+            {},
+            "Moving your right hand above the blue box.",
+        ),
+        (
+            "move_rel_dest",
+            {"arm": "left", "relation": "left_of", "object": "obj1"},
+            {"verb": "put", "relation": "beside"},
+            "Putting your left hand beside the blue box.",
+        ),
+        ("move_abs_dir", {"arm": "right", "direction": "up"}, {"verb": "lift"}, "Lifting your right hand up."),
+        ("move_abs_dest", {"arm": "left", "destination": "side"}, {}, "Moving your left hand to the side."),
+        (
+            "place_rel",
+            {"arm": "right", "relation": "next_to", "object": "obj1"},
+            {"verb": "drop"},
+            "Dropping the red cup next to the blue box with your right hand.",
+        ),
+        ("look_at", {"object": "obj1"}, {}, "Looking at the blue box."),
+        ("rotate", {"arm": "right", "direction": "cw"}, {"verb": "turn"}, "Turning your right hand clockwise."),
+        ("open", {"arm": "left"}, {}, "Opening your left hand."),
+        (
+            "move_abs_dir",
+            {"arm": "left", "direction": "right"},
+            {"verb": "move", "arm": "your left", "direction": "to the right"},
+            "Moving your left hand to the right.",
+        ),
+        ("move_abs_dir", {"arm": "right", "direction": "up"}, {"arm": "right arm"}, "Moving your right arm up."),
+    ],
+)
 def test_narration_uses_the_users_words(procedure: str, args: dict, phrases: dict, expected: str) -> None:
     assert wording.narration(procedure, args, phrases, refer, held="the red cup") == expected
 
 
-@pytest.mark.parametrize("text, expected", [
-    (wording.cannot_reach("left", "above", "the blue box"), "I can't reach above the blue box with my left hand."),
-    (wording.not_holding("right"), "My right hand isn't holding anything to place."),
-    (wording.gone("the red cup"), "The red cup is no longer on the table."),
-])
+@pytest.mark.parametrize(
+    "text, expected",
+    [
+        (wording.cannot_reach("left", "above", "the blue box"), "I can't reach above the blue box with my left hand."),
+        (wording.not_holding("right"), "My right hand isn't holding anything to place."),
+        (wording.gone("the red cup"), "The red cup is no longer on the table."),
+    ],
+)
 def test_failures_are_specific(text: str, expected: str) -> None:
     assert text == expected
 
 
-@pytest.mark.parametrize("procedure, args, message", [
-    ("fly", {}, "I don't know how to do 'fly'."),
-    ("pick_up", {"arm": "right"}, "Pick up needs an object."),
-    ("pick_up", {"arm": "middle", "object": "obj0"}, "'middle' is not an arm I know"),
-    ("move_rel_dest", {"arm": "right", "relation": "under", "object": "obj0"}, "'under' is not a relation I know"),
-    ("switch_action", {"target": "sideways"}, "Switch to which action?"),
-    ("open", ["right"], "must be a map"),
-])
+@pytest.mark.parametrize(
+    "procedure, args, message",
+    [
+        ("fly", {}, "I don't know how to do 'fly'."),
+        ("pick_up", {"arm": "right"}, "Pick up needs an object."),
+        ("pick_up", {"arm": "middle", "object": "obj0"}, "'middle' is not an arm I know"),
+        ("move_rel_dest", {"arm": "right", "relation": "under", "object": "obj0"}, "'under' is not a relation I know"),
+        ("switch_action", {"target": "sideways"}, "Switch to which action?"),
+        ("open", ["right"], "must be a map"),
+    ],
+)
 def test_malformed_commands_are_refused_with_the_reason(procedure: str, args: object, message: str) -> None:
     with pytest.raises(CommandError) as caught:
         check(procedure, args)

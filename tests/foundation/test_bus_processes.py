@@ -57,8 +57,11 @@ def test_failing_handler_becomes_error_reply(network: Network, echo) -> None:
     assert network.hub.request(f"pbd/{network.namespace}/test/echo", {"text": "x"})["echo"] == "x"
 
 
-@pytest.mark.parametrize("payload", [b"", b"\xc1garbage", b"\x92\x01\x02", b"\x81\xa1v\x63", b"\x82\xa1v\x01\xa4text\x05"],
-                         ids=["empty", "not-msgpack", "not-a-map", "wrong-version", "wrong-field-type"])
+@pytest.mark.parametrize(
+    "payload",
+    [b"", b"\xc1garbage", b"\x92\x01\x02", b"\x81\xa1v\x63", b"\x82\xa1v\x01\xa4text\x05"],
+    ids=["empty", "not-msgpack", "not-a-map", "wrong-version", "wrong-field-type"],
+)
 def test_malformed_payload_is_counted_not_fatal(network: Network, echo, payload: bytes) -> None:
     received = _collect(network, "test/out")
     network.hub.request(f"pbd/{network.namespace}/test/echo", {"text": "ready"})
@@ -97,8 +100,9 @@ def test_point_cloud_sized_message_crosses_intact(network: Network, echo) -> Non
     publisher = network.hub.publisher(network.hub.keys.cloud, large=True)
     network.hub.request(f"pbd/{network.namespace}/test/echo", {"text": "ready"})
     time.sleep(0.3)
-    publisher.put({"stamp": 1.0, "xyz": xyz, "rgb": rgb, "camera_pose": [0, 0, 1, 1, 0, 0, 0], "width": 640, "height": 480})
+    publisher.put(
+        {"stamp": 1.0, "xyz": xyz, "rgb": rgb, "camera_pose": [0, 0, 1, 1, 0, 0, 0], "width": 640, "height": 480}
+    )
     reply = received.get(timeout=15)
     assert xyz.nbytes + rgb.nbytes == 4_608_000
     assert reply["digest"] == digest and reply["shape"] == [480, 640, 3]
-

@@ -19,9 +19,24 @@ def _parse(*argv: str) -> argparse.Namespace:
 
 
 def test_flags_reach_the_zenoh_config() -> None:
-    options = options_from_args(_parse("--mode", "client", "-e", "tcp/10.0.0.2:7447", "-e", "tcp/10.0.0.3:7447",
-                                       "--listen", "tcp/0.0.0.0:7448", "--no-multicast-scouting", "-n", "robot1",
-                                       "--cfg", "transport/shared_memory/enabled:false", "--insecure"))
+    options = options_from_args(
+        _parse(
+            "--mode",
+            "client",
+            "-e",
+            "tcp/10.0.0.2:7447",
+            "-e",
+            "tcp/10.0.0.3:7447",
+            "--listen",
+            "tcp/0.0.0.0:7448",
+            "--no-multicast-scouting",
+            "-n",
+            "robot1",
+            "--cfg",
+            "transport/shared_memory/enabled:false",
+            "--insecure",
+        )
+    )
     assert options.namespace == "robot1"
     config = zenoh_config(options)
     assert json.loads(config.get_json("mode")) == "client"
@@ -42,11 +57,14 @@ def test_environment_supplies_defaults(monkeypatch: pytest.MonkeyPatch) -> None:
     assert options.connect == ("tcp/robot:7447", "tcp/backup:7447")
 
 
-@pytest.mark.parametrize("argv, reason", [
-    (("--cfg", "novalue"), "KEY:VALUE"),
-    (("--namespace", "a/b"), "one key chunk"),
-    (("--namespace", "*"), "one key chunk"),
-])
+@pytest.mark.parametrize(
+    "argv, reason",
+    [
+        (("--cfg", "novalue"), "KEY:VALUE"),
+        (("--namespace", "a/b"), "one key chunk"),
+        (("--namespace", "*"), "one key chunk"),
+    ],
+)
 def test_bad_flags_are_refused_with_reason(argv: tuple[str, ...], reason: str) -> None:
     with pytest.raises(ValueError, match=reason):
         options_from_args(_parse(*argv))
@@ -74,8 +92,9 @@ def test_help_lists_every_service() -> None:
 
 
 def test_bad_session_flag_exits_nonzero_with_one_line() -> None:
-    result = subprocess.run([sys.executable, "-m", "tests.echo_peer", "--namespace", "a/b"],
-                            capture_output=True, text=True, timeout=60)
+    result = subprocess.run(
+        [sys.executable, "-m", "tests.echo_peer", "--namespace", "a/b"], capture_output=True, text=True, timeout=60
+    )
     assert result.returncode == 2
     assert "one key chunk" in result.stderr and "Traceback" not in result.stderr
 
@@ -83,7 +102,12 @@ def test_bad_session_flag_exits_nonzero_with_one_line() -> None:
 def test_a_listener_in_a_config_file_is_refused_in_one_line(tmp_path) -> None:
     file = tmp_path / "zenoh.json5"
     file.write_text('{listen: {endpoints: ["tcp/0.0.0.0:7447"]}}')
-    result = subprocess.run([sys.executable, "-m", "tests.echo_peer", "--config", str(file)],
-                            capture_output=True, text=True, timeout=60, check=False)
+    result = subprocess.run(
+        [sys.executable, "-m", "tests.echo_peer", "--config", str(file)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
     assert result.returncode == 2
     assert "--secure DIR" in result.stderr and "Traceback" not in result.stderr

@@ -20,8 +20,10 @@ from services.executor.store import (
 )
 from tests.processes import ROOT
 
-HOLDER = ("import sys; from pathlib import Path; from services.executor.store import hold_store; "
-          "h = hold_store(Path(sys.argv[1])); print('held', flush=True); sys.stdin.read()")
+HOLDER = (
+    "import sys; from pathlib import Path; from services.executor.store import hold_store; "
+    "h = hold_store(Path(sys.argv[1])); print('held', flush=True); sys.stdin.read()"
+)
 
 
 def test_each_namespace_has_its_own_store(tmp_path: Path) -> None:
@@ -39,8 +41,13 @@ def test_the_default_namespace_takes_over_the_old_top_level_store(tmp_path: Path
 
 
 def test_a_second_executor_on_one_store_is_refused_while_the_first_lives(tmp_path: Path) -> None:
-    holder = subprocess.Popen([sys.executable, "-c", HOLDER, str(tmp_path)], cwd=ROOT, stdin=subprocess.PIPE,
-                              stdout=subprocess.PIPE, text=True)
+    holder = subprocess.Popen(
+        [sys.executable, "-c", HOLDER, str(tmp_path)],
+        cwd=ROOT,
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert holder.stdout.readline().strip() == "held"
         with pytest.raises(StoreError, match=f"another executor \\(process {holder.pid}\\)"):
@@ -51,9 +58,11 @@ def test_a_second_executor_on_one_store_is_refused_while_the_first_lives(tmp_pat
     hold_store(tmp_path).close()  # the lock went with the process, even killed
 
 
-WRITER = ("import sys; from services.executor.store import ActionStore; s = ActionStore(sys.argv[1]); "
-          "s.create('kept')\nprint('ready', flush=True)\nwhile True: s.append_step({'procedure': 'open', "
-          "'args': {'arm': 'right'}, 'words': 'open your right hand ' * 50})")
+WRITER = (
+    "import sys; from services.executor.store import ActionStore; s = ActionStore(sys.argv[1]); "
+    "s.create('kept')\nprint('ready', flush=True)\nwhile True: s.append_step({'procedure': 'open', "
+    "'args': {'arm': 'right'}, 'words': 'open your right hand ' * 50})"
+)
 
 
 def test_the_actions_file_survives_sigkill_during_writes(tmp_path: Path) -> None:
@@ -61,8 +70,9 @@ def test_the_actions_file_survives_sigkill_during_writes(tmp_path: Path) -> None
     rng = random.Random(3)
     steps = 0
     for kill in range(12):
-        writer = subprocess.Popen([sys.executable, "-c", WRITER, str(tmp_path)], cwd=ROOT, stdout=subprocess.PIPE,
-                                  text=True)
+        writer = subprocess.Popen(
+            [sys.executable, "-c", WRITER, str(tmp_path)], cwd=ROOT, stdout=subprocess.PIPE, text=True
+        )
         assert writer.stdout.readline().strip() == "ready"
         time.sleep(rng.uniform(0.0, 0.3))
         writer.send_signal(signal.SIGKILL)

@@ -8,16 +8,27 @@ from typing import Any
 from services.nlu.world import COLORS, TYPES
 
 
-def obj(object_id: str, color: str, kind: str, x: float, y: float,
-        size: tuple[float, float, float] = (0.07, 0.07, 0.10),
-        **extra: Any) -> dict[str, Any]:
-    return {"id": object_id, "color": color, "type": kind, "position": [x, y, 0.75 + size[2] / 2],
-            "size": list(size), **extra}
+def obj(
+    object_id: str,
+    color: str,
+    kind: str,
+    x: float,
+    y: float,
+    size: tuple[float, float, float] = (0.07, 0.07, 0.10),
+    **extra: Any,
+) -> dict[str, Any]:
+    return {
+        "id": object_id,
+        "color": color,
+        "type": kind,
+        "position": [x, y, 0.75 + size[2] / 2],
+        "size": list(size),
+        **extra,
+    }
 
 
 def world(*objects: dict[str, Any], **robot: Any) -> dict[str, Any]:
-    base = {"grippers": {"right": "open", "left": "open"}, "last_arm": "right", "last_object": None,
-            "executing": False}
+    base = {"grippers": {"right": "open", "left": "open"}, "last_arm": "right", "last_object": None, "executing": False}
     return {"objects": list(objects), "robot": {**base, **robot}}
 
 
@@ -28,7 +39,8 @@ def table_scene(**robot: Any) -> dict[str, Any]:
         obj("obj1", "blue", "cup", 0.62, 0.20),
         obj("obj2", "green", "box", 0.80, 0.0, (0.12, 0.12, 0.16)),
         obj("obj3", "white", "plate", 0.45, 0.0, (0.20, 0.20, 0.02)),
-        **robot)
+        **robot,
+    )
 
 
 def random_scene(seed: int) -> dict[str, Any]:
@@ -38,6 +50,14 @@ def random_scene(seed: int) -> dict[str, Any]:
     objects = []
     for i in range(count):
         size = (rng.uniform(0.04, 0.15), rng.uniform(0.04, 0.15), rng.uniform(0.02, 0.2))
-        objects.append(obj(f"obj{i}", rng.choice(COLORS[:5]), rng.choice(TYPES[:4]),
-                           rng.uniform(0.4, 0.9), rng.uniform(-0.4, 0.4), size))
+        objects.append(
+            obj(
+                f"obj{i}",
+                rng.choice(COLORS[:5]),
+                rng.choice(TYPES[:4]),
+                rng.uniform(0.4, 0.9),
+                rng.uniform(-0.4, 0.4),
+                size,
+            )
+        )
     return world(*objects, last_arm=None)

@@ -65,20 +65,31 @@ def test_ground_and_describe(world_file: Path, tmp_path: Path) -> None:
     lines = hfpbd("ground", "--world", str(world_file), "--batch", str(batch)).stdout.splitlines()
     assert [max(m, key=m.get) for m in map(json.loads, lines)] == ["obj2", "obj1"]
     described = json.loads(hfpbd("describe", "--world", str(world_file)).stdout)
-    assert described == {"obj0": "the rightmost cup", "obj1": "the leftmost cup", "obj2": "the box",
-                         "obj3": "the plate"}
+    assert described == {
+        "obj0": "the rightmost cup",
+        "obj1": "the leftmost cup",
+        "obj2": "the box",
+        "obj3": "the plate",
+    }
 
 
-@pytest.mark.parametrize("content, message", [
-    (None, "cannot read world file"),
-    ("{not json", "is not valid JSON"),
-    ('{"objects": 3}', "world 'objects' must be a list"),
-    ('{"objects": [{"id": "a", "color": "red", "type": "cup", "position": [1, 2], "size": [0.1, 0.1, 0.1]}]}',
-     "object 'a' position must be a list of three numbers"),
-    ('{"objects": [{"id": "a", "color": "mauve", "type": "cup", "position": [1, 2, 3], "size": [0.1, 0.1, 0.1]}]}',
-     "object 'a' color must be one of"),
-    ('{"objects": [], "robot": {"last_object": "obj9"}}', "robot.last_object 'obj9' is not one of the objects"),
-])
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (None, "cannot read world file"),
+        ("{not json", "is not valid JSON"),
+        ('{"objects": 3}', "world 'objects' must be a list"),
+        (
+            '{"objects": [{"id": "a", "color": "red", "type": "cup", "position": [1, 2], "size": [0.1, 0.1, 0.1]}]}',
+            "object 'a' position must be a list of three numbers",
+        ),
+        (
+            '{"objects": [{"id": "a", "color": "mauve", "type": "cup", "position": [1, 2, 3], "size": [0.1, 0.1, 0.1]}]}',
+            "object 'a' color must be one of",
+        ),
+        ('{"objects": [], "robot": {"last_object": "obj9"}}', "robot.last_object 'obj9' is not one of the objects"),
+    ],
+)
 def test_bad_world_file_is_one_line_and_nonzero(tmp_path: Path, content: str | None, message: str) -> None:
     path = tmp_path / "world.json"
     if content is not None:
@@ -103,14 +114,25 @@ def test_missing_batch_file(world_file: Path, tmp_path: Path) -> None:
 
 
 def test_benchmark_prints_its_table() -> None:
-    done = subprocess.run([HFPBD, "bench", "nlu", "--rounds", "20", "--sizes", "1", "4", "--batch-lines", "100"],
-                          capture_output=True, text=True, timeout=240, cwd=ROOT)
+    done = subprocess.run(
+        [HFPBD, "bench", "nlu", "--rounds", "20", "--sizes", "1", "4", "--batch-lines", "100"],
+        capture_output=True,
+        text=True,
+        timeout=240,
+        cwd=ROOT,
+    )
     assert done.returncode == 0, done.stderr
-    rows = [fields for fields in (line.split() for line in done.stdout.splitlines())
-            if len(fields) >= 6 and fields[0].isdigit()]
+    rows = [
+        fields
+        for fields in (line.split() for line in done.stdout.splitlines())
+        if len(fields) >= 6 and fields[0].isdigit()
+    ]
     assert [row[0] for row in rows] == ["1", "4"]
     assert "parse p99 target" in done.stdout and ("PASS" in done.stdout or "MISS" in done.stdout)
-    accuracy = {line.split()[0]: line.split()[3] for line in done.stdout.splitlines() if line.endswith("%")
-                or "(>= 97%)" in line}
+    accuracy = {
+        line.split()[0]: line.split()[3]
+        for line in done.stdout.splitlines()
+        if line.endswith("%") or "(>= 97%)" in line
+    }
     assert {"paper", "held", "relational", "compound", "distance", "questions", "typos", "all"} <= set(accuracy)
     assert [line.split()[1] for line in done.stdout.splitlines() if line.startswith("  batch,")] == ["4", "16", "64"]

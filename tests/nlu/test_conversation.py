@@ -32,12 +32,18 @@ def steps(text: str, scene: dict[str, Any] | None = None) -> list[tuple[str, dic
     return [(result["procedure"], result["args"])] + [(s["procedure"], s["args"]) for s in result.get("then", [])]
 
 
-@pytest.mark.parametrize("text, expected", [
-    ("lift it", ("move_abs_dir", {"arm": "right", "direction": "up"})),
-    ("move it above the plate", ("move_rel_dest", {"arm": "right", "relation": "above", "object": "obj3"})),
-    ("move the red cup behind the box", ("move_rel_dest", {"arm": "right", "relation": "behind", "object": "obj2"})),
-    ("put it on the plate", ("place_rel", {"arm": "right", "relation": "on_top_of", "object": "obj3"})),
-])
+@pytest.mark.parametrize(
+    "text, expected",
+    [
+        ("lift it", ("move_abs_dir", {"arm": "right", "direction": "up"})),
+        ("move it above the plate", ("move_rel_dest", {"arm": "right", "relation": "above", "object": "obj3"})),
+        (
+            "move the red cup behind the box",
+            ("move_rel_dest", {"arm": "right", "relation": "behind", "object": "obj2"}),
+        ),
+        ("put it on the plate", ("place_rel", {"arm": "right", "relation": "on_top_of", "object": "obj3"})),
+    ],
+)
 def test_it_is_the_held_object_and_the_holding_hand_moves(text: str, expected: tuple[str, dict[str, Any]]) -> None:
     assert steps(text, holding()) == [expected]
 
@@ -71,23 +77,39 @@ def test_reach_decides_the_hand_before_the_side() -> None:
 
 def test_an_empty_hand_place_loses_to_a_move_or_picks_up_first() -> None:
     assert steps("put your right hand over the green box") == [
-        ("move_rel_dest", {"arm": "right", "relation": "above", "object": "obj2"})]
+        ("move_rel_dest", {"arm": "right", "relation": "above", "object": "obj2"})
+    ]
     assert steps("put the red cup on the plate") == [
         ("pick_up", {"arm": "right", "object": "obj0"}),
-        ("place_rel", {"arm": "right", "relation": "on_top_of", "object": "obj3"})]
+        ("place_rel", {"arm": "right", "relation": "on_top_of", "object": "obj3"}),
+    ]
     nothing = understood("put it down here")
     assert nothing["kind"] == "clarify" and "not holding anything" in nothing["question"]
 
 
-@pytest.mark.parametrize("text, expected", [
-    ("pick up the red cup and put it in the box",
-     [("pick_up", {"arm": "right", "object": "obj0"}),
-      ("place_rel", {"arm": "right", "relation": "on_top_of", "object": "obj2"})]),
-    ("move up, then to the left",
-     [("move_abs_dir", {"arm": "right", "direction": "up"}), ("move_abs_dir", {"arm": "right", "direction": "left"})]),
-    ("open both hands and then move both hands up",
-     [("open", {"arm": "both"}), ("move_abs_dir", {"arm": "both", "direction": "up"})]),
-])
+@pytest.mark.parametrize(
+    "text, expected",
+    [
+        (
+            "pick up the red cup and put it in the box",
+            [
+                ("pick_up", {"arm": "right", "object": "obj0"}),
+                ("place_rel", {"arm": "right", "relation": "on_top_of", "object": "obj2"}),
+            ],
+        ),
+        (
+            "move up, then to the left",
+            [
+                ("move_abs_dir", {"arm": "right", "direction": "up"}),
+                ("move_abs_dir", {"arm": "right", "direction": "left"}),
+            ],
+        ),
+        (
+            "open both hands and then move both hands up",
+            [("open", {"arm": "both"}), ("move_abs_dir", {"arm": "both", "direction": "up"})],
+        ),
+    ],
+)
 def test_compounds_run_in_the_world_each_step_leaves(text: str, expected: list[tuple[str, dict[str, Any]]]) -> None:
     assert steps(text) == expected
 
@@ -97,10 +119,19 @@ def test_a_compound_step_not_understood_is_asked_about_by_name() -> None:
     assert result["kind"] == "clarify" and result["question"].startswith('About "xyzzy the box"')
 
 
-@pytest.mark.parametrize("text, distance", [
-    ("move up 5 centimeters", 0.05), ("move up five cm", 0.05), ("move up 20 mm", 0.02), ("move up two inches", 0.0508),
-    ("move up 0.1 metres", 0.1), ("move up a little", 0.03), ("move up a lot", 0.2), ("move up 5 centimetrs", 0.05),
-])
+@pytest.mark.parametrize(
+    "text, distance",
+    [
+        ("move up 5 centimeters", 0.05),
+        ("move up five cm", 0.05),
+        ("move up 20 mm", 0.02),
+        ("move up two inches", 0.0508),
+        ("move up 0.1 metres", 0.1),
+        ("move up a little", 0.03),
+        ("move up a lot", 0.2),
+        ("move up 5 centimetrs", 0.05),
+    ],
+)
 def test_distances_in_digits_words_and_units(text: str, distance: float) -> None:
     [(procedure, args)] = steps(text)
     assert procedure == "move_abs_dir" and args["direction"] == "up" and args["distance"] == pytest.approx(distance)
@@ -108,14 +139,20 @@ def test_distances_in_digits_words_and_units(text: str, distance: float) -> None
 
 def test_a_distance_towards_an_object_and_none_means_the_default_step() -> None:
     assert steps("move 4 cm towards the box") == [
-        ("move_rel_dir", {"arm": "right", "direction": "towards", "object": "obj2", "distance": 0.04})]
+        ("move_rel_dir", {"arm": "right", "direction": "towards", "object": "obj2", "distance": 0.04})
+    ]
     assert "distance" not in steps("move up")[0][1]
 
 
-@pytest.mark.parametrize("text, says", [
-    ("move up 50 cm", "between 1 and 30 cm"), ("move up some centimetres", "with a number"), ("move up 5", "unit"),
-    ("pick up the red cup 5 cm", "A distance goes with a move"),
-])
+@pytest.mark.parametrize(
+    "text, says",
+    [
+        ("move up 50 cm", "between 1 and 30 cm"),
+        ("move up some centimetres", "with a number"),
+        ("move up 5", "unit"),
+        ("pick up the red cup 5 cm", "A distance goes with a move"),
+    ],
+)
 def test_a_distance_that_cannot_be_used_is_a_clear_question(text: str, says: str) -> None:
     result = understood(text)
     assert result["kind"] == "clarify" and result["params"] == ["distance"] and says in result["question"]
@@ -131,8 +168,13 @@ def test_both_hands_only_where_both_may_act() -> None:
         assert [c["args"]["arm"] for c in result["candidates"]] == ["right", "left"]
 
 
-@pytest.mark.parametrize("text", ["move your right hand up with the left hand",
-                                  "pick up the red cup with your right hand and the blue cup with your left hand"])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "move your right hand up with the left hand",
+        "pick up the red cup with your right hand and the blue cup with your left hand",
+    ],
+)
 def test_each_hand_named_apart_is_asked_about(text: str) -> None:
     result = understood(text)
     assert result["kind"] == "clarify" and result["params"] == ["arm"] and "both hands" in result["question"]
@@ -145,15 +187,22 @@ def test_undo_and_repeat() -> None:
     assert steps("move up again") == [("move_abs_dir", {"arm": "right", "direction": "up"})]
 
 
-@pytest.mark.parametrize("text, topic, says", [
-    ("what do you see", "scene", "I see 4 objects: the rightmost cup (red)"),
-    ("where is the blue cup?", "object", "The leftmost cup (blue) is on my left, 62 cm in front of me."),
-    ("where is the yellow bowl", "object", "I don't see a yellow bowl."),
-    ("what are you holding", "holding", "My right hand is holding the rightmost cup (red) and my left hand is empty."),
-    ("what is in action 2", "actions", "Action 2 has 4 steps."),
-    ("what can I say", "help", "pick up the red cup"),
-    ("what do you sea", "scene", "I see 4 objects"),
-])
+@pytest.mark.parametrize(
+    "text, topic, says",
+    [
+        ("what do you see", "scene", "I see 4 objects: the rightmost cup (red)"),
+        ("where is the blue cup?", "object", "The leftmost cup (blue) is on my left, 62 cm in front of me."),
+        ("where is the yellow bowl", "object", "I don't see a yellow bowl."),
+        (
+            "what are you holding",
+            "holding",
+            "My right hand is holding the rightmost cup (red) and my left hand is empty.",
+        ),
+        ("what is in action 2", "actions", "Action 2 has 4 steps."),
+        ("what can I say", "help", "pick up the red cup"),
+        ("what do you sea", "scene", "I see 4 objects"),
+    ],
+)
 def test_questions_are_answered_from_the_world(text: str, topic: str, says: str) -> None:
     scene = holding(action=1, actions=[2, 4])
     if topic != "holding":
@@ -164,16 +213,26 @@ def test_questions_are_answered_from_the_world(text: str, topic: str, says: str)
 
 
 def two_red_cups() -> dict[str, Any]:
-    return world(obj("obj0", "red", "cup", 0.62, -0.28), obj("obj1", "red", "cup", 0.62, 0.05),
-                 obj("obj2", "green", "box", 0.62, 0.20, (0.12, 0.12, 0.16)),
-                 obj("obj3", "white", "plate", 0.42, -0.28, (0.18, 0.18, 0.02)))
+    return world(
+        obj("obj0", "red", "cup", 0.62, -0.28),
+        obj("obj1", "red", "cup", 0.62, 0.05),
+        obj("obj2", "green", "box", 0.62, 0.20, (0.12, 0.12, 0.16)),
+        obj("obj3", "white", "plate", 0.42, -0.28, (0.18, 0.18, 0.02)),
+    )
 
 
-@pytest.mark.parametrize("phrase, expected", [
-    ("the cup next to the box", "obj1"), ("the cup closest to the plate", "obj0"), ("the cup behind the plate", "obj0"),
-    ("the cup to the right of the box", "obj1"), ("the second cup from the right", "obj1"),
-    ("the first cup from the right", "obj0"), ("the cup between the plate and the box", "obj1"),
-])
+@pytest.mark.parametrize(
+    "phrase, expected",
+    [
+        ("the cup next to the box", "obj1"),
+        ("the cup closest to the plate", "obj0"),
+        ("the cup behind the plate", "obj0"),
+        ("the cup to the right of the box", "obj1"),
+        ("the second cup from the right", "obj1"),
+        ("the first cup from the right", "obj0"),
+        ("the cup between the plate and the box", "obj1"),
+    ],
+)
 def test_relational_expressions_in_parse_and_ground(phrase: str, expected: str) -> None:
     scene = two_red_cups()
     assert steps(f"pick up {phrase}", scene) == [("pick_up", {"arm": "right", "object": expected})]
@@ -183,12 +242,16 @@ def test_relational_expressions_in_parse_and_ground(phrase: str, expected: str) 
 
 def test_the_other_one_is_the_other_of_the_kind_last_referred_to() -> None:
     assert steps("point to the other cup", table_scene(last_object="obj0")) == [
-        ("point_to", {"arm": "right", "object": "obj1"})]
+        ("point_to", {"arm": "right", "object": "obj1"})
+    ]
 
 
 def test_describe_uses_a_relation_when_nothing_shorter_is_unique() -> None:
-    scene = world(obj("obj0", "red", "cup", 0.60, 0.0), obj("obj1", "red", "cup", 0.60, 0.05),
-                  obj("obj2", "green", "box", 0.60, 0.25, (0.12, 0.12, 0.16)))
+    scene = world(
+        obj("obj0", "red", "cup", 0.60, 0.0),
+        obj("obj1", "red", "cup", 0.60, 0.05),
+        obj("obj2", "green", "box", 0.60, 0.25, (0.12, 0.12, 0.16)),
+    )
     model = Model(parse_world(scene))
     names = model.describe()
     assert names["obj1"] == "the cup next to the box"

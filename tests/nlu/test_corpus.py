@@ -7,8 +7,18 @@ import json
 from services.nlu import corpus
 from services.nlu.corpus import check, generate
 
-CATEGORIES = {"paper", "hand", "held", "relational", "compound", "distance", "questions", "typos", "bad_input",
-              "conversation"}
+CATEGORIES = {
+    "paper",
+    "hand",
+    "held",
+    "relational",
+    "compound",
+    "distance",
+    "questions",
+    "typos",
+    "bad_input",
+    "conversation",
+}
 FLOOR = 0.97
 
 
@@ -30,8 +40,12 @@ def test_the_generated_cases_are_what_the_seeded_generator_makes() -> None:
 def test_the_corpus_is_understood_at_the_floor() -> None:
     scenes, cases = corpus.load()
     outcomes = corpus.run(scenes, cases)
-    wrong = [f"[{c.category}] {c.scene} {c.text[:60]!r}: {problem}" for items in outcomes.values()
-             for c, problem in items if problem is not None]
+    wrong = [
+        f"[{c.category}] {c.scene} {c.text[:60]!r}: {problem}"
+        for items in outcomes.values()
+        for c, problem in items
+        if problem is not None
+    ]
     right = len(cases) - len(wrong)
     assert right >= FLOOR * len(cases), "\n".join(wrong[:40])
     for category, (ok, total) in corpus.accuracy(outcomes).items():
@@ -43,6 +57,13 @@ def test_a_wrong_result_is_noticed() -> None:
     right = {"kind": "command", "procedure": "pick_up", "args": {"arm": "right", "object": "obj0"}}
     assert check(right, expect) is None
     assert check({"kind": "command", "procedure": "pick_up", "args": {"arm": "left", "object": "obj0"}}, expect)
-    assert check({"kind": "command", "procedure": "pick_up", "args": {"arm": "right", "object": "obj0"},
-                  "then": [{"procedure": "open", "args": {"arm": "right"}}]}, expect)
+    assert check(
+        {
+            "kind": "command",
+            "procedure": "pick_up",
+            "args": {"arm": "right", "object": "obj0"},
+            "then": [{"procedure": "open", "args": {"arm": "right"}}],
+        },
+        expect,
+    )
     assert check({"kind": "clarify", "params": [], "question": "Which of obj1?"}, {"kind": "clarify"})

@@ -13,8 +13,14 @@ pytestmark = pytest.mark.unit
 
 
 def tall_scene() -> Model:
-    return Model(parse_world(world(obj("obj0", "red", "cup", 0.6, -0.2, (0.08, 0.08, 0.20)),
-                                   obj("obj1", "blue", "box", 0.6, 0.2, (0.16, 0.08, 0.10)))))
+    return Model(
+        parse_world(
+            world(
+                obj("obj0", "red", "cup", 0.6, -0.2, (0.08, 0.08, 0.20)),
+                obj("obj1", "blue", "box", 0.6, 0.2, (0.16, 0.08, 0.10)),
+            )
+        )
+    )
 
 
 def test_paper_dialogue_point_clarify_point_pick_it_up() -> None:

@@ -30,22 +30,46 @@ HOLDING = dict(grippers={"right": "holding", "left": "open"})
 PROCEDURE_CASES = [
     ("move your right hand to the side", None, {"procedure": "move_abs_dest", "arm": "right", "destination": "side"}),
     ("move the left arm out of the way", None, {"procedure": "move_abs_dest", "arm": "left", "destination": "side"}),
-    ("move your right hand above the red cup", None,
-     {"procedure": "move_rel_dest", "arm": "right", "relation": "above", "object": "obj0"}),
-    ("move right hand next to the blue cup", None,
-     {"procedure": "move_rel_dest", "arm": "right", "relation": "next_to", "object": "obj1"}),
-    ("move your left hand to the left of the box", None,
-     {"procedure": "move_rel_dest", "arm": "left", "relation": "left_of", "object": "obj2"}),
-    ("move right hand to the right of the plate", None,
-     {"procedure": "move_rel_dest", "arm": "right", "relation": "right_of", "object": "obj3"}),
-    ("go in front of the green box", None,
-     {"procedure": "move_rel_dest", "arm": "right", "relation": "in_front_of", "object": "obj2"}),
-    ("move behind the box", None,
-     {"procedure": "move_rel_dest", "arm": "right", "relation": "behind", "object": "obj2"}),
-    ("move on top of the plate", None,
-     {"procedure": "move_rel_dest", "arm": "right", "relation": "on_top_of", "object": "obj3"}),
-    ("move near the blue cup", None,
-     {"procedure": "move_rel_dest", "arm": "right", "relation": "near", "object": "obj1"}),
+    (
+        "move your right hand above the red cup",
+        None,
+        {"procedure": "move_rel_dest", "arm": "right", "relation": "above", "object": "obj0"},
+    ),
+    (
+        "move right hand next to the blue cup",
+        None,
+        {"procedure": "move_rel_dest", "arm": "right", "relation": "next_to", "object": "obj1"},
+    ),
+    (
+        "move your left hand to the left of the box",
+        None,
+        {"procedure": "move_rel_dest", "arm": "left", "relation": "left_of", "object": "obj2"},
+    ),
+    (
+        "move right hand to the right of the plate",
+        None,
+        {"procedure": "move_rel_dest", "arm": "right", "relation": "right_of", "object": "obj3"},
+    ),
+    (
+        "go in front of the green box",
+        None,
+        {"procedure": "move_rel_dest", "arm": "right", "relation": "in_front_of", "object": "obj2"},
+    ),
+    (
+        "move behind the box",
+        None,
+        {"procedure": "move_rel_dest", "arm": "right", "relation": "behind", "object": "obj2"},
+    ),
+    (
+        "move on top of the plate",
+        None,
+        {"procedure": "move_rel_dest", "arm": "right", "relation": "on_top_of", "object": "obj3"},
+    ),
+    (
+        "move near the blue cup",
+        None,
+        {"procedure": "move_rel_dest", "arm": "right", "relation": "near", "object": "obj1"},
+    ),
     ("move your right hand up", None, {"procedure": "move_abs_dir", "arm": "right", "direction": "up"}),
     ("move down", None, {"procedure": "move_abs_dir", "arm": "right", "direction": "down"}),
     ("move left hand right", None, {"procedure": "move_abs_dir", "arm": "left", "direction": "right"}),
@@ -54,23 +78,41 @@ PROCEDURE_CASES = [
     ("move backward", None, {"procedure": "move_abs_dir", "arm": "right", "direction": "backward"}),
     ("raise your left hand", None, {"procedure": "move_abs_dir", "arm": "left", "direction": "up"}),
     ("lower the right arm", None, {"procedure": "move_abs_dir", "arm": "right", "direction": "down"}),
-    ("move towards the box", None,
-     {"procedure": "move_rel_dir", "arm": "right", "direction": "towards", "object": "obj2"}),
-    ("move your hand closer to the red cup", None,
-     {"procedure": "move_rel_dir", "arm": "right", "direction": "towards", "object": "obj0"}),
-    ("move away from the plate", None,
-     {"procedure": "move_rel_dir", "arm": "right", "direction": "away_from", "object": "obj3"}),
+    (
+        "move towards the box",
+        None,
+        {"procedure": "move_rel_dir", "arm": "right", "direction": "towards", "object": "obj2"},
+    ),
+    (
+        "move your hand closer to the red cup",
+        None,
+        {"procedure": "move_rel_dir", "arm": "right", "direction": "towards", "object": "obj0"},
+    ),
+    (
+        "move away from the plate",
+        None,
+        {"procedure": "move_rel_dir", "arm": "right", "direction": "away_from", "object": "obj3"},
+    ),
     ("pick up the red cup", None, {"procedure": "pick_up", "arm": "right", "object": "obj0"}),
     ("grab the blue cup with your left hand", None, {"procedure": "pick_up", "arm": "left", "object": "obj1"}),
     ("take the box", None, {"procedure": "pick_up", "arm": "right", "object": "obj2"}),
     ("place it on the table", HOLDING, {"procedure": "place_abs", "arm": "right", "destination": "table"}),
     ("put it down here", HOLDING, {"procedure": "place_abs", "arm": "right", "destination": "here"}),
-    ("place it next to the green box", HOLDING,
-     {"procedure": "place_rel", "arm": "right", "relation": "next_to", "object": "obj2"}),
-    ("put it on the plate", HOLDING,
-     {"procedure": "place_rel", "arm": "right", "relation": "on_top_of", "object": "obj3"}),
-    ("place it behind the blue cup", HOLDING,
-     {"procedure": "place_rel", "arm": "right", "relation": "behind", "object": "obj1"}),
+    (
+        "place it next to the green box",
+        HOLDING,
+        {"procedure": "place_rel", "arm": "right", "relation": "next_to", "object": "obj2"},
+    ),
+    (
+        "put it on the plate",
+        HOLDING,
+        {"procedure": "place_rel", "arm": "right", "relation": "on_top_of", "object": "obj3"},
+    ),
+    (
+        "place it behind the blue cup",
+        HOLDING,
+        {"procedure": "place_rel", "arm": "right", "relation": "behind", "object": "obj1"},
+    ),
     ("point to the plate", None, {"procedure": "point_to", "arm": "right", "object": "obj3"}),
     ("point at the red cup with the left hand", None, {"procedure": "point_to", "arm": "left", "object": "obj0"}),
     ("look at the box", None, {"procedure": "look_at", "object": "obj2"}),
@@ -101,35 +143,59 @@ def test_every_procedure_is_covered_above() -> None:
     assert covered == set(PROCEDURES)
 
 
-@pytest.mark.parametrize("text", [
-    "Pick up the red cup.", "PICK UP THE RED CUP", "pick-up the red cup", "please pick up the red cup now",
-    "could you pick up the red cup please", "pick the red cup up", "picking up the red cups",
-    "pikc up the red cup", "pick up the rde cup", "grabbed the red mug",
-])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "Pick up the red cup.",
+        "PICK UP THE RED CUP",
+        "pick-up the red cup",
+        "please pick up the red cup now",
+        "could you pick up the red cup please",
+        "pick the red cup up",
+        "picking up the red cups",
+        "pikc up the red cup",
+        "pick up the rde cup",
+        "grabbed the red mug",
+    ],
+)
 def test_ordinary_spelling(text: str) -> None:
     assert command(text) == {"procedure": "pick_up", "arm": "right", "object": "obj0"}
 
 
-@pytest.mark.parametrize("text, expected", [
-    ("move right-hand to-the-left-of the blue cup",
-     {"procedure": "move_rel_dest", "arm": "right", "relation": "left_of", "object": "obj1"}),
-    ("Move your LEFT hand, to the right of the blue cup!",
-     {"procedure": "move_rel_dest", "arm": "left", "relation": "right_of", "object": "obj1"}),
-    ("move left hand up", {"procedure": "move_abs_dir", "arm": "left", "direction": "up"}),
-])
+@pytest.mark.parametrize(
+    "text, expected",
+    [
+        (
+            "move right-hand to-the-left-of the blue cup",
+            {"procedure": "move_rel_dest", "arm": "right", "relation": "left_of", "object": "obj1"},
+        ),
+        (
+            "Move your LEFT hand, to the right of the blue cup!",
+            {"procedure": "move_rel_dest", "arm": "left", "relation": "right_of", "object": "obj1"},
+        ),
+        ("move left hand up", {"procedure": "move_abs_dir", "arm": "left", "direction": "up"}),
+    ],
+)
 def test_multiword_phrases_are_units(text: str, expected: dict[str, Any]) -> None:
     assert command(text) == expected
 
 
 def test_paper_example_up_uses_last_arm() -> None:
-    assert command("up", table_scene(last_arm="left")) == {"procedure": "move_abs_dir", "arm": "left",
-                                                           "direction": "up"}
+    assert command("up", table_scene(last_arm="left")) == {
+        "procedure": "move_abs_dir",
+        "arm": "left",
+        "direction": "up",
+    }
 
 
 def test_paper_example_above_with_one_object() -> None:
     scene = world(obj("obj0", "red", "cup", 0.6, 0.0), last_arm="left")
-    assert command("above", scene) == {"procedure": "move_rel_dest", "arm": "left", "relation": "above",
-                                       "object": "obj0"}
+    assert command("above", scene) == {
+        "procedure": "move_rel_dest",
+        "arm": "left",
+        "relation": "above",
+        "object": "obj0",
+    }
 
 
 def test_paper_example_above_uses_last_object() -> None:
@@ -137,8 +203,10 @@ def test_paper_example_above_uses_last_object() -> None:
 
 
 def test_paper_example_biggest_is_ambiguous_then_tallest_is_not() -> None:
-    scene = world(obj("obj0", "red", "cup", 0.6, -0.2, (0.08, 0.08, 0.20)),
-                  obj("obj1", "blue", "box", 0.6, 0.2, (0.16, 0.08, 0.10)))
+    scene = world(
+        obj("obj0", "red", "cup", 0.6, -0.2, (0.08, 0.08, 0.20)),
+        obj("obj1", "blue", "box", 0.6, 0.2, (0.16, 0.08, 0.10)),
+    )
     first = parse("Point to the biggest object.", scene)
     assert isinstance(first, Clarify) and first.params == ["object"]
     assert first.question == "Which object do you mean: the cup or the box?"
@@ -146,8 +214,11 @@ def test_paper_example_biggest_is_ambiguous_then_tallest_is_not() -> None:
 
 
 def test_paper_example_pick_it_up_resolves_to_last_object() -> None:
-    assert command("Pick it up", table_scene(last_object="obj1")) == {"procedure": "pick_up", "arm": "right",
-                                                                      "object": "obj1"}
+    assert command("Pick it up", table_scene(last_object="obj1")) == {
+        "procedure": "pick_up",
+        "arm": "right",
+        "object": "obj1",
+    }
 
 
 @pytest.mark.parametrize("anaphor", ["it", "that", "the same one", "that one", "this"])
@@ -159,10 +230,13 @@ def test_there_refers_to_last_object() -> None:
     assert command("move above there", table_scene(last_object="obj3"))["object"] == "obj3"
 
 
-@pytest.mark.parametrize("state, expected", [
-    ({"right": "open", "left": "closed"}, {"procedure": "open", "arm": "left"}),
-    ({"right": "closed", "left": "open"}, {"procedure": "open", "arm": "right"}),
-])
+@pytest.mark.parametrize(
+    "state, expected",
+    [
+        ({"right": "open", "left": "closed"}, {"procedure": "open", "arm": "left"}),
+        ({"right": "closed", "left": "open"}, {"procedure": "open", "arm": "right"}),
+    ],
+)
 def test_gripper_state_chooses_the_arm(state: dict[str, str], expected: dict[str, Any]) -> None:
     assert command("open your hand", table_scene(grippers=state)) == expected
 
@@ -177,14 +251,23 @@ def test_holding_turns_put_into_place_and_empty_hand_into_move() -> None:
     assert command("above the box", table_scene())["procedure"] == "move_rel_dest"
 
 
-@pytest.mark.parametrize("utterance, relation", [
-    ("on the blue cup", "on_top_of"), ("in blue", "on_top_of"), ("next to the blue cup", "next_to"),
-    ("above blue", "above"),
-])
+@pytest.mark.parametrize(
+    "utterance, relation",
+    [
+        ("on the blue cup", "on_top_of"),
+        ("in blue", "on_top_of"),
+        ("next to the blue cup", "next_to"),
+        ("above blue", "above"),
+    ],
+)
 def test_holding_hand_turns_a_bare_destination_into_place(utterance: str, relation: str) -> None:
     held = table_scene(grippers={"right": "holding", "left": "open"}, last_arm="right")
-    assert command(utterance, held) == {"procedure": "place_rel", "arm": "right", "relation": relation,
-                                        "object": "obj1"}
+    assert command(utterance, held) == {
+        "procedure": "place_rel",
+        "arm": "right",
+        "relation": relation,
+        "object": "obj1",
+    }
     assert command(utterance, table_scene(last_arm="right"))["procedure"] == "move_rel_dest"
 
 
@@ -206,9 +289,11 @@ def test_unreachable_object_is_avoided_by_arm() -> None:
 
 
 def test_relative_saliency_only_reachable_red_cup() -> None:
-    scene = world(obj("obj0", "red", "cup", 0.6, -0.3, reach={"right": {"pick_up": False}, "left": {"pick_up": False}}),
-                  obj("obj1", "red", "cup", 0.6, 0.3, reach={"right": {"pick_up": True}}),
-                  obj("obj2", "blue", "cup", 0.6, 0.0))
+    scene = world(
+        obj("obj0", "red", "cup", 0.6, -0.3, reach={"right": {"pick_up": False}, "left": {"pick_up": False}}),
+        obj("obj1", "red", "cup", 0.6, 0.3, reach={"right": {"pick_up": True}}),
+        obj("obj2", "blue", "cup", 0.6, 0.0),
+    )
     assert command("pick up the red cup", scene)["object"] == "obj1"
 
 
@@ -223,16 +308,24 @@ def test_execute_while_executing_means_stop_is_preferred() -> None:
     assert isinstance(result, CommandResult) and result.confidence < parse("execute").confidence
 
 
-@pytest.mark.parametrize("text, last_arm, params, phrase", [
-    ("pick up the cup", "right", ["object"], "Which object do you mean: the rightmost cup or the leftmost cup?"),
-    ("point to the box", None, ["arm"], "Which hand do you mean: the right hand or the left hand?"),
-    ("switch action", None, ["target"], "Which action do you mean: the next action or the previous action?"),
-    ("point to the cup", None, ["arm", "object"],
-     "Which hand do you mean: the right hand or the left hand? "
-     "And which object: the rightmost cup or the leftmost cup?"),
-])
-def test_clarifications_name_the_parameters_in_contention(text: str, last_arm: str | None, params: list[str],
-                                                          phrase: str) -> None:
+@pytest.mark.parametrize(
+    "text, last_arm, params, phrase",
+    [
+        ("pick up the cup", "right", ["object"], "Which object do you mean: the rightmost cup or the leftmost cup?"),
+        ("point to the box", None, ["arm"], "Which hand do you mean: the right hand or the left hand?"),
+        ("switch action", None, ["target"], "Which action do you mean: the next action or the previous action?"),
+        (
+            "point to the cup",
+            None,
+            ["arm", "object"],
+            "Which hand do you mean: the right hand or the left hand? "
+            "And which object: the rightmost cup or the leftmost cup?",
+        ),
+    ],
+)
+def test_clarifications_name_the_parameters_in_contention(
+    text: str, last_arm: str | None, params: list[str], phrase: str
+) -> None:
     result = parse(text, table_scene(last_arm=last_arm))
     assert isinstance(result, Clarify)
     assert result.params == params
@@ -247,13 +340,16 @@ def test_unclear_procedure_asks_to_rephrase() -> None:
     assert len({c.procedure for c in result.candidates}) == len(result.candidates) >= 2
 
 
-@pytest.mark.parametrize("text, question", [
-    ("", "Sorry, I did not understand that. Please rephrase the command."),
-    ("   ", "Sorry, I did not understand that. Please rephrase the command."),
-    ("xyzzy frobnicate", "Sorry, I don't know the words 'xyzzy', 'frobnicate'. Please rephrase the command."),
-    ("please", "Sorry, I did not understand that. Please rephrase the command."),
-    ("move " * 80, "That is too long (80 words). Please say one step at a time."),
-])
+@pytest.mark.parametrize(
+    "text, question",
+    [
+        ("", "Sorry, I did not understand that. Please rephrase the command."),
+        ("   ", "Sorry, I did not understand that. Please rephrase the command."),
+        ("xyzzy frobnicate", "Sorry, I don't know the words 'xyzzy', 'frobnicate'. Please rephrase the command."),
+        ("please", "Sorry, I did not understand that. Please rephrase the command."),
+        ("move " * 80, "That is too long (80 words). Please say one step at a time."),
+    ],
+)
 def test_bad_utterances_get_a_clear_question(text: str, question: str) -> None:
     result = parse(text)
     assert isinstance(result, Clarify)
@@ -268,11 +364,16 @@ def test_no_objects_still_understands_object_free_commands() -> None:
     assert isinstance(result, Clarify) and result.params == []
 
 
-@pytest.mark.parametrize("text, phrases", [
-    ("grab the red cup", {"verb": "grab", "object": "red cup"}),
-    ("move the left arm on top of the box",
-     {"verb": "move", "arm": "left arm", "relation": "on top of", "object": "box"}),
-])
+@pytest.mark.parametrize(
+    "text, phrases",
+    [
+        ("grab the red cup", {"verb": "grab", "object": "red cup"}),
+        (
+            "move the left arm on top of the box",
+            {"verb": "move", "arm": "left arm", "relation": "on top of", "object": "box"},
+        ),
+    ],
+)
 def test_phrase_tracking(text: str, phrases: dict[str, str]) -> None:
     result = parse(text)
     assert isinstance(result, CommandResult)

@@ -41,8 +41,10 @@ def test_a_likelier_short_hypothesis_beats_one_that_only_matches_more_words(mode
     nbest = (("go above the blue cup", 0.2), ("point at the blue cup", 0.8))
     assert command(pick(model, *nbest))["procedure"] == "point_to"
     # at full weight the longer sentence's extra matched words would win
-    assert command(most_plausible(model, None, [{"text": t, "score": s} for t, s in nbest],
-                                  1.0))["procedure"] == "move_rel_dest"
+    assert (
+        command(most_plausible(model, None, [{"text": t, "score": s} for t, s in nbest], 1.0))["procedure"]
+        == "move_rel_dest"
+    )
 
 
 def test_the_scene_still_breaks_a_near_tie(model: Model) -> None:
@@ -69,15 +71,25 @@ def test_a_question_is_never_rejected_and_one_hypothesis_is_all_the_support(mode
 
 
 def test_malformed_entries_are_skipped(model: Model) -> None:
-    nbest = ["stop", {"text": 3}, {"text": "look at the box", "score": True}, {"text": "look at the box", "score": -1},
-             {"text": "look at the box", "score": math.nan}, {"text": "point at the plate", "score": 0.5}]
+    nbest = [
+        "stop",
+        {"text": 3},
+        {"text": "look at the box", "score": True},
+        {"text": "look at the box", "score": -1},
+        {"text": "look at the box", "score": math.nan},
+        {"text": "point at the plate", "score": 0.5},
+    ]
     choice = most_plausible(model, None, nbest)
     assert choice is not None and choice.reading.text == "point at the plate" and choice.share == 1.0
     assert most_plausible(model, None, [{"text": "stop", "score": 0}]) is None
 
 
 def test_a_compound_is_not_grouped_with_its_first_step(model: Model) -> None:
-    choice = pick(model, ("pick up the red cup", 0.4), ("pick up the red cup and lift it", 0.35),
-                  ("pick up the red cup then lift it", 0.25))
+    choice = pick(
+        model,
+        ("pick up the red cup", 0.4),
+        ("pick up the red cup and lift it", 0.35),
+        ("pick up the red cup then lift it", 0.25),
+    )
     assert isinstance(choice.reading.result, CommandResult) and len(choice.reading.result.commands) == 2
     assert choice.share == pytest.approx(0.6)

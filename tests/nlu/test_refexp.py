@@ -19,25 +19,36 @@ def describe(scene: dict) -> dict[str, str]:
 
 
 def test_default_scene_prefers_location_then_type() -> None:
-    assert describe(table_scene()) == {"obj0": "the rightmost cup", "obj1": "the leftmost cup",
-                                       "obj2": "the box", "obj3": "the plate"}
+    assert describe(table_scene()) == {
+        "obj0": "the rightmost cup",
+        "obj1": "the leftmost cup",
+        "obj2": "the box",
+        "obj3": "the plate",
+    }
 
 
-@pytest.mark.parametrize("dy, expected", [
-    (0.10, {"obj0": "the rightmost cup", "obj1": "the leftmost cup"}),   # beyond the 0.07 m margin
-    (0.05, {"obj0": "the red cup", "obj1": "the blue cup"}),             # within it: colour decides
-])
+@pytest.mark.parametrize(
+    "dy, expected",
+    [
+        (0.10, {"obj0": "the rightmost cup", "obj1": "the leftmost cup"}),  # beyond the 0.07 m margin
+        (0.05, {"obj0": "the red cup", "obj1": "the blue cup"}),  # within it: colour decides
+    ],
+)
 def test_location_label_needs_the_margin(dy: float, expected: dict[str, str]) -> None:
     scene = world(obj("obj0", "red", "cup", 0.6, -dy / 2), obj("obj1", "blue", "cup", 0.6, dy / 2))
     assert describe(scene) == expected
 
 
 def test_size_then_height_then_colour() -> None:
-    scene = world(obj("obj0", "red", "box", 0.6, 0.0, (0.15, 0.15, 0.10)),
-                  obj("obj1", "blue", "box", 0.62, 0.02, (0.05, 0.05, 0.10)))
+    scene = world(
+        obj("obj0", "red", "box", 0.6, 0.0, (0.15, 0.15, 0.10)),
+        obj("obj1", "blue", "box", 0.62, 0.02, (0.05, 0.05, 0.10)),
+    )
     assert describe(scene) == {"obj0": "the biggest box", "obj1": "the smallest box"}
-    scene = world(obj("obj0", "red", "box", 0.6, 0.0, (0.08, 0.08, 0.18)),
-                  obj("obj1", "blue", "box", 0.62, 0.02, (0.08, 0.08, 0.11)))
+    scene = world(
+        obj("obj0", "red", "box", 0.6, 0.0, (0.08, 0.08, 0.18)),
+        obj("obj1", "blue", "box", 0.62, 0.02, (0.08, 0.08, 0.11)),
+    )
     assert describe(scene) == {"obj0": "the tallest box", "obj1": "the shortest box"}
 
 
@@ -57,8 +68,9 @@ def test_compound_when_no_single_label_is_unique() -> None:
 
 
 def test_labels_within_the_named_colour() -> None:
-    scene = world(obj("obj0", "red", "cup", 0.6, 0.3), obj("obj1", "blue", "cup", 0.6, 0.1),
-                  obj("obj2", "blue", "cup", 0.6, -0.2))
+    scene = world(
+        obj("obj0", "red", "cup", 0.6, 0.3), obj("obj1", "blue", "cup", 0.6, 0.1), obj("obj2", "blue", "cup", 0.6, -0.2)
+    )
     grounding = Model(parse_world(scene)).ground("the leftmost blue cup")
     assert max(grounding, key=grounding.get) == "obj1"
 

@@ -41,10 +41,16 @@ def live(network: Network, launcher: Launcher) -> Network:
     keys = network.hub.keys
     objects = network.hub.publisher(keys.objects, cached=True)
     executor = network.hub.publisher(keys.executor_state, cached=True)
-    objects.put({"stamp": time.time(),
-                 "objects": [{**o, "held_by": None, "confidence": 0.9} for o in scene["objects"]]})
-    executor.put({"stamp": time.time(), "robot": {**scene["robot"], "action": 1, "actions": [0]},
-                  "reach": {"obj1": {"right": {"pick_up": False}, "left": {"pick_up": True}}}})
+    objects.put(
+        {"stamp": time.time(), "objects": [{**o, "held_by": None, "confidence": 0.9} for o in scene["objects"]]}
+    )
+    executor.put(
+        {
+            "stamp": time.time(),
+            "robot": {**scene["robot"], "action": 1, "actions": [0]},
+            "reach": {"obj1": {"right": {"pick_up": False}, "left": {"pick_up": True}}},
+        }
+    )
     launcher.start("nlu")
     # the cached world arrives shortly after start; wait until describe sees all objects
     deadline = time.monotonic() + 20
@@ -79,15 +85,20 @@ def test_clarification_is_said_and_a_choice_answers_it(live: Network) -> None:
     assert len(line["candidates"]) == len(question["candidates"]) == 2
     say(live, text="", choice=0)
     chosen = next_result(results)
-    assert chosen["kind"] == "command" and {"procedure": chosen["procedure"],
-                                            "args": chosen["args"]} == question["candidates"][0]
+    assert (
+        chosen["kind"] == "command"
+        and {"procedure": chosen["procedure"], "args": chosen["args"]} == question["candidates"][0]
+    )
 
 
 def test_nbest_picks_the_plausible_hypothesis(live: Network) -> None:
     results = collect(live, live.hub.keys.nlu_result)
     time.sleep(0.3)
-    say(live, text="pick up the read cap", nbest=[{"text": "pick up the read cap", "score": 0.5},
-                                                  {"text": "pick up the red cup", "score": 0.4}])
+    say(
+        live,
+        text="pick up the read cap",
+        nbest=[{"text": "pick up the read cap", "score": 0.5}, {"text": "pick up the red cup", "score": 0.4}],
+    )
     result = next_result(results)
     assert result["utterance"] == "pick up the red cup" and result["args"]["object"] == "obj0"
 
@@ -153,5 +164,6 @@ def test_a_compound_is_one_result_with_then(live: Network) -> None:
     say(live, text="pick up the red cup and put it on the plate")
     result = next_result(results)
     assert (result["procedure"], result["args"]) == ("pick_up", {"arm": "right", "object": "obj0"})
-    assert result["then"] == [{"procedure": "place_rel", "args": {"arm": "right", "relation": "on_top_of",
-                                                                  "object": "obj3"}}]
+    assert result["then"] == [
+        {"procedure": "place_rel", "args": {"arm": "right", "relation": "on_top_of", "object": "obj3"}}
+    ]

@@ -22,7 +22,7 @@ from shared.robot import ROBOT  # noqa: E402
 OVER_THE_TABLE = np.array([-0.6, 0.6, 0.0, -1.0, 0.0, -0.9, 0.0])
 ACROSS = np.array([0.3, 0.5, 0.0, -0.8, 0.0, -1.0, 0.0])
 FRAMES = 7
-DELAY = 0.1   # s of simulated time between rendering a cloud and the newest state
+DELAY = 0.1  # s of simulated time between rendering a cloud and the newest state
 
 
 @pytest.fixture(scope="module")
@@ -50,7 +50,7 @@ def test_no_phantom_from_the_arm_with_the_states_around_the_cloud(sweep, frame):
     message, before, after, truth = sweep[frame]
     result = score(detect(message, after, earlier=before).objects, truth)
     assert result.phantoms == 0
-    assert result.found >= len(truth) - 1   # the arm may hide one object at a time, never show a false one
+    assert result.found >= len(truth) - 1  # the arm may hide one object at a time, never show a false one
 
 
 def test_the_arm_really_crossed_the_table(sweep):

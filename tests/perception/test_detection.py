@@ -16,13 +16,16 @@ SMALL = Camera(width=320, height=240)
 
 def mixed_scene(table_height: float = 0.75) -> Scene:
     z = table_height
-    return Scene([
-        Cylinder((0.70, -0.12, z + 0.05), 0.035, 0.10, "red", wall=0.005),
-        Cylinder((0.72, 0.02, z + 0.055), 0.04, 0.11, "blue"),
-        Box((0.85, 0.20, z + 0.03), (0.12, 0.08, 0.06), "green", yaw=0.4),
-        Cylinder((0.95, -0.05, z + 0.01), 0.10, 0.02, "white", kind="plate"),
-        Cylinder((0.80, 0.42, z + 0.035), 0.07, 0.07, "yellow", wall=0.006, kind="bowl"),
-    ], table_height=table_height)
+    return Scene(
+        [
+            Cylinder((0.70, -0.12, z + 0.05), 0.035, 0.10, "red", wall=0.005),
+            Cylinder((0.72, 0.02, z + 0.055), 0.04, 0.11, "blue"),
+            Box((0.85, 0.20, z + 0.03), (0.12, 0.08, 0.06), "green", yaw=0.4),
+            Cylinder((0.95, -0.05, z + 0.01), 0.10, 0.02, "white", kind="plate"),
+            Cylinder((0.80, 0.42, z + 0.035), 0.07, 0.07, "yellow", wall=0.006, kind="bowl"),
+        ],
+        table_height=table_height,
+    )
 
 
 def match_truth(detected: list, truth: list[dict]) -> list[tuple[dict, object]]:
@@ -75,20 +78,25 @@ def test_colour_word(colour):
     assert found.color == colour
 
 
-@pytest.mark.parametrize("shape, word", [
-    (Cylinder((0.8, 0.0, 0.80), 0.035, 0.10, "red", wall=0.005), "cup"),
-    (Cylinder((0.8, 0.0, 0.81), 0.04, 0.12, "red"), "cup"),
-    (Box((0.8, 0.0, 0.80), (0.08, 0.08, 0.10), "red"), "box"),
-    (Box((0.8, 0.0, 0.78), (0.15, 0.06, 0.06), "red", yaw=0.7), "box"),
-    (Cylinder((0.8, 0.0, 0.76), 0.11, 0.02, "red"), "plate"),
-    (Cylinder((0.8, 0.0, 0.785), 0.08, 0.07, "red", wall=0.006), "bowl"),
-])
+@pytest.mark.parametrize(
+    "shape, word",
+    [
+        (Cylinder((0.8, 0.0, 0.80), 0.035, 0.10, "red", wall=0.005), "cup"),
+        (Cylinder((0.8, 0.0, 0.81), 0.04, 0.12, "red"), "cup"),
+        (Box((0.8, 0.0, 0.80), (0.08, 0.08, 0.10), "red"), "box"),
+        (Box((0.8, 0.0, 0.78), (0.15, 0.06, 0.06), "red", yaw=0.7), "box"),
+        (Cylinder((0.8, 0.0, 0.76), 0.11, 0.02, "red"), "plate"),
+        (Cylinder((0.8, 0.0, 0.785), 0.08, 0.07, "red", wall=0.006), "bowl"),
+    ],
+)
 def test_type_word(shape, word):
     (found,) = detect(render(Scene([shape]))).objects
     assert found.type == word
 
 
-@pytest.mark.parametrize("offset", [(0.0, 0.08), (0.08, 0.0), (0.0566, 0.0566)], ids=["side-by-side", "one-behind", "diagonal"])
+@pytest.mark.parametrize(
+    "offset", [(0.0, 0.08), (0.08, 0.0), (0.0566, 0.0566)], ids=["side-by-side", "one-behind", "diagonal"]
+)
 def test_cups_one_centimetre_apart_are_separate(offset):
     a = (0.75, 0.0, 0.80)
     b = (a[0] + offset[0], a[1] + offset[1], 0.80)
@@ -106,8 +114,9 @@ def test_oriented_box_reports_its_own_length_and_width():
 
 
 def inside_some_object(position: np.ndarray, scene: Scene, margin: float = 0.01) -> bool:
-    return any(all(abs(position[k] - t["position"][k]) <= t["size"][k] / 2 + margin for k in (0, 1))
-               for t in scene.truth())
+    return any(
+        all(abs(position[k] - t["position"][k]) <= t["size"][k] / 2 + margin for k in (0, 1)) for t in scene.truth()
+    )
 
 
 def test_arm_over_the_table_is_not_an_object():
@@ -141,13 +150,19 @@ def cloud_with(xyz: np.ndarray) -> dict:
     return {"stamp": 0.0, "xyz": xyz.astype(np.float32), "rgb": np.zeros(xyz.shape, np.uint8), "camera_pose": [0.0] * 7}
 
 
-@pytest.mark.parametrize("cloud, reason", [
-    (cloud_with(np.full((240, 320, 3), np.nan)), "point cloud is empty"),
-    (cloud_with(np.zeros((0, 0, 3))), "point cloud is empty"),
-    (cloud_with(np.zeros((240, 320))), "shape (H, W, 3)"),
-    ({"stamp": 0.0, "xyz": np.zeros((4, 4, 3), np.float32), "rgb": np.zeros((2, 2, 3), np.uint8)}, "does not match"),
-    ({"stamp": 0.0, "rgb": np.zeros((2, 2, 3), np.uint8)}, "lacks xyz"),
-])
+@pytest.mark.parametrize(
+    "cloud, reason",
+    [
+        (cloud_with(np.full((240, 320, 3), np.nan)), "point cloud is empty"),
+        (cloud_with(np.zeros((0, 0, 3))), "point cloud is empty"),
+        (cloud_with(np.zeros((240, 320))), "shape (H, W, 3)"),
+        (
+            {"stamp": 0.0, "xyz": np.zeros((4, 4, 3), np.float32), "rgb": np.zeros((2, 2, 3), np.uint8)},
+            "does not match",
+        ),
+        ({"stamp": 0.0, "rgb": np.zeros((2, 2, 3), np.uint8)}, "lacks xyz"),
+    ],
+)
 def test_unusable_cloud_is_a_clear_error(cloud, reason):
     with pytest.raises(CloudError, match=reason.replace("(", r"\(").replace(")", r"\)")):
         detect(cloud)

@@ -25,18 +25,26 @@ def track(tracker: Tracker, scene: Scene, now: float, state: dict | None = None)
     cloud = render(scene, SMALL)
     arms = segments_from_state(state)
     camera = np.asarray(cloud["camera_pose"][:3])
-    return tracker.update(detect(cloud, state).objects, now, state,
-                          hidden=lambda position: hides(camera, position, arms))
+    return tracker.update(
+        detect(cloud, state).objects, now, state, hidden=lambda position: hides(camera, position, arms)
+    )
 
 
-@pytest.mark.parametrize("floating, reported", [
-    (Box((0.80, -0.10, TABLE + 0.15), (0.06, 0.06, 0.05), "grey"), False),          # hangs in the air
-    (Cylinder((0.94, 0.10, TABLE + 0.05), 0.035, 0.10, "green"), True),            # foot hidden by the box
-], ids=["in-the-air", "behind-a-box"])
+@pytest.mark.parametrize(
+    "floating, reported",
+    [
+        (Box((0.80, -0.10, TABLE + 0.15), (0.06, 0.06, 0.05), "grey"), False),  # hangs in the air
+        (Cylinder((0.94, 0.10, TABLE + 0.05), 0.035, 0.10, "green"), True),  # foot hidden by the box
+    ],
+    ids=["in-the-air", "behind-a-box"],
+)
 def test_only_supported_clusters_are_objects(floating, reported):
     found = detect(render(scene_with(RED_CUP, BLUE_BOX, floating), SMALL)).objects
-    at = [d for d in found if np.linalg.norm(d.position[:2] - np.asarray(floating.center[:2])) < 0.03
-          and d.color == floating.colour]
+    at = [
+        d
+        for d in found
+        if np.linalg.norm(d.position[:2] - np.asarray(floating.center[:2])) < 0.03 and d.color == floating.colour
+    ]
     assert bool(at) == reported
     assert {d.color for d in found} >= {"red", "blue"}
 
@@ -52,9 +60,11 @@ def test_a_reloaded_scene_drops_the_old_objects_within_a_few_frames():
     old = scene_with(RED_CUP, BLUE_BOX)
     track(tracker, old, 0.0)
     assert len(track(tracker, old, 0.2)) == 2
-    new = scene_with(Cylinder((0.62, 0.25, TABLE + 0.05), 0.035, 0.10, "green"),
-                     Box((0.95, -0.25, TABLE + 0.04), (0.08, 0.08, 0.08), "yellow"),
-                     Cylinder((0.80, -0.35, TABLE + 0.05), 0.035, 0.10, "red"))
+    new = scene_with(
+        Cylinder((0.62, 0.25, TABLE + 0.05), 0.035, 0.10, "green"),
+        Box((0.95, -0.25, TABLE + 0.04), (0.08, 0.08, 0.08), "yellow"),
+        Cylinder((0.80, -0.35, TABLE + 0.05), 0.035, 0.10, "red"),
+    )
     for step in range(4):
         items = track(tracker, new, 0.4 + 0.2 * step)
     assert sorted(o["color"] for o in items) == ["green", "red", "yellow"]
@@ -78,9 +88,13 @@ def test_an_object_hidden_by_an_arm_keeps_its_id_longer_than_forget_after():
     ids = {o["color"]: o["id"] for o in track(tracker, scene_with(RED_CUP, BLUE_BOX), 0.2)}
     capsules, state = reaching_arm((RED_CUP.center[0], RED_CUP.center[1], TABLE + 0.13))
     arms = segments_from_state(state)
-    for step in range(25):   # 5 s behind the arm; the cup itself is not rendered, as if fully hidden
-        items = tracker.update(detect(render(scene_with(BLUE_BOX, links=capsules), SMALL), state).objects,
-                               0.4 + 0.2 * step, state, hidden=lambda p: hides(CAMERA_AT, p, arms))
+    for step in range(25):  # 5 s behind the arm; the cup itself is not rendered, as if fully hidden
+        items = tracker.update(
+            detect(render(scene_with(BLUE_BOX, links=capsules), SMALL), state).objects,
+            0.4 + 0.2 * step,
+            state,
+            hidden=lambda p: hides(CAMERA_AT, p, arms),
+        )
     red = {o["id"]: o for o in items}[ids["red"]]
     assert red["visible"] is False
     again = {o["color"]: o["id"] for o in track(tracker, scene_with(RED_CUP, BLUE_BOX), 6.0)}

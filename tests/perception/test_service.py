@@ -9,15 +9,13 @@ import time
 import numpy as np
 import pytest
 
-from shared.bus import RemoteError
 from services.perception.synthetic import Box, Camera, Cylinder, Scene, render
+from shared.bus import RemoteError
 
 SMALL = Camera(width=320, height=240)
-SCENE = Scene([Cylinder((0.70, -0.15, 0.80), 0.035, 0.10, "red"),
-               Box((0.85, 0.10, 0.79), (0.08, 0.08, 0.08), "blue")])
+SCENE = Scene([Cylinder((0.70, -0.15, 0.80), 0.035, 0.10, "red"), Box((0.85, 0.10, 0.79), (0.08, 0.08, 0.08), "blue")])
 WITH_GREEN = Scene([*SCENE.objects, Box((0.75, 0.30, 0.79), (0.08, 0.08, 0.08), "green")])
-MOVED = Scene([Cylinder((0.90, -0.30, 0.80), 0.035, 0.10, "red"),
-               Box((0.65, 0.25, 0.79), (0.08, 0.08, 0.08), "blue")])
+MOVED = Scene([Cylinder((0.90, -0.30, 0.80), 0.035, 0.10, "red"), Box((0.65, 0.25, 0.79), (0.08, 0.08, 0.08), "blue")])
 
 
 @pytest.fixture(scope="module")
@@ -67,7 +65,10 @@ def test_publishes_objects_with_ids_and_words(feed, good_cloud):
     assert "scene" not in good_cloud and "scene_generation" not in good_cloud
     message = feed.until(good_cloud, lambda m: len(m["objects"]) == 2)
     assert message["status"] == "ok"
-    assert {(o["id"], o["color"], o["type"]) for o in message["objects"]} == {("obj0", "red", "cup"), ("obj1", "blue", "box")}
+    assert {(o["id"], o["color"], o["type"]) for o in message["objects"]} == {
+        ("obj0", "red", "cup"),
+        ("obj1", "blue", "box"),
+    }
     table = message["table"]
     assert table["height"] == pytest.approx(0.75, abs=0.005)
     assert table["edges"]["near"] == pytest.approx(SCENE.table_x[0], abs=0.006)
@@ -83,11 +84,15 @@ def test_late_joiner_gets_the_current_list_at_once(feed, good_cloud, network):
     assert len(message["objects"]) == 2
 
 
-@pytest.mark.parametrize("bad, status", [
-    ({"xyz": np.full((240, 320, 3), np.nan, np.float32)}, "point cloud is empty"),
-    ({"xyz": np.zeros((240, 320), np.float32)}, "shape (H, W, 3)"),
-    ({"xyz": None}, "rejected cloud"),
-], ids=["all-nan", "flat-array", "wrong-schema"])
+@pytest.mark.parametrize(
+    "bad, status",
+    [
+        ({"xyz": np.full((240, 320, 3), np.nan, np.float32)}, "point cloud is empty"),
+        ({"xyz": np.zeros((240, 320), np.float32)}, "shape (H, W, 3)"),
+        ({"xyz": None}, "rejected cloud"),
+    ],
+    ids=["all-nan", "flat-array", "wrong-schema"],
+)
 def test_bad_cloud_keeps_the_last_good_list_and_says_why(feed, good_cloud, bad, status):
     good = feed.until(good_cloud, lambda m: len(m["objects"]) == 2)
     broken = {**good_cloud, **bad}
@@ -134,8 +139,15 @@ def test_record_against_the_running_simulator(network, launcher):
 
 
 def sim_state(scene: str, sim_time: float) -> dict:
-    return {"stamp": time.time(), "sim_time": sim_time, "joints": {}, "ee": {}, "grippers": {}, "links": {},
-            "scene": scene}
+    return {
+        "stamp": time.time(),
+        "sim_time": sim_time,
+        "joints": {},
+        "ee": {},
+        "grippers": {},
+        "links": {},
+        "scene": scene,
+    }
 
 
 def test_a_scene_load_announced_in_the_state_forgets_every_object(feed, good_cloud):
@@ -143,17 +155,20 @@ def test_a_scene_load_announced_in_the_state_forgets_every_object(feed, good_clo
     state.put(sim_state("first", 0.0))
     first = feed.until(good_cloud, lambda m: len(m["objects"]) == 2)
     state.put(sim_state("second", 1.0))
-    reloaded = feed.until(good_cloud, lambda m: len(m["objects"]) == 2
-                          and not {o["id"] for o in m["objects"]} & {o["id"] for o in first["objects"]})
+    reloaded = feed.until(
+        good_cloud,
+        lambda m: len(m["objects"]) == 2 and not {o["id"] for o in m["objects"]} & {o["id"] for o in first["objects"]},
+    )
     assert sorted(o["color"] for o in reloaded["objects"]) == ["blue", "red"]
 
 
 def test_a_cloud_says_which_scene_load_it_shows(feed, good_cloud):
     """A cloud's own scene word decides, with no robot state to pair it with."""
     first = feed.until({**good_cloud, "scene": "first", "scene_generation": 1}, lambda m: len(m["objects"]) == 2)
-    reloaded = feed.until({**good_cloud, "scene": "first", "scene_generation": 2},
-                          lambda m: len(m["objects"]) == 2
-                          and not {o["id"] for o in m["objects"]} & {o["id"] for o in first["objects"]})
+    reloaded = feed.until(
+        {**good_cloud, "scene": "first", "scene_generation": 2},
+        lambda m: len(m["objects"]) == 2 and not {o["id"] for o in m["objects"]} & {o["id"] for o in first["objects"]},
+    )
     assert sorted(o["color"] for o in reloaded["objects"]) == ["blue", "red"]
 
 
@@ -210,8 +225,10 @@ def test_record_right_after_a_scene_load_waits_for_the_new_objects(feed):
     for k in range(4):
         feed.once({**new, "sim_time": 2.2 + 0.2 * k})
     reply = recording.result()
-    assert sorted((o["color"], tuple(np.round(o["position"][:2], 1))) for o in reply["objects"]) == \
-        [("blue", (0.6, 0.2)), ("red", (0.9, -0.3))]
+    assert sorted((o["color"], tuple(np.round(o["position"][:2], 1))) for o in reply["objects"]) == [
+        ("blue", (0.6, 0.2)),
+        ("red", (0.9, -0.3)),
+    ]
 
 
 def test_sigterm_while_clouds_stream_in_stops_cleanly(network, launcher, good_cloud):

@@ -103,8 +103,9 @@ def test_an_object_in_a_gripper_is_held_not_lost_and_keeps_its_id_when_put_down(
     capsules, state = reaching_arm(lifted, holding=True)
     carried = Cylinder((lifted[0], lifted[1], lifted[2] - 0.02), 0.035, 0.10, "red")
     for step in range(3):
-        items = tracker.update(detect(render(scene_with(carried, BLUE_BOX, links=capsules), SMALL), state).objects,
-                               0.6 + 0.2 * step, state)
+        items = tracker.update(
+            detect(render(scene_with(carried, BLUE_BOX, links=capsules), SMALL), state).objects, 0.6 + 0.2 * step, state
+        )
         held = {o["id"]: o for o in items}[ids["red"]]
         assert held["held_by"] == "right"
         assert np.linalg.norm(np.subtract(held["position"], carried.center)) < 0.03
@@ -123,8 +124,11 @@ WIDE_BOX = Box((0.62, -0.02, TABLE + 0.05), (0.20, 0.20, 0.10), "blue")
 SMALL_BOX = Box((0.78, 0.14, TABLE + 0.03), (0.06, 0.06, 0.06), "yellow")
 
 
-@pytest.mark.parametrize("tool", [(0.78, 0.14, TABLE + 0.20), (0.78, 0.14, TABLE + 0.12), (0.80, 0.10, TABLE + 0.10),
-                                  (0.75, 0.05, TABLE + 0.18)], ids=["above", "low", "beside", "over-the-edge"])
+@pytest.mark.parametrize(
+    "tool",
+    [(0.78, 0.14, TABLE + 0.20), (0.78, 0.14, TABLE + 0.12), (0.80, 0.10, TABLE + 0.10), (0.75, 0.05, TABLE + 0.18)],
+    ids=["above", "low", "beside", "over-the-edge"],
+)
 def test_a_wide_box_an_arm_reaches_across_stays_where_it_stands(tool):
     """The forearm hides most of the box on its way to the small one: the box neither moves nor splits."""
     tracker = Tracker()
@@ -134,8 +138,9 @@ def test_a_wide_box_an_arm_reaches_across_stays_where_it_stands(tool):
     cloud = render(scene_with(WIDE_BOX, SMALL_BOX, links=capsules), SMALL)
     arms, camera = segments_from_states([state]), camera_position(cloud)
     for k in range(3):
-        items = tracker.update(detect(cloud, state).objects, 0.4 + 0.2 * k, state,
-                               hidden=lambda position: hides(camera, position, arms))
+        items = tracker.update(
+            detect(cloud, state).objects, 0.4 + 0.2 * k, state, hidden=lambda position: hides(camera, position, arms)
+        )
     assert {o["color"]: o["id"] for o in items} == before
     box = next(o for o in items if o["color"] == "blue")
     assert np.linalg.norm(np.asarray(box["position"][:2]) - WIDE_BOX.center[:2]) < 0.01
@@ -178,9 +183,20 @@ def test_an_object_of_another_colour_on_a_removed_objects_footprint_is_a_new_obj
 def _sighting(center, size, points, color="red", kind="unknown", confidence=0.5) -> Descriptor:
     """A cluster as the pipeline describes it (resting on the table), for sequences a renderer can't pose."""
     center, size = np.asarray(center, float), np.asarray(size, float)
-    return Descriptor(position=center, size=size, box_center=center.copy(), box_size=size.copy(), box_yaw=0.0,
-                      volume=float(np.prod(size)), rgb=(200, 30, 30), color=color, type=kind, points=points,
-                      confidence=confidence, bottom_on_table=True)
+    return Descriptor(
+        position=center,
+        size=size,
+        box_center=center.copy(),
+        box_size=size.copy(),
+        box_yaw=0.0,
+        volume=float(np.prod(size)),
+        rgb=(200, 30, 30),
+        color=color,
+        type=kind,
+        points=points,
+        confidence=confidence,
+        bottom_on_table=True,
+    )
 
 
 def test_a_plate_an_arm_sweeps_across_keeps_its_id_piece_after_piece():
@@ -196,11 +212,15 @@ def test_a_plate_an_arm_sweeps_across_keeps_its_id_piece_after_piece():
     whole = _sighting((0.59, -0.18, 0.726), plate, 10818, kind="plate", confidence=0.98)
     tracker.update([whole], 0.0)
     plate_id = tracker.update([whole], 0.2)[0]["id"]
-    sweep = [[_sighting((0.572, -0.146, 0.726), (0.184, 0.150, 0.012), 4546)],
-             [_sighting((0.530, -0.130, 0.726), (0.099, 0.118, 0.012), 1391),
-              _sighting((0.678, -0.237, 0.726), (0.029, 0.043, 0.012), 134, confidence=0.45)],
-             [_sighting((0.640, -0.197, 0.726), (0.118, 0.186, 0.012), 2651)],
-             [_sighting((0.651, -0.185, 0.726), (0.097, 0.207, 0.012), 3401)]]
+    sweep = [
+        [_sighting((0.572, -0.146, 0.726), (0.184, 0.150, 0.012), 4546)],
+        [
+            _sighting((0.530, -0.130, 0.726), (0.099, 0.118, 0.012), 1391),
+            _sighting((0.678, -0.237, 0.726), (0.029, 0.043, 0.012), 134, confidence=0.45),
+        ],
+        [_sighting((0.640, -0.197, 0.726), (0.118, 0.186, 0.012), 2651)],
+        [_sighting((0.651, -0.185, 0.726), (0.097, 0.207, 0.012), 3401)],
+    ]
     push = [_sighting((x, -0.177, 0.726), (0.217, 0.214, 0.012), 6300) for x in np.linspace(0.589, 0.397, 12)]
     frames = sweep + [[d] for d in push]
     for k, detections in enumerate(frames):

@@ -19,8 +19,11 @@ def urdf(robot: RobotDescription) -> ET.Element:
 
 
 def joint_limits(robot: RobotDescription) -> dict[str, tuple[float, float]]:
-    return {j.get("name"): (float(j.find("limit").get("lower")), float(j.find("limit").get("upper")))
-            for j in urdf(robot).iter("joint") if j.find("limit") is not None}
+    return {
+        j.get("name"): (float(j.find("limit").get("lower")), float(j.find("limit").get("upper")))
+        for j in urdf(robot).iter("joint")
+        if j.find("limit") is not None
+    }
 
 
 @pytest.mark.parametrize("uid", ROBOTS)
@@ -73,14 +76,17 @@ def test_the_left_arm_mirrors_the_right_in_every_arm_posture() -> None:
         assert left == pytest.approx([m * v for m, v in zip(mirror, right, strict=True)])
 
 
-@pytest.mark.parametrize(("opening", "effort", "state"), [
-    (0.080, 0.0, "open"),      # open at rest
-    (0.040, 4.0, "open"),      # closing through the air: the motor barely pushes
-    (0.070, 30.0, "holding"),  # stopped by a cup, squeezing
-    (0.012, 30.0, "holding"),  # a plate's rim between the pads
-    (0.001, 30.0, "closed"),   # the pads met: nothing between them, however hard it pushes
-    (0.000, 0.0, "closed"),
-])
+@pytest.mark.parametrize(
+    ("opening", "effort", "state"),
+    [
+        (0.080, 0.0, "open"),  # open at rest
+        (0.040, 4.0, "open"),  # closing through the air: the motor barely pushes
+        (0.070, 30.0, "holding"),  # stopped by a cup, squeezing
+        (0.012, 30.0, "holding"),  # a plate's rim between the pads
+        (0.001, 30.0, "closed"),  # the pads met: nothing between them, however hard it pushes
+        (0.000, 0.0, "closed"),
+    ],
+)
 def test_the_gripper_state_is_judged_from_opening_and_effort(opening: float, effort: float, state: str) -> None:
     assert ROBOT.gripper.state(opening, effort) == state
 

@@ -44,10 +44,10 @@ def test_mplib_plans_a_top_down_reach(arm: str) -> None:
     mask = np.zeros(len(names), dtype=bool)
     mask[names.index("torso_lift_joint")] = True
     y = -0.1 if arm == "right" else 0.1
-    goal = mplib.Pose([0.55, y, 0.85], [0.7071068, 0.0, 0.7071068, 0.0])   # pointing down
+    goal = mplib.Pose([0.55, y, 0.85], [0.7071068, 0.0, 0.7071068, 0.0])  # pointing down
     result = planner.plan_pose(goal, start, mask=mask, planning_time=2.0)
     assert result["status"] == "Success"
-    assert result["position"].shape[1] == 8     # torso + 7 arm joints
+    assert result["position"].shape[1] == 8  # torso + 7 arm joints
 
 
 def test_srdf_leaves_the_two_arms_checked_against_each_other() -> None:

@@ -48,8 +48,15 @@ class RobotHost:
 
     def remote(self, identity: str) -> Bus:
         """A laptop's session: ``identity`` connecting to the router (client mode, as the contract has it)."""
-        return Bus(SessionOptions(namespace=self.namespace, connect=(self.endpoint,), multicast_scouting=False,
-                                  secure=str(self.pki), identity=identity))
+        return Bus(
+            SessionOptions(
+                namespace=self.namespace,
+                connect=(self.endpoint,),
+                multicast_scouting=False,
+                secure=str(self.pki),
+                identity=identity,
+            )
+        )
 
     def key(self, suffix: str) -> str:
         return f"pbd/{self.namespace}/{suffix}"
@@ -58,10 +65,25 @@ class RobotHost:
 @pytest.fixture
 def robot_host(pki: Path) -> Iterator[RobotHost]:
     namespace, port = "s" + uuid.uuid4().hex[:10], free_port()
-    router = Bus(SessionOptions(namespace=namespace, mode="router", listen=(f"tls/127.0.0.1:{port}",),
-                                multicast_scouting=False, secure=str(pki), identity="robot"))
-    service = Bus(SessionOptions(namespace=namespace, connect=(f"tls/localhost:{port}",), multicast_scouting=False,
-                                 secure=str(pki), identity="robot"))
+    router = Bus(
+        SessionOptions(
+            namespace=namespace,
+            mode="router",
+            listen=(f"tls/127.0.0.1:{port}",),
+            multicast_scouting=False,
+            secure=str(pki),
+            identity="robot",
+        )
+    )
+    service = Bus(
+        SessionOptions(
+            namespace=namespace,
+            connect=(f"tls/localhost:{port}",),
+            multicast_scouting=False,
+            secure=str(pki),
+            identity="robot",
+        )
+    )
     try:
         yield RobotHost(namespace, port, pki, router, service)
     finally:

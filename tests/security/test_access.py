@@ -37,8 +37,16 @@ def _reaches_service(host: RobotHost, key: str, send) -> bool:
 
 def _bad_client(host: RobotHost, change) -> zenoh.Config:
     """A client config to the router, then altered by ``change(config)``."""
-    config = zenoh_config(SessionOptions(namespace=host.namespace, mode="client", connect=(host.endpoint,),
-                                         multicast_scouting=False, secure=str(host.pki), identity="operator"))
+    config = zenoh_config(
+        SessionOptions(
+            namespace=host.namespace,
+            mode="client",
+            connect=(host.endpoint,),
+            multicast_scouting=False,
+            secure=str(host.pki),
+            identity="operator",
+        )
+    )
     change(config)
     return config
 
@@ -58,11 +66,15 @@ def test_unauthenticated_clients_get_nothing(robot_host: RobotHost, foreign_pki,
     def foreign(config: zenoh.Config, _host: RobotHost) -> None:  # trusts our CA, presents another's certificate
         for side in ("connect", "listen"):
             config.insert_json5(f"transport/link/tls/{side}_certificate", json.dumps(str(foreign_pki / "operator.pem")))
-            config.insert_json5(f"transport/link/tls/{side}_private_key",
-                                json.dumps(str(foreign_pki / "operator-key.pem")))
+            config.insert_json5(
+                f"transport/link/tls/{side}_private_key", json.dumps(str(foreign_pki / "operator-key.pem"))
+            )
 
-    change = {"plain-tcp": _plain_tcp, "tls-without-certificate": _no_certificate,
-              "certificate-from-another-ca": foreign}[how]
+    change = {
+        "plain-tcp": _plain_tcp,
+        "tls-without-certificate": _no_certificate,
+        "certificate-from-another-ca": foreign,
+    }[how]
     # refused by the robot's listener at the handshake: a client session cannot even open
     with pytest.raises(zenoh.ZError, match="Unable to connect"):
         zenoh.open(_bad_client(robot_host, lambda config: change(config, robot_host)))
@@ -74,8 +86,9 @@ def test_operator_commands_and_receives(robot_host: RobotHost) -> None:
     cached = robot_host.service.publisher(robot_host.key("executor/state"), cached=True)
     cached.put({"stamp": 1.0, "robot": {"action": 3}})
     with robot_host.remote("operator") as operator:
-        assert _reaches_service(robot_host, "dialog/utterance",
-                                lambda: operator.publish(operator.keys.utterance, UTTERANCE))
+        assert _reaches_service(
+            robot_host, "dialog/utterance", lambda: operator.publish(operator.keys.utterance, UTTERANCE)
+        )
         assert operator.request(operator.keys.nlu_query("parse"), {"text": "hello"}, timeout=5)["heard"] == "hello"
         history = collect(operator, operator.keys.executor_state, history=True)
         assert history.get(timeout=5)["robot"]["action"] == 3, "a cached stream's last sample reaches the operator"
@@ -89,8 +102,9 @@ def test_operator_commands_and_receives(robot_host: RobotHost) -> None:
 def test_observer_receives_but_cannot_command(robot_host: RobotHost) -> None:
     _serve_parse(robot_host)
     with robot_host.remote("observer") as observer:
-        assert not _reaches_service(robot_host, "dialog/utterance",
-                                    lambda: observer.publish(observer.keys.utterance, UTTERANCE))
+        assert not _reaches_service(
+            robot_host, "dialog/utterance", lambda: observer.publish(observer.keys.utterance, UTTERANCE)
+        )
         with pytest.raises(BusTimeout):
             observer.request(observer.keys.nlu_query("parse"), {"text": "hello"}, timeout=1)
         said = collect(observer, observer.keys.say)

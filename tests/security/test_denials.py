@@ -9,7 +9,7 @@ from tests.processes import ROOT
 
 # Lines as Zenoh 1.10.2 writes them (colours aside): a verdict naming the subject, a cached verdict naming
 # only the session id, and the forecast Zenoh logs for every kind of message when a key expression is declared.
-SCRIPT = r'''
+SCRIPT = r"""
 import logging, os, sys, time
 logging.basicConfig(level=logging.INFO, format="%(name)s: %(message)s")
 before = os.fstat(1)
@@ -30,12 +30,13 @@ for line in [*forecast, denied, allowed, cached, "an ordinary line\n", denied]:
 print("terminal kept:", (real.st_dev, real.st_ino) == (before.st_dev, before.st_ino), now.st_ino != before.st_ino)
 sys.stdout.flush()
 time.sleep(0.5)
-'''
+"""
 
 
 def test_denials_are_reported_once_and_other_output_passes_unchanged() -> None:
-    result = subprocess.run([sys.executable, "-c", SCRIPT], cwd=ROOT, capture_output=True, text=True, timeout=60,
-                            check=False)
+    result = subprocess.run(
+        [sys.executable, "-c", SCRIPT], cwd=ROOT, capture_output=True, text=True, timeout=60, check=False
+    )
     assert result.returncode == 0, result.stderr
     assert result.stderr.count("hfpbd.access: refused operator: put on pbd/x/sim/state") == 1, result.stderr
     assert "dialog/say" not in result.stderr, "a forecast made when a key is declared is not a refusal"

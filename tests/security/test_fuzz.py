@@ -11,9 +11,12 @@ PER_KEY = 500
 
 
 def test_malformed_messages_and_bad_requests_leave_every_service_alive_serving_and_unchanged(
-        network: Network, launcher: Launcher, tmp_path: Path) -> None:
-    children = [launcher.start(name, *(("--data-dir", str(tmp_path / "data")) if name == "executor" else ()))
-                for name in SERVICES]
+    network: Network, launcher: Launcher, tmp_path: Path
+) -> None:
+    children = [
+        launcher.start(name, *(("--data-dir", str(tmp_path / "data")) if name == "executor" else ()))
+        for name in SERVICES
+    ]
     figures = run(network.hub, children, PER_KEY)
     assert not figures.problems, "\n".join(figures.lines())
     assert len(figures.streams) == len(STREAMS) and len(figures.queries) == len(REFUSED)

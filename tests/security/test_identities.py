@@ -15,8 +15,7 @@ from shared.config import SessionOptions, zenoh_config
 from shared.security import SecurityError
 from tests.processes import ROOT
 
-FILES = ["ca.pem", "robot.pem", "robot-key.pem", "operator.pem", "operator-key.pem", "observer.pem",
-         "observer-key.pem"]
+FILES = ["ca.pem", "robot.pem", "robot-key.pem", "operator.pem", "operator-key.pem", "observer.pem", "observer-key.pem"]
 
 
 def _certificate(path: Path) -> x509.Certificate:
@@ -24,8 +23,14 @@ def _certificate(path: Path) -> x509.Certificate:
 
 
 def _init(directory: Path, *extra: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "hfpbd.cli", "secure", "init", str(directory), *extra],
-                          cwd=ROOT, capture_output=True, text=True, timeout=60, check=False)
+    return subprocess.run(
+        [sys.executable, "-m", "hfpbd.cli", "secure", "init", str(directory), *extra],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
 
 
 def test_init_writes_the_authority_and_three_identities(tmp_path: Path) -> None:
@@ -59,14 +64,16 @@ def test_missing_identity_files_are_named(tmp_path: Path) -> None:
         SessionOptions(secure=str(tmp_path), identity="operator")
 
 
-@pytest.mark.parametrize("listen, extra, refused", [
-    ("tcp/0.0.0.0:7447", {}, "--secure DIR"),
-    ("tcp/[::]:7447", {}, "--secure DIR"),
-    ("tcp/192.168.1.20:7447", {}, "--secure DIR"),
-    ("tcp/0.0.0.0:7447", {"secure": True}, "must be tls/"),
-])
-def test_listeners_beyond_loopback_need_secure_or_insecure(pki: Path, listen: str, extra: dict,
-                                                           refused: str) -> None:
+@pytest.mark.parametrize(
+    "listen, extra, refused",
+    [
+        ("tcp/0.0.0.0:7447", {}, "--secure DIR"),
+        ("tcp/[::]:7447", {}, "--secure DIR"),
+        ("tcp/192.168.1.20:7447", {}, "--secure DIR"),
+        ("tcp/0.0.0.0:7447", {"secure": True}, "must be tls/"),
+    ],
+)
+def test_listeners_beyond_loopback_need_secure_or_insecure(pki: Path, listen: str, extra: dict, refused: str) -> None:
     secure = str(pki) if extra.get("secure") else None
     with pytest.raises(SecurityError, match=refused):
         SessionOptions(listen=(listen,), secure=secure)

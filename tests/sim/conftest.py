@@ -7,7 +7,7 @@ from collections.abc import Iterator
 import pytest
 
 from services.sim.world import SimWorld
-from tests.processes import Launcher, ServiceProcess, new_network, Network
+from tests.processes import Launcher, Network, ServiceProcess, new_network
 
 
 @pytest.fixture(scope="module")

@@ -13,8 +13,9 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def hfpbd_sim(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "services.sim", *args], cwd=ROOT, capture_output=True,
-                          text=True, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-m", "services.sim", *args], cwd=ROOT, capture_output=True, text=True, timeout=120
+    )
 
 
 def test_snapshot_writes_a_picture_of_the_scene(tmp_path: Path) -> None:

@@ -10,13 +10,18 @@ from pathlib import Path
 import pytest
 
 from services.sim.layout import TABLE_TOP_Z
-from services.sim.scene_file import (COLOURS, SceneError, available_scenes, load_scene, parse_scene,
-                                     randomized)
+from services.sim.scene_file import COLOURS, SceneError, available_scenes, load_scene, parse_scene, randomized
 
 pytestmark = pytest.mark.unit
 
-PAPER_SCENES = ["default", "task1_stack_cups", "task2_side_by_side", "task3_in_box", "task4_large_box",
-                "task5_plate_edge"]
+PAPER_SCENES = [
+    "default",
+    "task1_stack_cups",
+    "task2_side_by_side",
+    "task3_in_box",
+    "task4_large_box",
+    "task5_plate_edge",
+]
 
 
 def test_the_paper_scenes_ship() -> None:
@@ -54,14 +59,20 @@ def test_random_placement_is_seeded_and_non_overlapping(seed: int) -> None:
         assert scene.region["x"][0] <= spec.position[0] <= scene.region["x"][1]
 
 
-@pytest.mark.parametrize("document, problem", [
-    ({"objects": [{"type": "teapot", "color": "red", "size": [0.1, 0.1, 0.1], "position": [0.5, 0]}]}, "type"),
-    ({"objects": [{"type": "cup", "color": "mauve", "size": [0.1, 0.1, 0.1], "position": [0.5, 0]}]}, "color"),
-    ({"objects": [{"type": "cup", "color": "red", "size": [0.1, 0.1], "position": [0.5, 0]}]}, "size"),
-    ({"objects": [{"type": "cup", "color": "red", "size": [0.1, 0.1, 0.1], "position": [0.5, "x"]}]}, "position"),
-    ({"objects": [{"type": "cup", "color": "red", "size": [0.1, 0.1, 0.1], "position": [0.5, 0], "mass": -1}]}, "mass"),
-    ({"objects": "none"}, "objects"),
-])
+@pytest.mark.parametrize(
+    "document, problem",
+    [
+        ({"objects": [{"type": "teapot", "color": "red", "size": [0.1, 0.1, 0.1], "position": [0.5, 0]}]}, "type"),
+        ({"objects": [{"type": "cup", "color": "mauve", "size": [0.1, 0.1, 0.1], "position": [0.5, 0]}]}, "color"),
+        ({"objects": [{"type": "cup", "color": "red", "size": [0.1, 0.1], "position": [0.5, 0]}]}, "size"),
+        ({"objects": [{"type": "cup", "color": "red", "size": [0.1, 0.1, 0.1], "position": [0.5, "x"]}]}, "position"),
+        (
+            {"objects": [{"type": "cup", "color": "red", "size": [0.1, 0.1, 0.1], "position": [0.5, 0], "mass": -1}]},
+            "mass",
+        ),
+        ({"objects": "none"}, "objects"),
+    ],
+)
 def test_bad_scene_documents_name_the_problem(document: dict, problem: str) -> None:
     with pytest.raises(SceneError, match=problem):
         parse_scene(document, source="bad.json")

@@ -55,8 +55,20 @@ def test_state_carries_every_documented_field(client: Bus) -> None:
     inbox = Inbox()
     client.subscribe(client.keys.sim_state, inbox, schema="sim_state", latest_only=True)
     state = inbox.wait()
-    for field in ("stamp", "sim_time", "joints", "ee", "grippers", "moving", "head", "torso", "links", "rtf",
-                  "scene", "scene_generation"):
+    for field in (
+        "stamp",
+        "sim_time",
+        "joints",
+        "ee",
+        "grippers",
+        "moving",
+        "head",
+        "torso",
+        "links",
+        "rtf",
+        "scene",
+        "scene_generation",
+    ):
         assert field in state, field
     assert len(state["joints"]) == 21
     assert set(state["ee"]) == {"right", "left"} and len(state["ee"]["right"]) == 7
@@ -74,7 +86,7 @@ def test_cloud_is_organised_in_the_base_frame(client: Bus) -> None:
     points = cloud["xyz"][np.isfinite(cloud["xyz"]).all(axis=2)]
     on_table = np.abs(points[:, 2] - 0.72) < 0.01
     assert on_table.mean() > 0.3
-    assert 1.6 < cloud["camera_pose"][2] < 2.0      # a Kinect on a raised PR2 head
+    assert 1.6 < cloud["camera_pose"][2] < 2.0  # a Kinect on a raised PR2 head
 
 
 def test_truth_lists_the_default_objects(client: Bus) -> None:
@@ -96,8 +108,9 @@ def test_arm_trajectory_is_followed(client: Bus, events: Inbox) -> None:
     start = [-2.110, 1.230, -2.06, -1.69, 0.3, -1.32, 1.57]
     goal = [-1.8, 1.0, -2.06, -1.5, 0.3, -1.2, 1.57]
     points = np.linspace(start, goal, 5)
-    reply = client.request(client.keys.sim_control("arm"),
-                           {"arm": "right", "points": points, "times": np.linspace(0.0, 1.5, 5)})
+    reply = client.request(
+        client.keys.sim_control("arm"), {"arm": "right", "points": points, "times": np.linspace(0.0, 1.5, 5)}
+    )
     done = events.wait(lambda e: e["motion_id"] == reply["motion_id"])
     assert done["status"] == "done", done["message"]
 
@@ -109,8 +122,11 @@ BAD_REQUESTS = [
     ("arm", {"arm": "right", "positions": [0, 0, 0]}, "7 numbers"),
     ("arm", {"arm": "right", "joints": ["r_elbow_joint"], "positions": [0] * 7}, "unknown or misplaced"),
     ("arm", {"arm": "right", "points": [[0] * 7, [0.5] + [0] * 6], "times": [0.0, 0.05]}, "too fast"),
-    ("arm", {"arm": "right", "points": [[0] * 7, [0] * 7], "times": [0.0, 1.0], "contact": "yes"},
-     "contact must be true or false"),
+    (
+        "arm",
+        {"arm": "right", "points": [[0] * 7, [0] * 7], "times": [0.0, 1.0], "contact": "yes"},
+        "contact must be true or false",
+    ),
     ("arm", {"arm": "right", "positions": [0] * 7, "contact": True}, "contact applies to timed waypoints"),
     ("gripper", {"arm": "left", "width": 0.2}, "width = 0.2 is outside"),
     ("head", {"pan": 0.0, "tilt": 2.0}, "tilt = 2 is outside"),
@@ -121,8 +137,9 @@ BAD_REQUESTS = [
 
 
 @pytest.mark.parametrize("name, request_, reason", BAD_REQUESTS, ids=[f"{b[0]}-{b[2][:20]}" for b in BAD_REQUESTS])
-def test_bad_requests_are_refused_with_a_reason(client: Bus, sim_service: ServiceProcess,
-                                                name: str, request_: dict, reason: str) -> None:
+def test_bad_requests_are_refused_with_a_reason(
+    client: Bus, sim_service: ServiceProcess, name: str, request_: dict, reason: str
+) -> None:
     with pytest.raises(RemoteError, match=reason):
         client.request(client.keys.sim_control(name), request_)
     assert sim_service.popen.poll() is None

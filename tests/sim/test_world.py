@@ -18,7 +18,7 @@ from services.sim.scene_file import load_scene
 from services.sim.world import SimWorld
 from shared.robot import ROBOT
 
-DOWN = [0.7071068, 0.0, 0.7071068, 0.0]    # tool frame x pointing down
+DOWN = [0.7071068, 0.0, 0.7071068, 0.0]  # tool frame x pointing down
 
 
 def truth_of(world: SimWorld, object_id: str) -> dict:
@@ -154,7 +154,9 @@ def test_look_at_points_the_camera_at_the_target(world: SimWorld) -> None:
 
 
 @pytest.mark.parametrize("contact", [True, False])
-def test_a_press_onto_a_plate_ends_done_only_as_a_contact_motion_and_holds_nothing(world: SimWorld, contact: bool) -> None:
+def test_a_press_onto_a_plate_ends_done_only_as_a_contact_motion_and_holds_nothing(
+    world: SimWorld, contact: bool
+) -> None:
     world.load(load_scene("task5_plate_edge"))
     world.settle(0.3)
     planner = mplib.Planner(urdf=str(ROBOT.urdf_path), srdf=str(ROBOT.srdf_path), move_group=ROBOT.tool_frame("right"))
@@ -170,8 +172,9 @@ def test_a_press_onto_a_plate_ends_done_only_as_a_contact_motion_and_holds_nothi
     names = ROBOT.arm_joint_names("right")
     index = [planner.user_joint_names.index(n) for n in names]
     motion_id = world.new_motion_id()
-    world.follow_waypoints("right", names, np.array([0.0, 2.0]), np.array([above[index], pressed[index]]),
-                           motion_id, contact)
+    world.follow_waypoints(
+        "right", names, np.array([0.0, 2.0]), np.array([above[index], pressed[index]]), motion_id, contact
+    )
     status, message = _run(world, motion_id)
     if contact:
         assert status == "done" and "stopped against obj0" in message, message

@@ -18,4 +18,4 @@ def stream(bus: Bus, pcm: np.ndarray, chunk_s: float = 0.1) -> None:
     publisher = bus.publisher(bus.keys.speech("audio"), large=True)
     step = int(RATE * chunk_s)
     for start in range(0, len(pcm), step):
-        publisher.put({"pcm": pcm[start:start + step], "rate": RATE})
+        publisher.put({"pcm": pcm[start : start + step], "rate": RATE})

@@ -15,5 +15,5 @@ def test_held_out_set_says_the_benchmark_sentences_with_other_voices_and_speeds(
     assert {(i.text, i.scene) for i in other} == {(i.text, i.scene) for i in benchmark}
     assert not {i.voice for i in other} & set(VOICES) and not {i.speed for i in other} & set(SPEEDS)
     # the second round gives each sentence another speaker
-    first, second = other[:len(benchmark)], other[len(benchmark):]
+    first, second = other[: len(benchmark)], other[len(benchmark) :]
     assert all(a.text == b.text and (a.voice, a.speed) != (b.voice, b.speed) for a, b in zip(first, second))

@@ -18,19 +18,34 @@ from services.speech.vocabulary import nlu_vocabulary
 
 pytestmark = pytest.mark.skipif(not espeak.available(), reason="espeak-ng is not installed")
 
-WORLD = {"objects": [
-    {"id": "obj0", "color": "red", "type": "cup", "position": [0.55, -0.15, 0.77], "size": [0.07, 0.07, 0.1]},
-    {"id": "obj1", "color": "blue", "type": "cup", "position": [0.6, 0.15, 0.77], "size": [0.07, 0.07, 0.1]},
-    {"id": "obj2", "color": "green", "type": "box", "position": [0.5, 0.0, 0.76], "size": [0.08, 0.08, 0.08]},
-], "robot": {"grippers": {"right": "open", "left": "open"}, "last_arm": "right"}}
+WORLD = {
+    "objects": [
+        {"id": "obj0", "color": "red", "type": "cup", "position": [0.55, -0.15, 0.77], "size": [0.07, 0.07, 0.1]},
+        {"id": "obj1", "color": "blue", "type": "cup", "position": [0.6, 0.15, 0.77], "size": [0.07, 0.07, 0.1]},
+        {"id": "obj2", "color": "green", "type": "box", "position": [0.5, 0.0, 0.76], "size": [0.08, 0.08, 0.08]},
+    ],
+    "robot": {"grippers": {"right": "open", "left": "open"}, "last_arm": "right"},
+}
 
 CASES = [
-    ("move your right hand above the red cup", "en-us", 150,
-     {"procedure": "move_rel_dest", "args": {"arm": "right", "relation": "above", "object": "obj0"}}),
-    ("move your left arm next to the blue cup", "en-gb", 150,
-     {"procedure": "move_rel_dest", "args": {"arm": "left", "relation": "next_to", "object": "obj1"}}),
-    ("pick up the green box with your right hand", "en-us", 140,
-     {"procedure": "pick_up", "args": {"arm": "right", "object": "obj2"}}),
+    (
+        "move your right hand above the red cup",
+        "en-us",
+        150,
+        {"procedure": "move_rel_dest", "args": {"arm": "right", "relation": "above", "object": "obj0"}},
+    ),
+    (
+        "move your left arm next to the blue cup",
+        "en-gb",
+        150,
+        {"procedure": "move_rel_dest", "args": {"arm": "left", "relation": "next_to", "object": "obj1"}},
+    ),
+    (
+        "pick up the green box with your right hand",
+        "en-us",
+        140,
+        {"procedure": "pick_up", "args": {"arm": "right", "object": "obj2"}},
+    ),
     ("look at the blue cup", "en-gb", 150, {"procedure": "look_at", "args": {"object": "obj1"}}),
 ]
 
@@ -63,7 +78,7 @@ def test_voice_activity_splits_a_stream_into_its_utterances():
     splitter = UtteranceSplitter()
     utterances = []
     for start in range(0, len(stream), 1234):  # chunk sizes that fit no frame boundary
-        utterances += splitter.feed(stream[start:start + 1234])
+        utterances += splitter.feed(stream[start : start + 1234])
     utterances += splitter.flush()
     assert len(utterances) == 2
     assert seconds(utterances[0]) == pytest.approx(seconds(first), abs=0.35)
@@ -75,10 +90,13 @@ def test_silence_gives_no_utterance():
     assert splitter.feed(silence(3.0)) + splitter.flush() == []
 
 
-@pytest.mark.parametrize(("content", "message"), [
-    (None, "no such WAV file"),
-    (b"not a wav file at all", "is not a readable WAV file"),
-])
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (None, "no such WAV file"),
+        (b"not a wav file at all", "is not a readable WAV file"),
+    ],
+)
 def test_unreadable_audio_is_a_clear_error(tmp_path: Path, content, message):
     path = tmp_path / "bad.wav"
     if content is not None:
@@ -91,6 +109,7 @@ def test_wav_at_another_rate_and_in_stereo_is_converted(tmp_path: Path):
     mono = espeak.synthesise("stop", "en-us", 150)
     path = tmp_path / "stereo.wav"
     import wave
+
     stereo = np.repeat(mono, 2)  # 16 kHz stereo, written as 8 kHz to test resampling too
     with wave.open(str(path), "wb") as wav:
         wav.setnchannels(2)

@@ -59,16 +59,19 @@ def test_the_scene_keeps_only_the_object_words_that_can_name_an_object_in_view(f
     assert {"blue", "box"} <= grammar_words(build_jsgf(full.core(3)))  # no scene known: every word
 
 
-@pytest.mark.parametrize(("sentence", "member"), [
-    ("move your right hand above the red cup", True),
-    ("pick the leftmost cup up with your left hand", True),
-    ("please place it on the table", True),
-    ("record objects", True),
-    ("switch to action three", True),
-    ("place it near", False),            # a partial path: the relation lacks its object
-    ("move your right hand above the blue box", False),  # not in this scene
-    ("pick up", False),
-])
+@pytest.mark.parametrize(
+    ("sentence", "member"),
+    [
+        ("move your right hand above the red cup", True),
+        ("pick the leftmost cup up with your left hand", True),
+        ("please place it on the table", True),
+        ("record objects", True),
+        ("switch to action three", True),
+        ("place it near", False),  # a partial path: the relation lacks its object
+        ("move your right hand above the blue box", False),  # not in this scene
+        ("pick up", False),
+    ],
+)
 def test_the_matcher_accepts_exactly_the_grammar_sentences(full, sentence, member):
     jsgf = build_jsgf(full.core(3), SceneWords.of(TWO_CUPS))
     assert in_grammar(sentence_matcher(jsgf), sentence) is member
@@ -83,7 +86,9 @@ def test_the_ngram_model_is_built_from_grammar_sentences(full):
     model = arpa(sentences)
     assert model.startswith("\\data\\") and model.rstrip().endswith("\\end\\")
     unigrams = model.split("\\1-grams:")[1].split("\\2-grams:")[0]
-    assert {line.split("\t")[1] for line in unigrams.strip().splitlines()} == {w for s in sentences for w in s.split()} | {"<s>", "</s>"}
+    assert {line.split("\t")[1] for line in unigrams.strip().splitlines()} == {
+        w for s in sentences for w in s.split()
+    } | {"<s>", "</s>"}
 
 
 def test_recogniser_loads_the_grammar_and_swaps_it_when_the_scene_changes(full):

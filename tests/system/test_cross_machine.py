@@ -16,11 +16,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from shared.bus import Bus
-from shared.config import SessionOptions, free_port
 from hfpbd.tasks.runner import TaskRunner
 from hfpbd.tasks.scripts import Expected, Utterance
 from hfpbd.tasks.stack import LocalStack
+from shared.bus import Bus
+from shared.config import SessionOptions, free_port
 
 
 @pytest.fixture
@@ -30,7 +30,7 @@ def split(tmp_path: Path) -> Iterator[tuple[TaskRunner, LocalStack]]:
     robot_host = SessionOptions(namespace=namespace, listen=(endpoint,), multicast_scouting=False)
     workstation = SessionOptions(namespace=namespace, connect=(endpoint,), multicast_scouting=False)
     assert "--connect" not in robot_host.to_argv()
-    watcher = Bus(workstation)   # keeps retrying its endpoint until the simulator listens there
+    watcher = Bus(workstation)  # keeps retrying its endpoint until the simulator listens there
     stack = LocalStack(watcher, tmp_path)
     try:
         stack.start("sim", robot_host.to_argv())
@@ -49,10 +49,16 @@ def test_objects_flow_and_a_spoken_command_moves_the_arm(split: tuple[TaskRunner
     runner.wait_for_services()
     truth = runner.load_scene("default")
     red = np.asarray(truth["obj0"]["position"])
-    assert {o["color"] for o in runner.watch.objects.values()} >= {"red", "blue"}, "perception saw nothing through the sim"
+    assert {o["color"] for o in runner.watch.objects.values()} >= {"red", "blue"}, (
+        "perception saw nothing through the sim"
+    )
 
-    step = runner.say(Utterance("Move your right hand above the red cup.",
-                                Expected("move_rel_dest", {"arm": "right", "relation": "above", "object": "obj0"})))
+    step = runner.say(
+        Utterance(
+            "Move your right hand above the red cup.",
+            Expected("move_rel_dest", {"arm": "right", "relation": "above", "object": "obj0"}),
+        )
+    )
     assert step.ok, step.problem
     tool = np.asarray(runner.watch.sim["ee"]["right"])
     assert np.linalg.norm(tool[:2] - red[:2]) < 0.04, "the right hand is not over the red cup"

@@ -37,9 +37,25 @@ def robot(tmp_path: Path):
     """``hfpbd up --headless`` with the NLU only, on a private port and namespace."""
     namespace, port = "up" + uuid.uuid4().hex[:8], free_port()
     popen = subprocess.Popen(
-        [sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", "nlu", "--namespace", namespace,
-         "--listen", f"tcp/127.0.0.1:{port}", "--log-dir", str(tmp_path)],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        [
+            sys.executable,
+            "-m",
+            "hfpbd.launcher",
+            "--headless",
+            "--services",
+            "nlu",
+            "--namespace",
+            namespace,
+            "--listen",
+            f"tcp/127.0.0.1:{port}",
+            "--log-dir",
+            str(tmp_path),
+        ],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     bus = Bus(loopback_options(namespace, port, listen=False))
     try:
         yield popen, bus
@@ -62,8 +78,10 @@ def test_crashed_service_is_reported_and_restarted_and_stop_leaves_no_orphans(ro
     nlu.kill()
     message = said.get(timeout=20)
     assert message["kind"] == "error" and "nlu service stopped" in message["text"] and "restarting" in message["text"]
-    assert _wait(lambda: "nlu" in bus.alive_services() and
-                 any(c.pid != nlu.pid for c in psutil.Process(popen.pid).children()), 60)
+    assert _wait(
+        lambda: "nlu" in bus.alive_services() and any(c.pid != nlu.pid for c in psutil.Process(popen.pid).children()),
+        60,
+    )
     children = psutil.Process(popen.pid).children(recursive=True)
     popen.send_signal(signal.SIGINT)
     assert popen.wait(30) == 0
@@ -71,16 +89,39 @@ def test_crashed_service_is_reported_and_restarted_and_stop_leaves_no_orphans(ro
 
 
 def test_unknown_service_is_refused(tmp_path: Path) -> None:
-    result = subprocess.run([sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", "nlu,teleporter"],
-                            cwd=ROOT, capture_output=True, text=True, timeout=60, check=False)
+    result = subprocess.run(
+        [sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", "nlu,teleporter"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
     assert result.returncode != 0 and "unknown service(s) teleporter" in result.stderr
 
 
 def _start_up(namespace: str, port: int, log_dir: Path, *extra: str) -> subprocess.Popen:
     return subprocess.Popen(
-        [sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", "nlu", "--namespace", namespace,
-         "--listen", f"tcp/127.0.0.1:{port}", "--log-dir", str(log_dir), *extra],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        [
+            sys.executable,
+            "-m",
+            "hfpbd.launcher",
+            "--headless",
+            "--services",
+            "nlu",
+            "--namespace",
+            namespace,
+            "--listen",
+            f"tcp/127.0.0.1:{port}",
+            "--log-dir",
+            str(log_dir),
+            *extra,
+        ],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
 
 
 def _listeners(root: psutil.Process) -> list[tuple[str, int]]:
@@ -91,8 +132,11 @@ def _listeners(root: psutil.Process) -> list[tuple[str, int]]:
             connections = process.net_connections(kind="inet")
         except psutil.NoSuchProcess:
             continue
-        found += [(c.laddr.ip, c.laddr.port) for c in connections
-                  if c.status == psutil.CONN_LISTEN or (c.type == socket.SOCK_DGRAM and not c.raddr)]
+        found += [
+            (c.laddr.ip, c.laddr.port)
+            for c in connections
+            if c.status == psutil.CONN_LISTEN or (c.type == socket.SOCK_DGRAM and not c.raddr)
+        ]
     return found
 
 
@@ -121,8 +165,14 @@ def test_a_second_robot_on_the_namespace_refuses_to_start(robot, tmp_path: Path)
 def test_a_second_service_on_the_namespace_refuses_to_start(robot) -> None:
     _, bus = robot
     assert _wait(lambda: "nlu" in bus.alive_services(), 60)
-    result = subprocess.run([sys.executable, "-m", "services.nlu", *bus.options.to_argv()], cwd=ROOT,
-                            capture_output=True, text=True, timeout=90, check=False)
+    result = subprocess.run(
+        [sys.executable, "-m", "services.nlu", *bus.options.to_argv()],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=90,
+        check=False,
+    )
     assert result.returncode == 3
     assert f"nlu is already running on namespace {bus.keys.namespace!r}" in result.stderr
     assert "Traceback" not in result.stderr
@@ -137,14 +187,20 @@ def test_services_end_with_the_launcher_however_it_ends(robot, sig: int) -> None
     assert children
     popen.send_signal(sig)
     popen.wait(30)
-    assert _wait(lambda: not any(c.is_running() and c.status() != psutil.STATUS_ZOMBIE for c in children), 20), \
-        [c.cmdline() for c in children if c.is_running()]
+    assert _wait(lambda: not any(c.is_running() and c.status() != psutil.STATUS_ZOMBIE for c in children), 20), [
+        c.cmdline() for c in children if c.is_running()
+    ]
 
 
 def test_a_listener_beyond_loopback_needs_secure_or_insecure(tmp_path: Path) -> None:
-    result = subprocess.run([sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", "nlu",
-                             "--listen", "tcp/0.0.0.0:7447"], cwd=ROOT, capture_output=True, text=True,
-                            timeout=60, check=False)
+    result = subprocess.run(
+        [sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", "nlu", "--listen", "tcp/0.0.0.0:7447"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
     assert result.returncode == 2
     assert "--secure DIR" in result.stderr and "--insecure" in result.stderr and "Traceback" not in result.stderr
 
@@ -154,14 +210,37 @@ def test_secure_robot_serves_its_operator_over_mutual_tls(tmp_path: Path) -> Non
     init(pki, host="robot-host")
     namespace, port = "sec" + uuid.uuid4().hex[:8], free_port()
     popen = subprocess.Popen(
-        [sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", "nlu", "--namespace", namespace,
-         "--listen", f"tls/127.0.0.1:{port}", "--secure", str(pki), "--log-dir", str(tmp_path / "logs")],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        [
+            sys.executable,
+            "-m",
+            "hfpbd.launcher",
+            "--headless",
+            "--services",
+            "nlu",
+            "--namespace",
+            namespace,
+            "--listen",
+            f"tls/127.0.0.1:{port}",
+            "--secure",
+            str(pki),
+            "--log-dir",
+            str(tmp_path / "logs"),
+        ],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
 
     def remote(identity: str) -> Bus:
         """A laptop's client session, once the robot listens (a client cannot open before that)."""
-        options = SessionOptions(namespace=namespace, connect=(f"tls/localhost:{port}",), multicast_scouting=False,
-                                 secure=str(pki), identity=identity)
+        options = SessionOptions(
+            namespace=namespace,
+            connect=(f"tls/localhost:{port}",),
+            multicast_scouting=False,
+            secure=str(pki),
+            identity=identity,
+        )
         deadline = time.monotonic() + 30
         while True:
             try:
@@ -194,9 +273,26 @@ def test_secure_robot_serves_its_operator_over_mutual_tls(tmp_path: Path) -> Non
 def test_insecure_listener_warns_and_the_services_stay_on_loopback(tmp_path: Path) -> None:
     namespace, port = "ins" + uuid.uuid4().hex[:8], free_port()
     popen = subprocess.Popen(
-        [sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", "nlu", "--listen", f"tcp/0.0.0.0:{port}",
-         "--insecure", "--namespace", namespace, "--log-dir", str(tmp_path)],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        [
+            sys.executable,
+            "-m",
+            "hfpbd.launcher",
+            "--headless",
+            "--services",
+            "nlu",
+            "--listen",
+            f"tcp/0.0.0.0:{port}",
+            "--insecure",
+            "--namespace",
+            namespace,
+            "--log-dir",
+            str(tmp_path),
+        ],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     try:
         with Bus(loopback_options(namespace, port, listen=False)) as bus:
             assert _wait(lambda: "nlu" in bus.alive_services(), 60), "the NLU never came up"
@@ -213,10 +309,26 @@ def test_each_service_killed_mid_run_is_restarted_and_keeps_the_current_action(t
     namespace, port = "kill" + uuid.uuid4().hex[:8], free_port()
     services = ("nlu", "perception", "executor")
     popen = subprocess.Popen(
-        [sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", ",".join(services), "--namespace",
-         namespace, "--listen", f"tcp/127.0.0.1:{port}", "--log-dir", str(tmp_path / "logs")],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        env={**os.environ, "HFPBD_DATA_DIR": str(tmp_path / "data")})
+        [
+            sys.executable,
+            "-m",
+            "hfpbd.launcher",
+            "--headless",
+            "--services",
+            ",".join(services),
+            "--namespace",
+            namespace,
+            "--listen",
+            f"tcp/127.0.0.1:{port}",
+            "--log-dir",
+            str(tmp_path / "logs"),
+        ],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env={**os.environ, "HFPBD_DATA_DIR": str(tmp_path / "data")},
+    )
     bus = Bus(loopback_options(namespace, port, listen=False))
     said: queue.Queue = queue.Queue()
     bus.subscribe(bus.keys.say, said.put, schema="say")
@@ -234,13 +346,18 @@ def test_each_service_killed_mid_run_is_restarted_and_keeps_the_current_action(t
             while f"{name} service stopped" not in text and time.monotonic() < deadline:
                 text = said.get(timeout=max(0.1, deadline - time.monotonic()))["text"]
             assert f"The {name} service stopped" in text and "restarting it" in text
-            assert _wait(lambda name=name, old=child.pid: name in bus.alive_services() and old not in
-                         [c.pid for c in psutil.Process(popen.pid).children()], 60), f"{name} did not come back"
+            assert _wait(
+                lambda name=name, old=child.pid: (
+                    name in bus.alive_services() and old not in [c.pid for c in psutil.Process(popen.pid).children()]
+                ),
+                60,
+            ), f"{name} did not come back"
         assert _wait(lambda: set(services) <= bus.alive_services(), 30)
         listed = bus.request(actions, {"op": "list"}, timeout=10)
         assert listed["current"] == 1 and len(listed["actions"]) == 1, listed
-        assert bus.request(bus.keys.nlu_query("parse"), {"text": "open your left hand"}, timeout=10)["kind"] == \
-            "command"
+        assert (
+            bus.request(bus.keys.nlu_query("parse"), {"text": "open your left hand"}, timeout=10)["kind"] == "command"
+        )
         assert (tmp_path / "data" / namespace / "actions.json").is_file()
     finally:
         bus.close()
@@ -248,12 +365,15 @@ def test_each_service_killed_mid_run_is_restarted_and_keeps_the_current_action(t
         popen.communicate(timeout=60)
 
 
-@pytest.mark.parametrize("listen, router, services", [
-    ("tcp/127.0.0.1:7447", ("tcp/127.0.0.1:7447",), "tcp/127.0.0.1:7447"),
-    ("tls/0.0.0.0:7447", ("tls/0.0.0.0:7447",), "tls/127.0.0.1:7447"),
-    ("tls/[::]:7448", ("tls/[::]:7448",), "tls/127.0.0.1:7448"),
-    ("tls/192.168.1.20:7447", ("tls/192.168.1.20:7447", "tls/127.0.0.1:7447"), "tls/127.0.0.1:7447"),
-])
+@pytest.mark.parametrize(
+    "listen, router, services",
+    [
+        ("tcp/127.0.0.1:7447", ("tcp/127.0.0.1:7447",), "tcp/127.0.0.1:7447"),
+        ("tls/0.0.0.0:7447", ("tls/0.0.0.0:7447",), "tls/127.0.0.1:7447"),
+        ("tls/[::]:7448", ("tls/[::]:7448",), "tls/127.0.0.1:7448"),
+        ("tls/192.168.1.20:7447", ("tls/192.168.1.20:7447", "tls/127.0.0.1:7447"), "tls/127.0.0.1:7447"),
+    ],
+)
 def test_the_services_reach_the_router_on_loopback(listen: str, router: tuple[str, ...], services: str) -> None:
     assert hub_listen(listen) == router
     assert local_endpoint(listen) == services

@@ -44,16 +44,20 @@ def test_task4_minimal_language_still_saves_words() -> None:
     assert task.words("minimal") < task.words("full")
 
 
-@pytest.mark.parametrize(("text", "words"), [("Move your right hand above the red cup.", 8), ("above blue", 2),
-                                             ("pick it up", 3), ("  side ", 1)])
+@pytest.mark.parametrize(
+    ("text", "words"),
+    [("Move your right hand above the red cup.", 8), ("above blue", 2), ("pick it up", 3), ("  side ", 1)],
+)
 def test_words_are_counted_as_typed(text: str, words: int) -> None:
     assert word_count(text) == words
 
 
 def test_a_broken_task_file_is_named(tmp_path: Path) -> None:
     bad = tmp_path / "tasks.json"
-    bad.write_text('{"tasks": [{"id": "t", "title": "x", "scene": "default", "success": {"kind": "teleported"},'
-                   ' "replay_seed": 1, "styles": {}}]}')
+    bad.write_text(
+        '{"tasks": [{"id": "t", "title": "x", "scene": "default", "success": {"kind": "teleported"},'
+        ' "replay_seed": 1, "styles": {}}]}'
+    )
     with pytest.raises(ScriptError, match="task t: success.kind must be one of"):
         load_tasks(bad)
 
@@ -72,24 +76,71 @@ Z = TABLE_TOP_Z
 CUP = (0.07, 0.07, 0.10)
 
 
-@pytest.mark.parametrize(("criterion", "truth", "grippers", "expected"), [
-    ({"kind": "stacked", "top": "a", "base": "b"}, _truth(a=((0.55, 0.1, Z + 0.09), CUP), b=((0.55, 0.1, Z + 0.05), CUP)), {}, True),
-    ({"kind": "stacked", "top": "a", "base": "b"}, _truth(a=((0.55, 0.0, Z + 0.05), CUP), b=((0.55, 0.1, Z + 0.05), CUP)), {}, False),
-    ({"kind": "side_by_side", "moved": "a", "landmark": "b"},
-     _truth(a=((0.55, 0.02, Z + 0.05), CUP), b=((0.56, 0.12, Z + 0.03), (0.06, 0.06, 0.06))), {}, True),
-    ({"kind": "side_by_side", "moved": "a", "landmark": "b"},
-     _truth(a=((0.45, -0.2, Z + 0.05), CUP), b=((0.56, 0.12, Z + 0.03), (0.06, 0.06, 0.06))), {}, False),
-    ({"kind": "inside", "object": "a", "container": "b"},
-     _truth(a=((0.58, 0.1, Z + 0.04), (0.06, 0.06, 0.06)), b=((0.58, 0.1, Z + 0.05), (0.2, 0.2, 0.1))), {}, True),
-    ({"kind": "inside", "object": "a", "container": "b"},
-     _truth(a=((0.58, 0.1, Z + 0.14), (0.06, 0.06, 0.06)), b=((0.58, 0.1, Z + 0.05), (0.2, 0.2, 0.1))), {}, False),
-    ({"kind": "lifted", "object": "a", "height": 0.10}, _truth(a=((0.58, 0.0, Z + 0.21), (0.2, 0.3, 0.18))), {}, True),
-    ({"kind": "lifted", "object": "a", "height": 0.10}, _truth(a=((0.58, 0.0, Z + 0.15), (0.2, 0.3, 0.18))), {}, False),
-    ({"kind": "off_table_in_gripper", "object": "a", "height": 0.03},
-     _truth(a=((0.40, 0.0, Z + 0.10), (0.22, 0.22, 0.012))), {"right": {"holding": "a"}, "left": {"holding": None}}, True),
-    ({"kind": "off_table_in_gripper", "object": "a", "height": 0.03},
-     _truth(a=((0.40, 0.0, Z + 0.006), (0.22, 0.22, 0.012))), {"right": {"holding": None}}, False),
-])
+@pytest.mark.parametrize(
+    ("criterion", "truth", "grippers", "expected"),
+    [
+        (
+            {"kind": "stacked", "top": "a", "base": "b"},
+            _truth(a=((0.55, 0.1, Z + 0.09), CUP), b=((0.55, 0.1, Z + 0.05), CUP)),
+            {},
+            True,
+        ),
+        (
+            {"kind": "stacked", "top": "a", "base": "b"},
+            _truth(a=((0.55, 0.0, Z + 0.05), CUP), b=((0.55, 0.1, Z + 0.05), CUP)),
+            {},
+            False,
+        ),
+        (
+            {"kind": "side_by_side", "moved": "a", "landmark": "b"},
+            _truth(a=((0.55, 0.02, Z + 0.05), CUP), b=((0.56, 0.12, Z + 0.03), (0.06, 0.06, 0.06))),
+            {},
+            True,
+        ),
+        (
+            {"kind": "side_by_side", "moved": "a", "landmark": "b"},
+            _truth(a=((0.45, -0.2, Z + 0.05), CUP), b=((0.56, 0.12, Z + 0.03), (0.06, 0.06, 0.06))),
+            {},
+            False,
+        ),
+        (
+            {"kind": "inside", "object": "a", "container": "b"},
+            _truth(a=((0.58, 0.1, Z + 0.04), (0.06, 0.06, 0.06)), b=((0.58, 0.1, Z + 0.05), (0.2, 0.2, 0.1))),
+            {},
+            True,
+        ),
+        (
+            {"kind": "inside", "object": "a", "container": "b"},
+            _truth(a=((0.58, 0.1, Z + 0.14), (0.06, 0.06, 0.06)), b=((0.58, 0.1, Z + 0.05), (0.2, 0.2, 0.1))),
+            {},
+            False,
+        ),
+        (
+            {"kind": "lifted", "object": "a", "height": 0.10},
+            _truth(a=((0.58, 0.0, Z + 0.21), (0.2, 0.3, 0.18))),
+            {},
+            True,
+        ),
+        (
+            {"kind": "lifted", "object": "a", "height": 0.10},
+            _truth(a=((0.58, 0.0, Z + 0.15), (0.2, 0.3, 0.18))),
+            {},
+            False,
+        ),
+        (
+            {"kind": "off_table_in_gripper", "object": "a", "height": 0.03},
+            _truth(a=((0.40, 0.0, Z + 0.10), (0.22, 0.22, 0.012))),
+            {"right": {"holding": "a"}, "left": {"holding": None}},
+            True,
+        ),
+        (
+            {"kind": "off_table_in_gripper", "object": "a", "height": 0.03},
+            _truth(a=((0.40, 0.0, Z + 0.006), (0.22, 0.22, 0.012))),
+            {"right": {"holding": None}},
+            False,
+        ),
+    ],
+)
 def test_success_is_judged_from_ground_truth(criterion: dict, truth: dict, grippers: dict, expected: bool) -> None:
     verdict = judge(criterion, truth, grippers)
     assert verdict.success is expected, verdict.reason
@@ -101,13 +152,26 @@ def test_a_missing_object_fails_with_its_name() -> None:
 
 
 def _run(task: str, style: str, words: int, seconds: float, ok: bool, latency: float) -> dict:
-    return {"task": task, "title": "t", "style": style, "utterances": 3, "words": words, "programming_s": seconds,
-            "success": ok, "replay": ok, "steps": [{"motion_latency_s": latency}, {"motion_latency_s": None}]}
+    return {
+        "task": task,
+        "title": "t",
+        "style": style,
+        "utterances": 3,
+        "words": words,
+        "programming_s": seconds,
+        "success": ok,
+        "replay": ok,
+        "steps": [{"motion_latency_s": latency}, {"motion_latency_s": None}],
+    }
 
 
 def test_outputs_are_written_and_compared_with_the_paper(tmp_path: Path) -> None:
-    runs = [_run("task1", "full", 33, 40.0, True, 0.12), _run("task1", "minimal", 10, 30.0, True, 0.25),
-            _run("task4", "full", 53, 60.0, False, 0.1), _run("task4", "minimal", 24, 50.0, False, 0.1)]
+    runs = [
+        _run("task1", "full", 33, 40.0, True, 0.12),
+        _run("task1", "minimal", 10, 30.0, True, 0.25),
+        _run("task4", "full", 53, 60.0, False, 0.1),
+        _run("task4", "minimal", 24, 50.0, False, 0.1),
+    ]
     rows = figures.table_rows(runs)
     figures.write_csv(rows, tmp_path / "tasks.csv")
     figures.chart(runs, tmp_path / "tasks.png")

@@ -14,13 +14,14 @@ from collections.abc import Iterator
 
 import pytest
 
-from shared.bus import Bus
-from shared.config import free_port, loopback_options
 from hfpbd.tasks.runner import TaskRunner
 from hfpbd.tasks.scripts import STYLES, load_tasks
 from hfpbd.tasks.stack import LocalStack
+from shared.bus import Bus
+from shared.config import free_port, loopback_options
 
 BOOK = load_tasks()
+
 
 @pytest.fixture(scope="module")
 def runner(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TaskRunner]:
@@ -42,11 +43,15 @@ def runner(tmp_path_factory: pytest.TempPathFactory) -> Iterator[TaskRunner]:
 
 def _cases() -> list:
     marks = [pytest.mark.slow, pytest.mark.timeout(1200)]
-    return [pytest.param(task.id, style, marks=marks, id=f"{task.id}-{style}") for task in BOOK.tasks for style in STYLES]
+    return [
+        pytest.param(task.id, style, marks=marks, id=f"{task.id}-{style}") for task in BOOK.tasks for style in STYLES
+    ]
 
 
 @pytest.mark.parametrize(("task_id", "style"), _cases())
-def test_task_is_programmed_by_language_and_replayed_on_moved_objects(runner: TaskRunner, task_id: str, style: str) -> None:
+def test_task_is_programmed_by_language_and_replayed_on_moved_objects(
+    runner: TaskRunner, task_id: str, style: str
+) -> None:
     task = BOOK.task(task_id)
     report = runner.run(task, style)
     failed = [f"{s.text!r}: {s.problem}" for s in report.steps if not s.ok]

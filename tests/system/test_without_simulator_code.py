@@ -35,7 +35,7 @@ def sim_imports(path: Path) -> list[str]:
     for node in ast.walk(ast.parse(path.read_text(), str(path))):
         if isinstance(node, ast.Import):
             names = [alias.name for alias in node.names]
-        elif isinstance(node, ast.ImportFrom):   # "from services import sim" names it too
+        elif isinstance(node, ast.ImportFrom):  # "from services import sim" names it too
             names = [f"{node.module}.{alias.name}" for alias in node.names]
         else:
             continue
@@ -57,8 +57,14 @@ def guard(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
     folder = tmp_path_factory.mktemp("no_sim")
     (folder / "sitecustomize.py").write_text(GUARD)
     env = {"PYTHONPATH": os.pathsep.join([str(folder), str(ROOT)])}
-    probe = subprocess.run([sys.executable, "-c", "import services.sim.layout"], cwd=ROOT, capture_output=True,
-                           text=True, env={**os.environ, **env}, timeout=60)
+    probe = subprocess.run(
+        [sys.executable, "-c", "import services.sim.layout"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        env={**os.environ, **env},
+        timeout=60,
+    )
     assert probe.returncode != 0 and "services.sim" in probe.stderr, probe.stderr
     return env
 

@@ -15,8 +15,8 @@ from scipy.spatial.transform import Rotation
 from tests.tui.helpers import OBJECTS
 
 WIDTH, HEIGHT = 160, 120
-FOCAL = 147.3                       # px at 160 wide: 57° horizontal field of view
-EYE = np.array([0.10, 0.0, 1.40])   # the camera link, above the base
+FOCAL = 147.3  # px at 160 wide: 57° horizontal field of view
+EYE = np.array([0.10, 0.0, 1.40])  # the camera link, above the base
 TARGET = np.array([0.62, 0.0, 0.72])
 TABLE = {"z": 0.72, "x": (0.35, 1.15), "y": (-0.80, 0.80), "rgb": (196, 180, 150)}
 FLOOR_RGB = (90, 90, 100)
@@ -63,5 +63,15 @@ def frame(objects: list[dict[str, Any]] = OBJECTS, stamp: float = 1.0) -> dict[s
             nearest[closer], rgb[closer] = enter[closer], obj["rgb"]
     xyz = (EYE + rays * nearest[..., None]).astype(np.float32)
     xyz[~np.isfinite(nearest)] = np.nan
-    return {"stamp": stamp, "sim_time": stamp, "xyz": xyz, "rgb": rgb, "camera_pose": camera_pose(),
-            "width": WIDTH, "height": HEIGHT, "frame": "base", "scene": "default", "scene_generation": 1}
+    return {
+        "stamp": stamp,
+        "sim_time": stamp,
+        "xyz": xyz,
+        "rgb": rgb,
+        "camera_pose": camera_pose(),
+        "width": WIDTH,
+        "height": HEIGHT,
+        "frame": "base",
+        "scene": "default",
+        "scene_generation": 1,
+    }

@@ -28,14 +28,42 @@ async def until(pilot: Pilot, condition: Callable[[], bool], timeout: float = 15
 
 
 OBJECTS: list[dict[str, Any]] = [
-    {"id": "obj0", "color": "red", "type": "cup", "position": [0.62, -0.15, 0.80],
-     "size": [0.07, 0.07, 0.10], "held_by": None, "rgb": [200, 30, 30]},
-    {"id": "obj1", "color": "blue", "type": "cup", "position": [0.58, 0.12, 0.80],
-     "size": [0.07, 0.07, 0.12], "held_by": None, "rgb": [40, 60, 210]},
-    {"id": "obj2", "color": "green", "type": "box", "position": [0.75, 0.02, 0.79],
-     "size": [0.10, 0.08, 0.08], "held_by": None, "rgb": [40, 160, 60]},
-    {"id": "obj3", "color": "white", "type": "plate", "position": [0.50, 0.30, 0.76],
-     "size": [0.18, 0.18, 0.02], "held_by": None, "rgb": [230, 230, 230]},
+    {
+        "id": "obj0",
+        "color": "red",
+        "type": "cup",
+        "position": [0.62, -0.15, 0.80],
+        "size": [0.07, 0.07, 0.10],
+        "held_by": None,
+        "rgb": [200, 30, 30],
+    },
+    {
+        "id": "obj1",
+        "color": "blue",
+        "type": "cup",
+        "position": [0.58, 0.12, 0.80],
+        "size": [0.07, 0.07, 0.12],
+        "held_by": None,
+        "rgb": [40, 60, 210],
+    },
+    {
+        "id": "obj2",
+        "color": "green",
+        "type": "box",
+        "position": [0.75, 0.02, 0.79],
+        "size": [0.10, 0.08, 0.08],
+        "held_by": None,
+        "rgb": [40, 160, 60],
+    },
+    {
+        "id": "obj3",
+        "color": "white",
+        "type": "plate",
+        "position": [0.50, 0.30, 0.76],
+        "size": [0.18, 0.18, 0.02],
+        "held_by": None,
+        "rgb": [230, 230, 230],
+    },
 ]
 
 REACH = {
@@ -47,16 +75,24 @@ REACH = {
 
 ROBOT = {
     "grippers": {"right": "open", "left": "closed"},
-    "last_arm": "right", "last_object": "obj0", "executing": False,
-    "action": 1, "actions": [2], "steps": ["move your right hand above the red cup", "pick it up"],
+    "last_arm": "right",
+    "last_object": "obj0",
+    "executing": False,
+    "action": 1,
+    "actions": [2],
+    "steps": ["move your right hand above the red cup", "pick it up"],
     "progress": None,
 }
 
 SIM_STATE = {
-    "sim_time": 1.0, "joints": {}, "moving": {"right": False, "left": False},
+    "sim_time": 1.0,
+    "joints": {},
+    "moving": {"right": False, "left": False},
     "ee": {"right": [0.45, -0.3, 0.95, 1, 0, 0, 0], "left": [0.45, 0.3, 0.95, 1, 0, 0, 0]},
-    "grippers": {"right": {"width": 0.08, "holding": None, "contact": []},
-                 "left": {"width": 0.0, "holding": None, "contact": []}},
+    "grippers": {
+        "right": {"width": 0.08, "holding": None, "contact": []},
+        "left": {"width": 0.0, "holding": None, "contact": []},
+    },
 }
 
 DESCRIPTIONS = {"obj0": "the red cup", "obj1": "the blue cup", "obj2": "the green box", "obj3": "the plate"}
@@ -73,8 +109,10 @@ def stage_world(hub: Bus) -> list[Publisher]:
     for service in ("sim", "perception", "nlu", "executor"):
         hub.declare_alive(service)
     hub.serve(hub.keys.nlu_query("describe"), lambda _request: dict(DESCRIPTIONS))
-    hub.serve(hub.keys.nlu_query("vocabulary"), lambda _request: {"words": ["move", "pick", "place", "execute"],
-                                                                   "phrases": ["move your right hand"]})
+    hub.serve(
+        hub.keys.nlu_query("vocabulary"),
+        lambda _request: {"words": ["move", "pick", "place", "execute"], "phrases": ["move your right hand"]},
+    )
     objects = hub.publisher(hub.keys.objects, cached=True)
     objects.put({"stamp": 1.0, "objects": OBJECTS})
     state = hub.publisher(hub.keys.executor_state, cached=True)
@@ -102,8 +140,16 @@ def fixed_network(name: str) -> Iterator[tuple[Bus, SessionOptions]]:
 
 # Three actions as a person would have taught them; creation times fixed so pictures never change.
 TAUGHT = [
-    ("stack the cups", 1764590400.0, ["move your right hand above the red cup", "open your right hand",
-                                      "pick up the red cup", "place it on top of the blue cup"]),
+    (
+        "stack the cups",
+        1764590400.0,
+        [
+            "move your right hand above the red cup",
+            "open your right hand",
+            "pick up the red cup",
+            "place it on top of the blue cup",
+        ],
+    ),
     (None, 1764594000.0, ["pick up the plate with your left hand", "move it up", "place it on the table"]),
     ("tidy the box", 1764597600.0, ["pick up the green box"]),
 ]

@@ -36,6 +36,7 @@ async def draw(directory: Path, name: str, scene: Scene) -> Path:
         serve_actions(hub, store, [])
         app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell")
         async with app.run_test(size=SIZE) as pilot:
+
             async def then(p: Pilot) -> None:
                 await pick_up_the_red_cup(app, hub, p)
                 await scene(app, hub, p)

@@ -33,8 +33,9 @@ def utc() -> Iterator[None]:
 
 
 @asynccontextmanager
-async def actions_screen(tmp_path: Path, name: str, size: tuple[int, int] = (100, 30),
-                         serve: bool = True) -> AsyncIterator[tuple[PbdApp, Pilot, ActionStore, list]]:
+async def actions_screen(
+    tmp_path: Path, name: str, size: tuple[int, int] = (100, 30), serve: bool = True
+) -> AsyncIterator[tuple[PbdApp, Pilot, ActionStore, list]]:
     """The app with the actions screen open over a store holding ``TAUGHT``."""
     store = ActionStore(tmp_path)
     teach(store)
@@ -63,8 +64,11 @@ async def test_every_action_is_listed_with_its_steps_in_the_users_words(tmp_path
     async with actions_screen(tmp_path, "actlist") as (app, pilot, _store, _runs):
         table = app.screen.query_one("#actions-table")
         rows = [[str(cell) for cell in table.get_row_at(i)] for i in range(table.row_count)]
-        assert [row[1:4] for row in rows] == [["1", "stack the cups", "4"], ["2", "(unnamed)", "3"],
-                                              ["3", "tidy the box", "1"]]
+        assert [row[1:4] for row in rows] == [
+            ["1", "stack the cups", "4"],
+            ["2", "(unnamed)", "3"],
+            ["3", "tidy the box", "1"],
+        ]
         assert rows[0][4] == "2025-12-01 12:00" and rows[0][0] == "▶"
         await pilot.press("down")
         steps = app.screen.query_one("#steps-table")

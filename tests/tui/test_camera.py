@@ -28,8 +28,12 @@ HALF_BLOCKS = (1, 2)
 
 
 def _world(**changes: object) -> WorldView:
-    world = WorldView(objects={o["id"]: o for o in OBJECTS}, descriptions=dict(DESCRIPTIONS),
-                      ee=SIM_STATE["ee"], grippers=SIM_STATE["grippers"])
+    world = WorldView(
+        objects={o["id"]: o for o in OBJECTS},
+        descriptions=dict(DESCRIPTIONS),
+        ee=SIM_STATE["ee"],
+        grippers=SIM_STATE["grippers"],
+    )
     for name, value in changes.items():
         setattr(world, name, value)
     return world
@@ -73,8 +77,10 @@ def test_the_outline_surrounds_the_object_in_the_scaled_picture() -> None:
     picture = compose(frame(), _world(highlighted="obj0"), 60, 20, CELL, HALF_BLOCKS)
     pixels = np.asarray(picture.image)
     camera = fit_pinhole(frame()["xyz"], frame()["camera_pose"])
-    (u, v), = camera.project(np.array([OBJECTS[0]["position"]]))[0] * [picture.image.width / WIDTH,
-                                                                        picture.image.height / HEIGHT]
+    ((u, v),) = camera.project(np.array([OBJECTS[0]["position"]]))[0] * [
+        picture.image.width / WIDTH,
+        picture.image.height / HEIGHT,
+    ]
     row = pixels[int(v)]
     left = [c for c in range(int(u)) if tuple(row[c]) == (255, 215, 0)]
     right = [c for c in range(int(u) + 1, len(row)) if tuple(row[c]) == (255, 215, 0)]
@@ -84,12 +90,13 @@ def test_the_outline_surrounds_the_object_in_the_scaled_picture() -> None:
 @pytest.mark.unit
 def test_labels_of_objects_side_by_side_do_not_cover_each_other() -> None:
     cups = [{**OBJECTS[0], "id": f"obj{i}", "position": [0.62, -0.15 + 0.08 * i, 0.80]} for i in range(3)]
-    world = _world(objects={c["id"]: c for c in cups}, descriptions={"obj0": "the rightmost cup",
-                                                                     "obj1": "the middle cup",
-                                                                     "obj2": "the leftmost cup"})
+    world = _world(
+        objects={c["id"]: c for c in cups},
+        descriptions={"obj0": "the rightmost cup", "obj1": "the middle cup", "obj2": "the leftmost cup"},
+    )
     labels = compose(frame(cups), world, 60, 20, CELL, HALF_BLOCKS).labels
     for i, one in enumerate(labels):
-        for other in labels[i + 1:]:
+        for other in labels[i + 1 :]:
             apart = one.column + len(one.text) <= other.column or other.column + len(other.text) <= one.column
             assert one.row != other.row or apart, f"{one.text!r} covers {other.text!r}"
 
@@ -201,8 +208,9 @@ async def test_f3_shows_the_simulators_overview_picture() -> None:
     with fixed_network("camoverview") as (hub, options):
         world = stage_world(hub)
         asked: list[dict] = []
-        hub.serve(hub.keys.sim_control("snapshot"), lambda request: (asked.append(request), {"ok": True,
-                                                                                           "png": _png()})[1])
+        hub.serve(
+            hub.keys.sim_control("snapshot"), lambda request: (asked.append(request), {"ok": True, "png": _png()})[1]
+        )
         app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell")
         async with app.run_test(size=(100, 30)) as pilot:
             await settled(app, hub)(pilot)
@@ -223,8 +231,11 @@ async def test_f3_without_a_simulator_says_why() -> None:
             await settled(app, hub)(pilot)
             await pilot.press("f3")
             conversation = app.main.query_one(Conversation)
-            await until(pilot, lambda: any("overview picture failed" in text for text in conversation.texts("error")),
-                        what="the reason")
+            await until(
+                pilot,
+                lambda: any("overview picture failed" in text for text in conversation.texts("error")),
+                what="the reason",
+            )
             assert any("the simulator did not answer" in text for text in conversation.texts("error"))
         del world
 

@@ -31,8 +31,12 @@ async def test_command_then_clarification_chosen_from_the_list(network: Network,
     launcher.start("nlu")
     app = PbdApp(network.client_options, probe_seconds=None)
     async with app.run_test(size=(120, 40)) as pilot:
-        await until(pilot, lambda: set(app.world.descriptions) == {o["id"] for o in OBJECTS}, timeout=30,
-                    what="the NLU's referring expressions")
+        await until(
+            pilot,
+            lambda: set(app.world.descriptions) == {o["id"] for o in OBJECTS},
+            timeout=30,
+            what="the NLU's referring expressions",
+        )
         table = app.query_one(ObjectTable)
         assert str(table.get_row("obj2")[3]) == app.world.descriptions["obj2"]
 

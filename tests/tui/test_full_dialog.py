@@ -39,13 +39,24 @@ async def test_pick_up_through_the_ui(network: Network, launcher: Launcher, tmp_
     launcher.start("executor", "--data-dir", str(tmp_path / "actions"))
     app = PbdApp(network.client_options, probe_seconds=None)
     async with app.run_test(size=(120, 40)) as pilot:
-        await until(pilot, lambda: sum(o.get("type") == "cup" for o in app.world.objects.values()) >= 2
-                    and app.world.reach and set(app.world.objects) <= set(app.world.descriptions),
-                    timeout=90, what="cups seen, reach known and named")
+        await until(
+            pilot,
+            lambda: (
+                sum(o.get("type") == "cup" for o in app.world.objects.values()) >= 2
+                and app.world.reach
+                and set(app.world.objects) <= set(app.world.descriptions)
+            ),
+            timeout=90,
+            what="cups seen, reach known and named",
+        )
         await pilot.press(*"move your right hand up", "enter")
         assert results.get(timeout=30)["procedure"] == "move_abs_dir"
-        await until(pilot, lambda: any("up" in t for t in app.query_one(Conversation).texts("narration")),
-                    timeout=60, what="narration of the move")
+        await until(
+            pilot,
+            lambda: any("up" in t for t in app.query_one(Conversation).texts("narration")),
+            timeout=60,
+            what="narration of the move",
+        )
 
         errors_before = len(app.query_one(Conversation).texts("error"))
         await pilot.press(*"pick up the cup", "enter")
@@ -62,8 +73,12 @@ async def test_pick_up_through_the_ui(network: Network, launcher: Launcher, tmp_
         cup_truth = truth_id_near(truth, list(start))
         table_z = float(truth[cup_truth]["position"][2])
 
-        await until(pilot, lambda: (app.world.robot.get("grippers") or {}).get(arm) == "holding"
-                    and not app.world.robot.get("busy"), timeout=150, what="the cup held and the robot idle")
+        await until(
+            pilot,
+            lambda: (app.world.robot.get("grippers") or {}).get(arm) == "holding" and not app.world.robot.get("busy"),
+            timeout=150,
+            what="the cup held and the robot idle",
+        )
         time.sleep(1.0)  # let the physics settle a moment with the cup in the hand
         lifted = float(truth[cup_truth]["position"][2])
         assert lifted > table_z + 0.03, f"the cup is at z={lifted:.3f}, it stood at {table_z:.3f}"

@@ -132,8 +132,9 @@ CANDIDATES = ["the red cup", "the blue cup", "the tallest cup"]
 async def _ask(app: PbdApp, pilot: Any, network: Network) -> None:
     await connected(app, pilot)
     await pilot.pause(0.5)
-    network.hub.publish(network.hub.keys.say, {"text": "Which object do you mean?", "kind": "clarify",
-                                               "candidates": CANDIDATES})
+    network.hub.publish(
+        network.hub.keys.say, {"text": "Which object do you mean?", "kind": "clarify", "candidates": CANDIDATES}
+    )
     await until(pilot, lambda: app.query_one(ClarifyPrompt).is_open, what="the clarification prompt")
 
 
@@ -157,8 +158,13 @@ async def test_a_clarification_is_answered_by_choosing_from_the_list(network: Ne
         await _ask(app, pilot, network)
         await answer(pilot, app)
         message = heard.get(timeout=10)
-        assert message == {"v": 1, "text": "the blue cup", "choice": 1, "source": "tui",
-                           "_key": network.hub.keys.utterance}
+        assert message == {
+            "v": 1,
+            "text": "the blue cup",
+            "choice": 1,
+            "source": "tui",
+            "_key": network.hub.keys.utterance,
+        }
         await until(pilot, lambda: not app.query_one(ClarifyPrompt).is_open, what="the prompt to close")
         assert conversation(app).texts("user") == ["2. the blue cup"]
 
@@ -205,9 +211,16 @@ async def test_world_panel_shows_objects_with_names_reach_and_the_referred_objec
         assert str(rows["obj0"][3]) == "the red cup"
         assert [str(rows[i][6]) for i in ("obj0", "obj1", "obj3")] == ["right", "both", "left"]
         assert str(rows["obj3"][5]) == "18×18×2 cm"
-        hub.publish(hub.keys.nlu_result, {"kind": "command", "procedure": "pick_up",
-                                          "utterance": "pick up the blue cup",
-                                          "args": {"arm": "left", "object": "obj1"}, "confidence": 0.9})
+        hub.publish(
+            hub.keys.nlu_result,
+            {
+                "kind": "command",
+                "procedure": "pick_up",
+                "utterance": "pick up the blue cup",
+                "args": {"arm": "left", "object": "obj1"},
+                "confidence": 0.9,
+            },
+        )
         await until(pilot, lambda: app.world.highlighted == "obj1", what="the highlight")
         await pilot.pause(0.1)
         assert str(table.get_row("obj1")[0]) == "▶"
@@ -237,8 +250,12 @@ async def test_robot_and_action_panels_follow_the_executor(network: Network) -> 
     async with app.run_test(size=SIZE) as pilot:
         await connected(app, pilot)
         await pilot.pause(0.5)
-        running = {**ROBOT, "executing": True, "grippers": {"right": "holding", "left": "open"},
-                   "progress": {"step": 2, "of": 2}}
+        running = {
+            **ROBOT,
+            "executing": True,
+            "grippers": {"right": "holding", "left": "open"},
+            "progress": {"step": 2, "of": 2},
+        }
         state.put({"stamp": time.time(), "robot": running, "reach": REACH})
         await until(pilot, lambda: app.world.robot.get("executing"), what="executing state")
         await pilot.pause(0.1)
@@ -264,8 +281,9 @@ KEYS = [
 
 
 @pytest.mark.parametrize(("key", "procedure", "args"), KEYS, ids=[k[1] + "-" + k[0] for k in KEYS])
-async def test_keys_send_direct_commands_even_while_typing(network: Network, key: str, procedure: str,
-                                                            args: dict[str, Any]) -> None:
+async def test_keys_send_direct_commands_even_while_typing(
+    network: Network, key: str, procedure: str, args: dict[str, Any]
+) -> None:
     requests = serve_recording(network.hub, network.hub.keys.executor_control("command"), {"ok": True, "message": "ok"})
     app = PbdApp(network.client_options, probe_seconds=None)
     async with app.run_test(size=SIZE) as pilot:
@@ -311,8 +329,10 @@ async def test_executor_errors_are_shown_with_their_reason(network: Network) -> 
 
 async def test_history_and_vocabulary_completion(network: Network) -> None:
     hub = network.hub
-    hub.serve(hub.keys.nlu_query("vocabulary"),
-              lambda _r: {"words": ["move", "pick", "right", "hand", "above"], "phrases": ["move your right hand"]})
+    hub.serve(
+        hub.keys.nlu_query("vocabulary"),
+        lambda _r: {"words": ["move", "pick", "right", "hand", "above"], "phrases": ["move your right hand"]},
+    )
     hub.serve(hub.keys.nlu_query("describe"), lambda _r: dict(DESCRIPTIONS))
     hub.declare_alive("nlu")
     app = PbdApp(network.client_options, probe_seconds=0.2)

@@ -74,13 +74,18 @@ def refusing_speech(hub: Bus) -> None:
     hub.serve(hub.keys.speech("ptt"), refuse)
 
 
-@pytest.mark.parametrize("setup, kind, told", [
-    (no_speech, "warning", NO_SPEECH),
-    (silent_speech, "error", "push-to-talk failed: the speech service did not answer (is it running?)"),
-    (refusing_speech, "error", "push-to-talk failed: the microphone is busy"),
-], ids=["not-running", "not-answering", "refusing"])
+@pytest.mark.parametrize(
+    "setup, kind, told",
+    [
+        (no_speech, "warning", NO_SPEECH),
+        (silent_speech, "error", "push-to-talk failed: the speech service did not answer (is it running?)"),
+        (refusing_speech, "error", "push-to-talk failed: the microphone is busy"),
+    ],
+    ids=["not-running", "not-answering", "refusing"],
+)
 async def test_the_talk_key_without_a_working_speech_service_says_why(
-        network: Network, setup: Callable[[Bus], None], kind: str, told: str) -> None:
+    network: Network, setup: Callable[[Bus], None], kind: str, told: str
+) -> None:
     setup(network.hub)
     app = PbdApp(network.client_options, probe_seconds=None)
     async with app.run_test(size=SIZE) as pilot:

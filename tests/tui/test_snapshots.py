@@ -28,8 +28,9 @@ from tui.status_bar import StatusBar
 SIZE = (120, 40)
 
 
-def settled(app: PbdApp, hub: Bus,
-            then: Callable[[Pilot], Awaitable[Any]] | None = None) -> Callable[[Pilot], Awaitable[None]]:
+def settled(
+    app: PbdApp, hub: Bus, then: Callable[[Pilot], Awaitable[Any]] | None = None
+) -> Callable[[Pilot], Awaitable[None]]:
     """Wait until the staged world is on screen, then run ``then``."""
 
     async def run_before(pilot: Pilot) -> None:
@@ -40,8 +41,9 @@ def settled(app: PbdApp, hub: Bus,
                 break
             hub.publish(hub.keys.sim_state, {"stamp": 1.0, **SIM_STATE})
             await pilot.pause(0.1)
-        await until(pilot, lambda: len(app.world.objects) == len(OBJECTS) and app.world.ee and app.world.robot,
-                    what="the world")
+        await until(
+            pilot, lambda: len(app.world.objects) == len(OBJECTS) and app.world.ee and app.world.robot, what="the world"
+        )
         await until(pilot, lambda: app.world.descriptions == DESCRIPTIONS, what="referring expressions")
         await until(pilot, lambda: app.query_one("#input").vocabulary.words, what="vocabulary")
         if then is not None:
@@ -55,8 +57,16 @@ async def pick_up_the_red_cup(app: PbdApp, hub: Bus, pilot: Pilot) -> None:
     """The user asks for a pick-up; the NLU's result and the executor's narration come back."""
     await pilot.pause(0.3)
     await pilot.press(*"pick up the red cup", "enter")
-    hub.publish(hub.keys.nlu_result, {"kind": "command", "procedure": "pick_up", "utterance": "pick up the red cup",
-                                      "args": {"arm": "right", "object": "obj0"}, "confidence": 0.93})
+    hub.publish(
+        hub.keys.nlu_result,
+        {
+            "kind": "command",
+            "procedure": "pick_up",
+            "utterance": "pick up the red cup",
+            "args": {"arm": "right", "object": "obj0"},
+            "confidence": 0.93,
+        },
+    )
     await until(pilot, lambda: app.world.highlighted == "obj0", what="the highlight")
     # the result and the narration travel on different keys: send the second after the first is shown
     hub.publish(hub.keys.say, {"text": "Picking up the red cup with my right hand.", "kind": "narration"})
@@ -83,8 +93,10 @@ def test_clarification_prompt(snap_compare: Any) -> None:
         async def ask(pilot: Pilot) -> None:
             await pilot.pause(0.3)
             await pilot.press(*"pick up the cup", "enter")
-            hub.publish(hub.keys.say, {"text": "Which cup do you mean?", "kind": "clarify",
-                                       "candidates": ["the red cup", "the blue cup"]})
+            hub.publish(
+                hub.keys.say,
+                {"text": "Which cup do you mean?", "kind": "clarify", "candidates": ["the red cup", "the blue cup"]},
+            )
             await until(pilot, lambda: app.query_one(ClarifyPrompt).is_open, what="the prompt")
             await pilot.press("down")
 
@@ -107,8 +119,9 @@ async def show_the_camera(app: PbdApp, hub: Bus, pilot: Pilot) -> None:
 async def open_the_actions(app: PbdApp, pilot: Pilot) -> None:
     """F4, then the second step of the first action highlighted."""
     await pilot.press("f4")
-    await until(pilot, lambda: isinstance(app.screen, ActionsScreen) and len(app.screen.actions) == 3,
-                what="the actions")
+    await until(
+        pilot, lambda: isinstance(app.screen, ActionsScreen) and len(app.screen.actions) == 3, what="the actions"
+    )
     await pilot.press("tab", "down")
 
 
@@ -136,6 +149,7 @@ def test_actions_screen(snap_compare: Any, tmp_path: Path, size: tuple[int, int]
         world = stage_world(hub)
         serve_actions(hub, store, [])
         app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell")
-        assert snap_compare(app, terminal_size=size,
-                            run_before=settled(app, hub, lambda pilot: open_the_actions(app, pilot)))
+        assert snap_compare(
+            app, terminal_size=size, run_before=settled(app, hub, lambda pilot: open_the_actions(app, pilot))
+        )
         del world

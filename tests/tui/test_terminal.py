@@ -33,8 +33,14 @@ class Terminal:
         self._tmux("new-session", "-d", "-x", "120", "-y", "40", "-s", "ui", subprocess.list2cmdline(command))
 
     def _tmux(self, *args: str) -> str:
-        return subprocess.run(["tmux", "-L", self.socket, "-f", "/dev/null", *args], cwd=ROOT, check=True,
-                              capture_output=True, text=True, timeout=10).stdout
+        return subprocess.run(
+            ["tmux", "-L", self.socket, "-f", "/dev/null", *args],
+            cwd=ROOT,
+            check=True,
+            capture_output=True,
+            text=True,
+            timeout=10,
+        ).stdout
 
     def screen(self) -> str:
         return self._tmux("capture-pane", "-p", "-t", "ui")
@@ -53,8 +59,12 @@ class Terminal:
             time.sleep(0.2)
 
     def running(self) -> bool:
-        return subprocess.run(["tmux", "-L", self.socket, "has-session", "-t", "ui"],
-                              capture_output=True, timeout=10).returncode == 0
+        return (
+            subprocess.run(
+                ["tmux", "-L", self.socket, "has-session", "-t", "ui"], capture_output=True, timeout=10
+            ).returncode
+            == 0
+        )
 
     def close(self) -> None:
         subprocess.run(["tmux", "-L", self.socket, "kill-server"], capture_output=True, timeout=10)

@@ -10,44 +10,59 @@ from tui.world import object_rgb, reach_text, size_text
 pytestmark = pytest.mark.unit
 
 
-@pytest.mark.parametrize(("obj", "reach", "expected"), [
-    ({}, {"right": {"pick_up": True}, "left": {"pick_up": True}}, "both"),
-    ({}, {"right": {"pick_up": True}, "left": {"pick_up": False}}, "right"),
-    ({}, {"right": {"pick_up": False}, "left": {"above": True}}, "left"),
-    ({}, {"right": {"pick_up": False}, "left": {"pick_up": False}}, "none"),
-    ({}, None, "?"),
-    ({"held_by": "left"}, {"right": {"pick_up": True}}, "held (left)"),
-])
+@pytest.mark.parametrize(
+    ("obj", "reach", "expected"),
+    [
+        ({}, {"right": {"pick_up": True}, "left": {"pick_up": True}}, "both"),
+        ({}, {"right": {"pick_up": True}, "left": {"pick_up": False}}, "right"),
+        ({}, {"right": {"pick_up": False}, "left": {"above": True}}, "left"),
+        ({}, {"right": {"pick_up": False}, "left": {"pick_up": False}}, "none"),
+        ({}, None, "?"),
+        ({"held_by": "left"}, {"right": {"pick_up": True}}, "held (left)"),
+    ],
+)
 def test_reach_wording(obj: dict, reach: dict | None, expected: str) -> None:
     assert reach_text(obj, reach) == expected
 
 
-@pytest.mark.parametrize(("size", "expected"), [
-    ([0.07, 0.07, 0.1], "7×7×10 cm"), ([0.184, 0.18, 0.021], "18×18×2 cm"), (None, "?"), (["x"], "?"),
-])
+@pytest.mark.parametrize(
+    ("size", "expected"),
+    [
+        ([0.07, 0.07, 0.1], "7×7×10 cm"),
+        ([0.184, 0.18, 0.021], "18×18×2 cm"),
+        (None, "?"),
+        (["x"], "?"),
+    ],
+)
 def test_size_wording(size: object, expected: str) -> None:
     assert size_text(size) == expected
 
 
-@pytest.mark.parametrize(("obj", "expected"), [
-    ({"rgb": [200, 30, 30], "color": "blue"}, (200, 30, 30)),
-    ({"rgb": [1.0, 0.5, 0.0]}, (255, 127, 0)),
-    ({"color": "green"}, (40, 170, 60)),
-    ({"color": "chartreuse"}, (160, 160, 160)),
-])
+@pytest.mark.parametrize(
+    ("obj", "expected"),
+    [
+        ({"rgb": [200, 30, 30], "color": "blue"}, (200, 30, 30)),
+        ({"rgb": [1.0, 0.5, 0.0]}, (255, 127, 0)),
+        ({"color": "green"}, (40, 170, 60)),
+        ({"color": "chartreuse"}, (160, 160, 160)),
+    ],
+)
 def test_swatch_colour_prefers_the_measured_colour(obj: dict, expected: tuple[int, int, int]) -> None:
     assert object_rgb(obj) == expected
 
 
-@pytest.mark.parametrize(("typed", "expected"), [
-    ("mo", "move your right hand"),
-    ("move your right hand above the r", "move your right hand above the red cup"),
-    ("pi", "pick"),
-    ("pick it u", "pick it up"),
-    ("pick ", None),
-    ("", None),
-    ("zz", None),
-])
+@pytest.mark.parametrize(
+    ("typed", "expected"),
+    [
+        ("mo", "move your right hand"),
+        ("move your right hand above the r", "move your right hand above the red cup"),
+        ("pi", "pick"),
+        ("pick it u", "pick it up"),
+        ("pick ", None),
+        ("", None),
+        ("zz", None),
+    ],
+)
 def test_completion(typed: str, expected: str | None) -> None:
     suggester = VocabularySuggester()
     suggester.learn(["move", "pick", "up", "place"], ["move your right hand", "the red cup"])

@@ -53,8 +53,16 @@ def load(directory: Path = HERE) -> tuple[dict[str, Any], list[Case]]:
         for line in path.read_text().splitlines():
             if line.strip():
                 item = json.loads(line)
-                cases.append(Case(item["category"], item["scene"], item["text"], item["expect"],
-                                  tuple(item.get("before", ())), item.get("history")))
+                cases.append(
+                    Case(
+                        item["category"],
+                        item["scene"],
+                        item["text"],
+                        item["expect"],
+                        tuple(item.get("before", ())),
+                        item.get("history"),
+                    )
+                )
     return scenes, cases
 
 
@@ -111,5 +119,7 @@ def run(scenes: dict[str, Any], cases: list[Case]) -> dict[str, list[tuple[Case,
 
 def accuracy(outcomes: dict[str, list[tuple[Case, str | None]]]) -> dict[str, tuple[int, int]]:
     """(right, total) per category."""
-    return {category: (sum(problem is None for _, problem in items), len(items))
-            for category, items in sorted(outcomes.items())}
+    return {
+        category: (sum(problem is None for _, problem in items), len(items))
+        for category, items in sorted(outcomes.items())
+    }
