@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-ARMS = ("right", "left")
+from shared.contract import ARMS
 
 # Display colours for perception's colour words, used when an object carries
 # no measured ``rgb``.

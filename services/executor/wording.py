@@ -12,45 +12,17 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 
+from shared import contract
+
 Refer = Callable[[str], str]
 
-DEFAULT_VERBS = {
-    "move_abs_dest": "move",
-    "move_rel_dest": "move",
-    "move_abs_dir": "move",
-    "move_rel_dir": "move",
-    "pick_up": "pick up",
-    "place_abs": "place",
-    "place_rel": "place",
-    "point_to": "point at",
-    "look_at": "look at",
-    "rotate": "rotate",
-    "open": "open",
-    "close": "close",
+# the contract's words, the same ones the NLU phrases commands with
+DEFAULT_VERBS = {name: procedure.verb for name, procedure in contract.PROCEDURES.items()}
+RELATION_WORDS = {name: contract.VALUE_WORDS[name] for name in (*contract.RELATIONS, *contract.REL_DIRECTIONS)}
+DIRECTION_WORDS = {name: contract.VALUE_WORDS[name] for name in (*contract.ABS_DIRECTIONS, *contract.ROTATE_DIRECTIONS)}
+DESTINATION_WORDS = {
+    name: contract.VALUE_WORDS[name] for name in (*contract.MOVE_DESTINATIONS, *contract.PLACE_DESTINATIONS)
 }
-RELATION_WORDS = {
-    "above": "above",
-    "next_to": "next to",
-    "left_of": "to the left of",
-    "right_of": "to the right of",
-    "in_front_of": "in front of",
-    "behind": "behind",
-    "on_top_of": "on top of",
-    "near": "near",
-    "towards": "towards",
-    "away_from": "away from",
-}
-DIRECTION_WORDS = {
-    "up": "up",
-    "down": "down",
-    "left": "to the left",
-    "right": "to the right",
-    "forward": "forward",
-    "backward": "backward",
-    "cw": "clockwise",
-    "ccw": "counter-clockwise",
-}
-DESTINATION_WORDS = {"side": "to the side", "table": "on the table", "here": "here"}
 VOWELS = set("aeiou")
 
 
