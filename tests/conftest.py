@@ -7,6 +7,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from tests.processes import Launcher, Network, new_network
@@ -30,6 +31,12 @@ def launcher(network: Network, tmp_path: Path) -> Iterator[Launcher]:
         yield services
     finally:
         services.stop_all()
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _numpy_probes_the_cpu_once() -> None:
+    """numpy's ``assert_allclose`` runs ``lscpu`` once per process to learn the CPU; do it before any unit test."""
+    np.testing.assert_allclose(0.0, 0.0)
 
 
 @pytest.fixture(autouse=True)
