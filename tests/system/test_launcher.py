@@ -36,26 +36,7 @@ def _wait(predicate, timeout: float) -> bool:
 def robot(tmp_path: Path):
     """``hfpbd up --headless`` with the NLU only, on a private port and namespace."""
     namespace, port = "up" + uuid.uuid4().hex[:8], free_port()
-    popen = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "hfpbd.launcher",
-            "--headless",
-            "--services",
-            "nlu",
-            "--namespace",
-            namespace,
-            "--listen",
-            f"tcp/127.0.0.1:{port}",
-            "--log-dir",
-            str(tmp_path),
-        ],
-        cwd=ROOT,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-    )
+    popen = _start_up(namespace, port, tmp_path)
     bus = Bus(loopback_options(namespace, port, listen=False))
     try:
         yield popen, bus
