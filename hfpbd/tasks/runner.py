@@ -24,7 +24,7 @@ import numpy as np
 
 from hfpbd.tasks.judge import Verdict, judge
 from hfpbd.tasks.observer import Observer, WaitTimeout
-from hfpbd.tasks.scripts import Expected, Task, Utterance
+from hfpbd.tasks.scripts import Expected, Task, Utterance, word_count
 from shared.bus import Bus, BusTimeout, RemoteError
 
 log = logging.getLogger("hfpbd.tasks")
@@ -50,7 +50,7 @@ class RunError(RuntimeError):
 class StepReport:
     text: str
     words: int
-    expected: dict[str, Any]
+    expected: dict[str, Any] | None  # None: any command will do (a walkthrough judged by what is said)
     understood: dict[str, Any] | None = None  # procedure + args with the scene's object ids, or a question
     ok: bool = False
     problem: str = ""
@@ -200,16 +200,20 @@ class TaskRunner:
         )
 
     # -- one utterance -------------------------------------------------------------------
-    def say(self, utterance: Utterance, timeout: float = STEP_TIMEOUT) -> StepReport:
-        """Send one utterance as the TUI does and follow it to its end."""
-        step = StepReport(utterance.text, utterance.words, utterance.expect.as_dict())
+    def say(self, utterance: Utterance | str, timeout: float = STEP_TIMEOUT) -> StepReport:
+        """Send one utterance as the TUI does and follow it to its end (plain text: no expected command)."""
+        if isinstance(utterance, str):
+            text, expected = utterance, None
+        else:
+            text, expected = utterance.text, utterance.expect.as_dict()
+        step = StepReport(text, word_count(text), expected)
         busy_before = self.watch.busy_states
         sent = time.time()
         self.watch.watch_motion(sent)
-        self.bus.publish(self.bus.keys.utterance, {"text": utterance.text, "source": "script"})
+        self.bus.publish(self.bus.keys.utterance, {"text": step.text, "source": "script"})
         try:
             result = self.watch.wait_for(
-                lambda: self._result_for(utterance.text, sent), NLU_TIMEOUT, f"the NLU to understand {utterance.text!r}"
+                lambda: self._result_for(step.text, sent), NLU_TIMEOUT, f"the NLU to understand {step.text!r}"
             )
         except WaitTimeout as exc:
             step.problem = str(exc)
@@ -219,17 +223,17 @@ class TaskRunner:
             step.problem = f"the robot asked: {result.get('question', '')}"
             return self._finish(step, sent)
         step.understood = self._in_scene_ids(result)
-        if step.understood != step.expected:
+        if step.expected is not None and step.understood != step.expected:
             step.problem = f"understood {step.understood} instead of {step.expected}"
         try:
             # taken up: a busy state, or a line about it (a quick command can be over before its busy state is sent)
             self.watch.wait_for(
                 lambda: self.watch.busy_states > busy_before or self.watch.lines_since(sent),
                 START_TIMEOUT,
-                f"the executor to take up {utterance.text!r}",
+                f"the executor to take up {step.text!r}",
             )
             time.sleep(TAKEN_UP_GRACE)
-            self.watch.wait_for(lambda: not self.watch.busy(), timeout, f"the executor to finish {utterance.text!r}")
+            self.watch.wait_for(lambda: not self.watch.busy(), timeout, f"the executor to finish {step.text!r}")
         except WaitTimeout as exc:
             step.problem = step.problem or str(exc)
         time.sleep(0.3)  # the last line of a step arrives just after the idle state

@@ -52,6 +52,7 @@ from services.executor.scene import ARMS, Scene
 from services.executor.store import ActionStore, StoreError
 from services.executor.undo import before_state, reverse
 from shared.bus import Bus, BusTimeout, RemoteError
+from shared.contract import PLACES
 
 log = logging.getLogger("hfpbd.executor")
 
@@ -321,6 +322,19 @@ class Executor:
         self.say(f"Switched to action {target}.", "info")
 
     # -- one step ------------------------------------------------------------------------------
+
+    def _referent(self, procedure: str, args: dict[str, Any]) -> str | None:
+        """What "it" refers to once this step is done: after a placement the object put down, not the place.
+
+        The NLU keeps the same rule (``History.after``), so the two accounts
+        of history agree.
+        """
+        if procedure in PLACES and args.get("arm") in ARMS:
+            held = self.procedures.held()[args["arm"]]
+            if held is not None:
+                return held.object_id
+        return args.get("object")
+
     def _step(
         self,
         procedure: str,
@@ -340,8 +354,7 @@ class Executor:
         if procedure not in ADMIN:
             if args.get("arm") != BOTH:
                 self._last_arm = args.get("arm", self._last_arm)
-            if args.get("object"):
-                self._last_object = args["object"]
+            self._last_object = self._referent(procedure, args) or self._last_object
 
         def failed(text: str) -> bool:
             self.say(f"{text} {failure_note}" if failure_note else text, "error")

@@ -24,7 +24,7 @@ from __future__ import annotations
 import itertools
 import logging
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Collection, Iterator
 from dataclasses import dataclass, field
 from functools import partial
 from typing import Any
@@ -768,8 +768,11 @@ class Procedures:
         support = self._support_below(held.object_id, held.box, snap) if destination == "here" else snap.table_z
         first, *around = targets.place_table(kin.fk(), held, support)
         where = "here" if destination == "here" else "on the table"
-        # right below first, landing on a plate's rim allowed; then only free spots of the table around it
-        pairs = [first] + [(hover, release) for hover, release in around if self._free_spot(held, release, snap)]
+        # right below first, landing on a plate's rim allowed; then only free spots of the table around it.
+        # Down on the table, right below counts only where nothing but flat things lie there: lowered onto the box
+        # it was lifted from, the object would stand on the box again.
+        below = destination == "here" or self._free_spot(held, first[1], snap, self._flat_below(held, first[1], snap))
+        pairs = ([first] if below else []) + [pair for pair in around if self._free_spot(held, pair[1], snap)]
         done = self._place(
             arm, kin, snap, held, pairs, wording.sentence(f"I can't find a clear path to put it down {where}")
         )
@@ -777,16 +780,17 @@ class Procedures:
             raise StepFailed(wording.sentence(f"I can't lower my {arm} hand to put it down {where}"))
         return done
 
-    def _free_spot(self, held: Held, release: np.ndarray, snap: SceneSnapshot, on: str | None = None) -> bool:
+    def _free_spot(self, held: Held, release: np.ndarray, snap: SceneSnapshot, on: Collection[str] = ()) -> bool:
         """Whether the held object released at ``release`` would stand clear of every other object's footprint.
 
-        ``on``: the object it is put on (its footprint is where it goes).
+        ``on``: the objects it is put on (their footprints are where it goes).
         Perception's own sighting of what a hand holds is no footprint on the table.
         """
         center = held.center_at(release)
         arm = next((a for a, h in self.held().items() if h is not None and h.object_id == held.object_id), "")
         return all(
-            oid in (held.object_id, on)
+            oid == held.object_id
+            or oid in on
             or reach.is_held_sighting(obj, arm, held)
             or np.any(
                 np.abs(Box.of(obj).center[:2] - center[:2])
@@ -834,7 +838,7 @@ class Procedures:
         pairs = [
             (hover, release)
             for hover, release in targets.place_relation(relation, box, kin.fk(), held, snap.table_z)
-            if self._free_spot(held, release, snap, on=object if relation in ("above", "on_top_of") else None)
+            if self._free_spot(held, release, snap, on=(object,) if relation in ("above", "on_top_of") else ())
         ]
         done = self._place(
             arm,

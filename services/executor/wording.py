@@ -77,8 +77,13 @@ def arm_words(arm: str, phrases: Mapping[str, str] | None = None, *, own: bool =
 
 
 def _word(table: Mapping[str, str], key: str, phrases: Mapping[str, str] | None, field: str) -> str:
+    """The user's words for ``field``, else the contract's; never the verb's words twice.
+
+    "put it down" names the verb and the destination with the same words, so
+    the destination is then said in the contract's words ("on the table").
+    """
     said = (phrases or {}).get(field)
-    return said if said else table.get(key, key.replace("_", " "))
+    return said if said and said != (phrases or {}).get("verb") else table.get(key, key.replace("_", " "))
 
 
 def narration(

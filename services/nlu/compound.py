@@ -92,11 +92,8 @@ def run(model: Model, parts: list[str], history: History) -> Result:
         confidence *= result.confidence
         world = current.world
         for command in result.commands:
+            history = history.after(command, world)
             world = after(world, command)
-            history = History(
-                command.arg("arm") if command.arg("arm") in ARMS else history.last_arm,
-                command.arg("object") or history.last_object,
-            )
         current = type(model)(world)
     return CommandResult(commands[0], confidence, ", then ".join(texts), {}, score, tuple(commands[1:]))
 
@@ -118,9 +115,10 @@ def after(world: World, command: Command) -> World:
     elif command.procedure == "close":
         for hand in arms:
             grippers[hand] = "holding" if any(o.held_by == hand for o in objects) else "closed"
-    last_arm = arm if arm in ARMS else robot.last_arm
-    last_object = object_id or robot.last_object
+    history = History(robot.last_arm, robot.last_object).after(command, world)
     return World(
         objects,
-        RobotState(**{**robot.__dict__, "grippers": grippers, "last_arm": last_arm, "last_object": last_object}),
+        RobotState(
+            **{**robot.__dict__, "grippers": grippers, "last_arm": history.last_arm, "last_object": history.last_object}
+        ),
     )

@@ -14,11 +14,11 @@ from dataclasses import dataclass, field
 
 from services.nlu import questions
 from services.nlu.commands import ADMIN_PROCEDURES
+from services.nlu.compound import after
 from services.nlu.infer import Answer, Clarify, CommandResult, Model, Result
 from services.nlu.prior import History
 from services.nlu.tokens import read
 from services.nlu.weights import LANGUAGE
-from shared.contract import ARMS
 
 _WORD = re.compile(r"[a-z]+")
 _CANCEL = re.compile(
@@ -112,8 +112,8 @@ class Dialogue:
         if isinstance(result, Answer):
             return  # a question answered changes nothing, not even a pending question
         self.pending = None
+        world = model.world
         for command in result.commands:
             if command.procedure not in ADMIN_PROCEDURES:
-                base = self._history(model)
-                arm = command.arg("arm") if command.arg("arm") in ARMS else base.last_arm
-                self.history = History(arm, command.arg("object") or base.last_object)
+                self.history = self._history(model).after(command, world)
+            world = after(world, command)

@@ -10,7 +10,10 @@ runner-up:
 - a place with an empty hand is a pick-up first when the utterance names what
   to place ("put the red cup on the plate": ``pick_up`` then ``place_rel``),
   and otherwise the move to that place ("put your right hand over the box");
-  with nowhere to move to, it is refused.
+  with nowhere to move to, it is refused;
+- a move of an empty hand to a place is that same pick-up and place when the
+  words name an object to move and no hand ("move the blue cup next to the
+  box").
 """
 
 from __future__ import annotations
@@ -38,17 +41,27 @@ def situate(model: Model, command: Command, match: Match, history: History, said
     if command.procedure == "pick_up":
         already_held(model, command.procedure, match)
         return (command,)
+    if command.procedure == "move_rel_dest" and not said_arm and _empty(model, command.arg("arm")):
+        carried = _theme(model, command, match)
+        if carried is not None:  # "move the cup next to the box": the cup goes there
+            command = Command("place_rel", command.args)
     if command.procedure not in ("place_abs", "place_rel") or not _empty(model, command.arg("arm")):
         return (command,)
-    theme = _unique(match.grounding(match.theme_end) if match.theme_end else match.grounding(), model)
-    if command.procedure == "place_rel" and theme == world.index_of(command.arg("object")):
-        theme = None
+    theme = _theme(model, command, match)
     if theme is not None and world.objects[theme].held_by is None:
         arm = command.arg("arm") if said_arm else _best_arm(model, theme, history, command.arg("arm"))
         return (Command("pick_up", (("arm", arm), ("object", world.ids[theme]))), command.with_arg("arm", arm))
     if command.procedure == "place_rel":
         return (Command("move_rel_dest", command.args),)
     raise Refusal(f"My {command.arg('arm')} hand is not holding anything to put down.")
+
+
+def _theme(model: Model, command: Command, match: Match) -> int | None:
+    """The one object the words before the relation name, when it is not the command's landmark."""
+    theme = _unique(match.grounding(match.theme_end) if match.theme_end else match.grounding(), model)
+    if command.arg("object") is not None and theme == model.world.index_of(command.arg("object")):
+        return None
+    return theme
 
 
 def already_held(model: Model, procedure: str, match: Match) -> None:

@@ -100,6 +100,9 @@ class Model:
             one_handed = _one_handed(result.candidates[0], self.scene, result.score)
             if one_handed is not None and len({c.procedure for c in result.candidates}) == 1:
                 return one_handed
+            if result.params == ["arm"]:  # "which hand?" is answered by "both" (a first command, no hand used yet)
+                chosen = result.candidates[0]
+                result = CommandResult(chosen, 1.0, command_text(chosen, self.scene), {}, result.score)
         if isinstance(result, CommandResult):
             return qualify(result, said, self.scene)
         return result
@@ -175,10 +178,14 @@ class Model:
         labels = [command_text(c, self.scene) for c in candidates]
         procedure = candidates[0].procedure
         params = [p for p in PROCEDURES[procedure] if len({c.arg(p) for c in candidates}) > 1]
-        if params == ["arm"] and procedure in PLACES:  # an empty hand's place: the hand that picks up decides
+        if params == ["arm"] and procedure in {*PLACES, "move_rel_dest"}:  # a pick-up first: its hand decides
             situated = self._situated(candidates[0], {}, confidence, best_score, match, history)
             if isinstance(situated, CommandResult) and situated.command.procedure == "pick_up":
                 return situated
+        if params == ["destination"] and procedure == "place_abs":  # "set it down", "drop it": down on the table
+            table = next((c for c in candidates if c.arg("destination") == "table"), None)
+            if table is not None:
+                return self._situated(table, {}, confidence, best_score, match, history)
         return Clarify(params, parameter_question(params, candidates, self.scene), candidates, labels, best_score)
 
     def _command(self, position: int, confidence: float, score: float, match: Match, history: History) -> Result:

@@ -16,7 +16,7 @@ import numpy as np
 from services.nlu.commands import Command
 from services.nlu.weights import MARGINS, PRIOR
 from services.nlu.world import ARMS, World, WorldObject
-from shared.contract import REL_DIRECTIONS, RELATIONS
+from shared.contract import PLACES, REL_DIRECTIONS, RELATIONS
 
 # the reach keys these rules read (each must be one the executor publishes: tests/nlu/test_contract.py)
 READ_KEYS = frozenset({"pick_up", "place", *RELATIONS, *REL_DIRECTIONS})
@@ -28,6 +28,18 @@ class History:
 
     last_arm: str | None = None
     last_object: str | None = None
+
+    def after(self, command: Command, world: World) -> History:
+        """The history once ``command``, understood in ``world``, is done.
+
+        After a placement "it" is the object just put down, not the place it
+        went: "put it on the plate", then "pick it up" means the cup again.
+        """
+        arm = command.arg("arm")
+        referred = command.arg("object")
+        if command.procedure in PLACES:
+            referred = next((o.id for o in world.objects if o.held_by == arm), None) or referred
+        return History(arm if arm in ARMS else self.last_arm, referred or self.last_object)
 
 
 def situation_scores(world: World, commands: list[Command]) -> np.ndarray:

@@ -50,6 +50,12 @@ def refer(oid: str) -> str:
             "Moving your left hand to the right.",
         ),
         ("move_abs_dir", {"arm": "right", "direction": "up"}, {"arm": "right arm"}, "Moving your right arm up."),
+        (
+            "place_abs",
+            {"arm": "right", "destination": "table"},
+            {"verb": "put down", "destination": "put down"},
+            "Putting down the red cup on the table with your right hand.",
+        ),
     ],
 )
 def test_narration_uses_the_users_words(procedure: str, args: dict, phrases: dict, expected: str) -> None:

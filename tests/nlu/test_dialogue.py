@@ -77,3 +77,24 @@ def test_it_follows_the_command_just_issued_before_the_robot_reports() -> None:
     dialogue.observe_robot()  # the robot's newer state wins again
     again = dialogue.understand(model, "pick it up")
     assert isinstance(again, CommandResult) and again.command.arg("object") == "obj2"
+
+
+@pytest.mark.parametrize("placement", ["put it on the plate", "put it down on the table", "put it next to the box"])
+def test_after_a_placement_it_is_the_object_put_down_not_the_place(placement: str) -> None:
+    held = table_scene(grippers={"right": "holding", "left": "open"}, last_object="obj0")
+    held["objects"][0]["held_by"] = "right"
+    model, dialogue = Model(parse_world(held)), Dialogue()
+    placed = dialogue.understand(model, placement)
+    assert isinstance(placed, CommandResult) and placed.command.procedure in ("place_rel", "place_abs")
+    dropped = table_scene(last_object=None)  # the world once it stands there, before the robot reports
+    picked = dialogue.understand(Model(parse_world(dropped)), "pick it up")
+    assert isinstance(picked, CommandResult)
+    assert (picked.command.procedure, picked.command.arg("object")) == ("pick_up", "obj0")
+
+
+def test_put_the_cup_on_the_plate_then_pick_it_up_means_the_cup() -> None:
+    model, dialogue = Model(parse_world(table_scene())), Dialogue()
+    compound = dialogue.understand(model, "put the red cup on the plate")
+    assert isinstance(compound, CommandResult) and compound.command.procedure == "pick_up"
+    picked = dialogue.understand(Model(parse_world(table_scene())), "pick it up")
+    assert isinstance(picked, CommandResult) and picked.command.arg("object") == "obj0"
