@@ -20,8 +20,8 @@ pytestmark = pytest.mark.slow
 
 CUPS = {"red": ("obj0", "obj1", "right"), "blue": ("obj1", "obj0", "left")}
 PLATE, BOX = "obj3", "obj2"
-LIFTED = 0.06   # metres above where it stood: the pick-up lifted it
-SEEN_WITHIN = 0.08   # metres: perception places a cup standing on a plate or box a few centimetres off
+LIFTED = 0.06  # metres above where it stood: the pick-up lifted it
+SEEN_WITHIN = 0.08  # metres: perception places a cup standing on a plate or box a few centimetres off
 
 
 def seen(stack: Stack, truth_id: str) -> str:
@@ -34,8 +34,12 @@ def seen(stack: Stack, truth_id: str) -> str:
 
     def found() -> str | None:
         where = stack.position(truth_id)
-        close = [k for k, o in stack.objects.items() if o.get("type") == kind   # hidden under the hand: still kept
-                 and np.linalg.norm(np.asarray(o["position"]) - where) < SEEN_WITHIN]
+        close = [
+            k
+            for k, o in stack.objects.items()
+            if o.get("type") == kind  # hidden under the hand: still kept
+            and np.linalg.norm(np.asarray(o["position"]) - where) < SEEN_WITHIN
+        ]
         return close[0] if close else None
 
     return stack.wait_for(found, 10, f"perception to see the {kind} {truth_id}")
@@ -55,7 +59,7 @@ def test_either_cup_on_the_plate_next_to_the_other_on_the_box_and_down(stack: St
         else:
             said = stack.command("place_rel", {"arm": arm, "relation": relation, "object": seen(stack, landmark)})
         assert texts(said, "error") == [], f"placing the {colour} cup {relation or 'down'}: {texts(said)}"
-        time.sleep(1.0)   # let it settle before judging
+        time.sleep(1.0)  # let it settle before judging
         verdict = placed(stack.truth, cup, relation or "down", landmark)
         assert verdict.success, verdict.reason
         assert stack.state["robot"]["grippers"][arm] == "open"
