@@ -28,6 +28,8 @@ MOVED = 0.01  # metres an object must move to count as a change
 ARMS = ROBOT.arms
 SUPPORT_GAP = 0.025  # metres between an object's bottom and what it stands on
 MAX_STACK = 4
+FLAT_THICKNESS = 0.03  # metres: an object this thin (a plate, a tray) is something others stand on, not beside
+MIN_THICKNESS = 0.003  # metres: a flat object's box cut thinner than this is left out of the planning world
 FAINT_CONFIDENCE = 0.6
 REMEMBER = 256  # objects no longer seen whose descriptions are kept, for "the red cup is gone"
 
@@ -66,14 +68,39 @@ class SceneSnapshot:
         So is a faint blob perception could neither type nor see clearly.
         """
         boxes = {"table": self.table.box()} if self.table is not None else {}
-        boxes.update(
-            {
-                oid: Box.of(o)
-                for oid, o in self.objects.items()
-                if oid not in skip and self.supported(oid) and not _faint(o)
-            }
-        )
+        for oid, o in self.objects.items():
+            if oid not in skip and self.supported(oid) and not _faint(o):
+                box = self._below_what_stands_on_it(oid)
+                if box is not None:
+                    boxes[oid] = box
         return boxes
+
+    def _below_what_stands_on_it(self, object_id: str) -> Box | None:
+        """A flat object's box, ending where anything standing on it begins (None: nothing of it is left).
+
+        From above, the camera sees only the rim of a plate around the cup
+        standing on it, and perception can then place the plate up at the
+        cup's middle; a plate modelled there would block every grasp of that
+        cup. A flat thing under an object cannot reach above that object's
+        bottom, so its box is moved down (not below the table) to end there.
+        """
+        box = Box.of(self.objects[object_id])
+        if box.size[2] > FLAT_THICKNESS:
+            return box
+        top = box.top
+        for oid, other in self.objects.items():
+            above = Box.of(other)
+            centred_over = np.all(np.abs(above.center[:2] - box.center[:2]) < box.half[:2])
+            if oid != object_id and centred_over and above.size[2] > box.size[2] and above.bottom < top:
+                top = above.bottom
+        if top >= box.top:
+            return box
+        bottom = max(self.table_z, top - float(box.size[2]))
+        if top - bottom < MIN_THICKNESS:
+            return None
+        return Box(
+            np.array([box.center[0], box.center[1], (top + bottom) / 2]), np.array([*box.size[:2], top - bottom])
+        )
 
     def standing_objects(self) -> list[dict[str, Any]]:
         """Objects in view now that rest on something (see :meth:`obstacles`): candidates for re-grounding.

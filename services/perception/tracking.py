@@ -194,6 +194,9 @@ class Tracker:
         if partial and track.held_by is None:
             last = track.shown if track.shown is not None else known
             shift = covering_shift(last.position, known.size, current.position, current.size)
+            # an object nobody holds neither rises nor sinks: a box with a cup standing on it shows only its sides,
+            # and a cluster that took in the cup's foot would otherwise lift the box up into the cup
+            shift[2] = 0.0
             shown = replace(
                 shown, position=last.position + shift, box_center=last.box_center + shift, box_yaw=last.box_yaw
             )

@@ -113,3 +113,22 @@ def test_putting_down_tries_straight_below_first_then_spots_around() -> None:
     moved = [float(np.linalg.norm(held.center_at(release)[:2] - below[:2])) for _, release in pairs[1:]]
     assert np.all(np.diff(moved) > -1e-9) and max(moved) == pytest.approx(max(geo.DOWN_RINGS))
     assert all(hover[2] - release[2] == pytest.approx(targets.HOVER) for hover, release in pairs[1:])
+
+
+def _object(oid: str, kind: str, center: list[float], size: list[float]) -> dict:
+    return {"id": oid, "color": "white", "type": kind, "position": center, "size": size}
+
+
+def test_a_plate_seen_up_around_the_cup_on_it_is_modelled_below_the_cup() -> None:
+    """From above only the plate's rim shows around a cup on it; perception may place the plate too high."""
+    scene = Scene()
+    plate_top = TABLE_TOP_Z + 0.015
+    cup = _object("cup", "cup", [0.63, 0.0, plate_top + 0.05], [0.07, 0.07, 0.10])
+    plate = _object("plate", "plate", [0.63, 0.02, plate_top + 0.015], [0.16, 0.13, 0.015])
+    beside = _object("saucer", "plate", [0.63, 0.30, TABLE_TOP_Z + 0.0075], [0.16, 0.16, 0.015])
+    scene.update_objects([cup, plate, beside], table_truth())
+    boxes = scene.snapshot().obstacles()
+    assert boxes["plate"].top == pytest.approx(plate_top)
+    assert boxes["plate"].bottom >= TABLE_TOP_Z - 1e-9
+    assert boxes["cup"].bottom == pytest.approx(plate_top)
+    np.testing.assert_allclose(boxes["saucer"].center, beside["position"])  # nothing stands on it: as seen
