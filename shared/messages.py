@@ -169,11 +169,30 @@ class Objects(Message):
     table: Table | None = None
 
 
+class CommandStep(msgspec.Struct, kw_only=True):
+    """One command inside a result: a further step of a compound (``then``) or a clarification's candidate."""
+
+    procedure: str
+    args: dict[str, Any] = {}
+    phrases: dict[str, str] | None = None
+    text: str | None = None
+
+
 class NluResult(Message):
+    """A command (``procedure``, ``args``, maybe ``then``), a clarification or an answer, for ``utterance``."""
+
     kind: str
     utterance: str
     procedure: str | None = None
     args: dict[str, Any] | None = None
+    confidence: float | None = None
+    text: str | None = None
+    phrases: dict[str, str] | None = None
+    then: list[CommandStep] | None = None
+    params: list[str] | None = None
+    question: str | None = None
+    candidates: list[CommandStep] | None = None
+    topic: str | None = None
 
 
 class Progress(msgspec.Struct, kw_only=True):
