@@ -109,6 +109,16 @@ class WorldObject(msgspec.Struct, kw_only=True):
     position: Vector3
     size: Vector3
 
+    def world_state(self) -> dict[str, Any]:
+        """The object as DESIGN.md's world-state JSON writes it, for code that reads that map (the NLU's model)."""
+        return {
+            "id": self.id,
+            "color": self.color,
+            "type": self.type,
+            "position": list(self.position),
+            "size": list(self.size),
+        }
+
 
 class TruthObject(WorldObject):
     dimensions: Vector3 | None = None

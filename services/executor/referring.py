@@ -8,16 +8,11 @@ process); if it cannot describe the scene, a plain "the red cup" is used.
 from __future__ import annotations
 
 import logging
-from typing import Any
-
-import msgspec
 
 from services.executor.grounding import kind_words
 from shared.messages import PerceivedObject
 
 log = logging.getLogger("hfpbd.executor.referring")
-
-WORLD_FIELDS = ("id", "color", "type", "position", "size")
 
 
 def describe_objects(objects: dict[str, PerceivedObject]) -> dict[str, str]:
@@ -32,16 +27,11 @@ def describe_objects(objects: dict[str, PerceivedObject]) -> dict[str, str]:
         from services.nlu.refexp import Scene as ReferringScene
         from services.nlu.world import parse_world
 
-        world = parse_world({"objects": [_world_fields(o) for o in objects.values()]}, strict=False)
+        world = parse_world({"objects": [o.world_state() for o in objects.values()]}, strict=False)
         return ReferringScene(world).describe_all()
     except Exception as exc:  # the generator is optional: narration must go on without it
         log.debug("falling back to plain descriptions: %s", exc)
         return {oid: f"the {kind_words(o.color, o.type)}" for oid, o in objects.items()}
-
-
-def _world_fields(obj: PerceivedObject) -> dict[str, Any]:
-    fields = msgspec.to_builtins(obj)
-    return {k: fields[k] for k in WORLD_FIELDS}
 
 
 def refer(objects: dict[str, PerceivedObject], object_id: str, remembered: PerceivedObject | None = None) -> str:
