@@ -41,8 +41,7 @@ from services.executor.reach import reach_map
 from services.executor.robot import SHORT_MOTION, Outcome, Started
 from services.executor.scene import Scene, measured, perceived
 from services.sim.layout import TABLE_TOP_Z, table_truth
-from shared.codec import encode
-from shared.messages import SimState, decode_typed
+from shared.messages import SimState, as_received
 from shared.robot import ROBOT
 from shared.stats import markdown_table
 
@@ -145,7 +144,7 @@ class WorldRobot:
         self._reports: dict[str, Outcome] = {}  # motions that ended while another one was being stepped
 
     def publish(self) -> None:
-        state = decode_typed("sim_state", encode({"stamp": time.time(), **self.world.state()}))  # as the bus hands it
+        state = as_received("sim_state", {"stamp": time.time(), **self.world.state()})
         assert isinstance(state, SimState)
         self.scene.update_robot(state)
         self.scene.update_objects(perceived(self.world.truth()), table_truth())

@@ -7,8 +7,8 @@ the bus's typed messages (:mod:`shared.messages`), as the bridge received them.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 from shared.contract import ARMS
 from shared.messages import Gripper, PerceivedObject, Pose, Robot
@@ -63,12 +63,9 @@ def hex_color(rgb: tuple[int, int, int]) -> str:
     return "#{:02x}{:02x}{:02x}".format(*rgb)
 
 
-def size_text(size: Any) -> str:
+def size_text(size: Sequence[float]) -> str:
     """Extent in whole centimetres, x × y × z."""
-    try:
-        return "×".join(f"{float(s) * 100:.0f}" for s in size) + " cm"
-    except (TypeError, ValueError):
-        return "?"
+    return "×".join(f"{s * 100:.0f}" for s in size) + " cm"
 
 
 def reach_text(obj: PerceivedObject, reach: dict[str, dict[str, bool]] | None) -> str:
