@@ -33,8 +33,8 @@ MOVED = 0.01  # metres an object must move to count as a change
 ARMS = ROBOT.arms
 SUPPORT_GAP = 0.025  # metres between an object's bottom and what it stands on
 MAX_STACK = 4
-FLAT_THICKNESS = 0.03  # metres: an object this thin (a plate, a tray) is something others stand on, not beside
-MIN_THICKNESS = 0.003  # metres: a flat object's box cut thinner than this is left out of the planning world
+MIN_THICKNESS = 0.003  # metres: an object's box cut thinner than this is left out of the planning world
+CONTAINERS = ("bowl",)  # types whose walls stand around what is in them
 FAINT_CONFIDENCE = 0.6
 REMEMBER = 256  # objects no longer seen whose descriptions are kept, for "the red cup is gone"
 
@@ -81,26 +81,31 @@ class SceneSnapshot:
         return boxes
 
     def _below_what_stands_on_it(self, object_id: str) -> Box | None:
-        """A flat object's box, ending where anything standing on it begins (None: nothing of it is left).
+        """An object's box, ending where anything standing on it begins (None: nothing of it is left).
 
         From above, the camera sees only the rim of a plate around the cup
-        standing on it, and perception can then place the plate up at the
-        cup's middle; a plate modelled there would block every grasp of that
-        cup. A flat thing under an object cannot reach above that object's
-        bottom, so its box is moved down (not below the table) to end there.
+        standing on it, or the sides of a box with a cup on its lid, and
+        perception can then place the plate or the box too high, up into the
+        cup; modelled there, it would block every grasp of that cup. What
+        holds an object up ends below that object's bottom, so its box is cut
+        (never below the table) to end there, keeping its height. An object stands on another when
+        its middle is over the other's outline and higher than the other's
+        middle, and it rises above the other's top; a bowl keeps its walls
+        around what is in it.
         """
         box = Box.of(self.objects[object_id])
-        if box.size[2] > FLAT_THICKNESS:
+        if self.objects[object_id].type in CONTAINERS:
             return box
         top = box.top
         for oid, other in self.objects.items():
             above = Box.of(other)
             centred_over = np.all(np.abs(above.center[:2] - box.center[:2]) < box.half[:2])
-            if oid != object_id and centred_over and above.size[2] > box.size[2] and above.bottom < top:
-                top = above.bottom
+            standing = above.center[2] > box.center[2] and above.top > box.top
+            if oid != object_id and centred_over and standing:
+                top = min(top, above.bottom)
         if top >= box.top:
             return box
-        bottom = max(self.table_z, top - float(box.size[2]))
+        bottom = max(self.table_z, min(box.bottom, top - float(box.size[2])))  # its height kept where it fits
         if top - bottom < MIN_THICKNESS:
             return None
         return Box(
