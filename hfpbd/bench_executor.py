@@ -39,8 +39,9 @@ from services.executor.kinematics import ArmKinematics, joint_names
 from services.executor.procedures import Procedures, StepFailed
 from services.executor.reach import reach_map
 from services.executor.robot import SHORT_MOTION, Outcome, Started
-from services.executor.scene import Scene
+from services.executor.scene import Scene, measured, perceived
 from services.sim.layout import TABLE_TOP_Z, table_truth
+from shared.messages import SimState, as_received
 from shared.robot import ROBOT
 from shared.stats import markdown_table
 
@@ -71,8 +72,8 @@ def synthetic_scene(count: int, rng: np.random.Generator) -> Scene:
             }
         )
     scene = Scene()
-    scene.update_objects(objects, table_truth())
-    scene.update_robot({"joints": {ROBOT.torso_joint: ROBOT.working_torso, **ROBOT.arm_pose_map("untucked")}})
+    scene.update_objects(perceived(objects), table_truth())
+    scene.update_robot(measured({ROBOT.torso_joint: ROBOT.working_torso, **ROBOT.arm_pose_map("untucked")}))
     return scene
 
 
@@ -143,8 +144,10 @@ class WorldRobot:
         self._reports: dict[str, Outcome] = {}  # motions that ended while another one was being stepped
 
     def publish(self) -> None:
-        self.scene.update_robot(self.world.state())
-        self.scene.update_objects(self.world.truth(), table_truth())
+        state = as_received("sim_state", {"stamp": time.time(), **self.world.state()})
+        assert isinstance(state, SimState)
+        self.scene.update_robot(state)
+        self.scene.update_objects(perceived(self.world.truth()), table_truth())
 
     def _finish(self, motion_id: str) -> Outcome:
         start = self.world.sim_time
@@ -191,7 +194,7 @@ def in_process_procedures() -> tuple[Any, Scene, WorldRobot, Procedures]:
     scene = Scene()
     robot = WorldRobot(world, scene)
     arms = {arm: ArmKinematics(arm) for arm in ("right", "left")}
-    procedures = Procedures(scene, robot, arms, lambda: world.truth())  # type: ignore[arg-type]
+    procedures = Procedures(scene, robot, arms, lambda: perceived(world.truth()))  # type: ignore[arg-type]
     return world, scene, robot, procedures
 
 
@@ -278,7 +281,7 @@ def bench_procedures(rounds: int) -> list[list[object]]:
     for round_number in range(rounds):
         load(world, robot, 100 + round_number)
         red, blue, box = "obj0", "obj1", "obj2"
-        arm = "right" if scene.snapshot().objects[red]["position"][1] <= 0 else "left"
+        arm = "right" if scene.snapshot().objects[red].position[1] <= 0 else "left"
         timed("move_rel_dest (above)", partial(procedures.move_rel_dest, arm, "above", box))
         timed("move_abs_dir (up)", partial(procedures.move_abs_dir, arm, "up"))
         timed("move_rel_dir (towards)", partial(procedures.move_rel_dir, arm, "towards", box))

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from hfpbd.manipulation_judge import Verdict, placed
+from hfpbd.tasks.judge import box
 from hfpbd.tasks.observer import Observer, WaitTimeout
 from hfpbd.tasks.stack import LocalStack
 from services.sim.scene_file import COLOURS
@@ -119,9 +120,8 @@ class Driver:
         self.watch.wait_for(
             lambda: (
                 self.watch.objects_stamp > loaded
-                and sum(o.get("visible", True) and o.get("type") != "unknown" for o in self.watch.objects.values())
-                >= expected
-                and all(o.get("visible", True) for o in self.watch.objects.values())
+                and sum(o.visible is not False and o.type != "unknown" for o in self.watch.objects.values()) >= expected
+                and all(o.visible is not False for o in self.watch.objects.values())
             ),
             60,
             "perception to see the table",
@@ -129,9 +129,9 @@ class Driver:
 
     def pid(self, truth_id: str) -> str:
         """Perception's id of the simulator's object ``truth_id`` (nearest seen object)."""
-        where = np.asarray(self.watch.truth[truth_id]["position"], float)
-        seen = {k: o for k, o in self.watch.objects.items() if o.get("visible", True)}
-        return min(seen, key=lambda k: float(np.linalg.norm(np.asarray(seen[k]["position"]) - where)))
+        where = np.asarray(self.watch.truth[truth_id].position, float)
+        seen = {k: o for k, o in self.watch.objects.items() if o.visible is not False}
+        return min(seen, key=lambda k: float(np.linalg.norm(np.asarray(seen[k].position) - where)))
 
     def command(self, procedure: str, args: dict[str, Any] | None = None) -> tuple[list[str], list[str]]:
         """Send one command and wait for its end: (everything said, the error lines)."""
@@ -219,9 +219,9 @@ def run_task(driver: Driver, seed: int) -> Outcome:
 def _judge(driver: Driver, kind: str, moved: str, landmark: str | None, arm: str) -> Verdict:
     truth = driver.watch.truth
     if kind == "pick_up":
-        holding = (driver.watch.sim or {}).get("grippers", {}).get(arm, {})
-        low = float(truth[moved]["aabb"][0][2])
-        lifted = holding.get("holding") == moved and low > 0.72 + 0.05
+        gripper = driver.watch.sim.grippers.get(arm) if driver.watch.sim is not None else None
+        low = box(truth[moved])[0][2]
+        lifted = gripper is not None and gripper.holding == moved and low > 0.72 + 0.05
         return Verdict(lifted, f"{moved} {'is' if lifted else 'is not'} held up in the {arm} hand ({low:.3f} m)")
     return placed(
         truth,

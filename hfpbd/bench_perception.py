@@ -16,19 +16,24 @@ from collections.abc import Sequence
 
 from services.perception.evaluate import Score, score
 from services.perception.pipeline import detect
+from shared.messages import Cloud, SimState, as_received
 from shared.stats import markdown_table, percentiles_ms
 
 TARGET_P50_MS = 50.0
 RESOLUTIONS = ((640, 480), (320, 240))
 
 
-def _frame(world, scene_name: str) -> tuple[dict, dict, list[dict]]:
+def _frame(world, scene_name: str) -> tuple[Cloud, SimState, list[dict]]:
+    """A rendered cloud and the robot's state, as perception's subscriptions hand them over, and the truth."""
     from services.sim.cloud import cloud_message
     from services.sim.scene_file import load_scene
 
     world.load(load_scene(scene_name))
     world.settle(0.5)
-    return cloud_message(world.capture(), world.sim_time), world.state(), world.truth()
+    cloud = as_received("cloud", cloud_message(world.capture(), world.sim_time))
+    state = as_received("sim_state", {"stamp": 0.0, **world.state()})
+    assert isinstance(cloud, Cloud) and isinstance(state, SimState)
+    return cloud, state, world.truth()
 
 
 def latency(frames: int) -> list[list[object]]:

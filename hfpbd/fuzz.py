@@ -33,7 +33,7 @@ from hfpbd.tasks.stack import LocalStack
 from shared.bus import Bus
 from shared.codec import decode, encode
 from shared.config import free_port, loopback_options
-from shared.messages import TYPES
+from shared.messages import TYPES, Objects
 
 # stream key (under pbd/<ns>/) -> the schema its readers hold it to
 STREAMS: dict[str, str] = {
@@ -230,10 +230,10 @@ def run(bus: Bus, children: Sequence[ServiceProcess], count: int, seed: int = 0)
     """Flood every key, then check the services (they must already be up on ``bus``'s namespace)."""
     rng = random.Random(seed)
     figures = Figures(count)
-    made_up: list[dict[str, Any]] = []
+    made_up: list[Objects] = []
 
-    def on_objects(message: dict[str, Any]) -> None:
-        if message["objects"]:
+    def on_objects(message: Objects) -> None:
+        if message.objects:
             made_up.append(message)
 
     bus.subscribe(bus.keys.objects, on_objects, schema="objects")

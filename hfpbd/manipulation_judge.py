@@ -8,9 +8,7 @@ believe.
 
 from __future__ import annotations
 
-from typing import Any
-
-from hfpbd.tasks.judge import ON_TABLE, Truth, Verdict
+from hfpbd.tasks.judge import ON_TABLE, Truth, Verdict, box
 from services.sim.layout import TABLE_TOP_Z
 
 UPRIGHT = 0.015  # metres: an upright object's bounding box is this close to its own height
@@ -19,22 +17,20 @@ ON_BASE = 0.008  # metres an object standing on a base may sink below its top (a
 BESIDE = 0.12  # metres edge to edge: "next to", "left of", ... at most this far apart
 
 
-def _low_high(obj: dict[str, Any]) -> tuple[list[float], list[float]]:
-    low, high = obj["aabb"]
-    return [float(v) for v in low], [float(v) for v in high]
-
-
 def upright(truth: Truth, object_id: str) -> Verdict:
     """The object stands as it stood (not tipped over, not lying on its side)."""
-    low, high = _low_high(truth[object_id])
-    height, own = high[2] - low[2], float(truth[object_id]["dimensions"][2])
+    low, high = box(truth[object_id])
+    dimensions = truth[object_id].dimensions
+    if dimensions is None:
+        raise ValueError(f"the simulator reports no dimensions for {object_id}")
+    height, own = high[2] - low[2], dimensions[2]
     if abs(height - own) > UPRIGHT:
         return Verdict(False, f"{object_id} is tipped over ({height:.3f} m tall, {own:.3f} m upright)")
     return Verdict(True, f"{object_id} stands upright")
 
 
 def on_table(truth: Truth, object_id: str) -> Verdict:
-    low, _ = _low_high(truth[object_id])
+    low, _ = box(truth[object_id])
     if abs(low[2] - TABLE_TOP_Z) > ON_TABLE:
         return Verdict(False, f"{object_id} is not standing on the table (bottom at {low[2]:.3f} m)")
     return upright(truth, object_id)
@@ -45,7 +41,7 @@ def beside(truth: Truth, moved: str, landmark: str, relation: str) -> Verdict:
     standing = on_table(truth, moved)
     if not standing.success:
         return standing
-    (mlo, mhi), (llo, lhi) = _low_high(truth[moved]), _low_high(truth[landmark])
+    (mlo, mhi), (llo, lhi) = box(truth[moved]), box(truth[landmark])
     gaps = {
         "left_of": mlo[1] - lhi[1],
         "right_of": llo[1] - mhi[1],
@@ -78,7 +74,7 @@ def on_top(truth: Truth, moved: str, base: str) -> Verdict:
     A thin base (a plate 1.5 cm thick) raises the object only that much, so
     the test is the bottom against the base's top, not a fixed height.
     """
-    (mlo, mhi), (blo, bhi) = _low_high(truth[moved]), _low_high(truth[base])
+    (mlo, mhi), (blo, bhi) = box(truth[moved]), box(truth[base])
     cx, cy = (mlo[0] + mhi[0]) / 2, (mlo[1] + mhi[1]) / 2
     if not (blo[0] <= cx <= bhi[0] and blo[1] <= cy <= bhi[1]):
         return Verdict(False, f"{moved} is not over {base} (centre {cx:.3f}, {cy:.3f})")

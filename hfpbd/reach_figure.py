@@ -25,9 +25,10 @@ from services.executor import targets
 from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics
 from services.executor.reach import can_pick, sync
-from services.executor.scene import Scene
+from services.executor.scene import Scene, measured
 from services.sim.layout import TABLE_TOP_Z, TABLE_X, TABLE_Y, table_truth
 from shared.contract import ARMS
+from shared.messages import PerceivedObject
 from shared.robot import ROBOT
 
 OBJECTS = {"cup": (0.07, 0.07, 0.10), "box": (0.06, 0.06, 0.06)}
@@ -35,15 +36,15 @@ STEP = 0.04
 OUT = Path(__file__).resolve().parents[1] / "docs" / "reach.png"
 
 
-def _object(kind: str, x: float, y: float) -> dict:
+def _object(kind: str, x: float, y: float) -> PerceivedObject:
     size = OBJECTS[kind]
-    return {"id": "o", "color": "red", "type": kind, "position": [x, y, TABLE_TOP_Z + size[2] / 2], "size": list(size)}
+    return PerceivedObject(id="o", color="red", type=kind, position=(x, y, TABLE_TOP_Z + size[2] / 2), size=size)
 
 
-def _snapshot(*objects: dict):
+def _snapshot(*objects: PerceivedObject):
     scene = Scene()
     scene.update_objects(list(objects), table_truth())
-    scene.update_robot({"joints": {ROBOT.torso_joint: ROBOT.working_torso, **ROBOT.arm_pose_map("side")}})
+    scene.update_robot(measured({ROBOT.torso_joint: ROBOT.working_torso, **ROBOT.arm_pose_map("side")}))
     return scene.snapshot()
 
 

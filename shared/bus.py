@@ -1,7 +1,9 @@
 """The project's bus: typed pub/sub, request/reply and presence over Zenoh.
 
 Why a wrapper: every service needs the same few guarantees — messages are
-validated before user code sees them, a bad message is logged and counted
+validated before user code sees them (a subscription with a ``schema`` hands
+its handler the stream's typed message from :mod:`shared.messages`, checked
+all the way down, so no service walks an unchecked map), a bad message is logged and counted
 instead of crashing the receiver, Zenoh's threads are never blocked by user
 code, every query is finalised, requests time out cleanly, and closing leaves
 no thread behind. Samples wait in zenoh's own channels (ring channels for
@@ -15,7 +17,7 @@ import logging
 import threading
 from collections import Counter
 from collections.abc import Callable
-from typing import Any
+from typing import Any, overload
 
 import zenoh
 import zenoh.ext as zext
@@ -24,7 +26,7 @@ from shared.codec import MessageError, decode, encode
 from shared.config import SessionOptions, enforces_access_control, zenoh_config
 from shared.denials import log_access_denials
 from shared.keys import Keys
-from shared.messages import validate
+from shared.messages import TYPES, typed
 
 log = logging.getLogger("hfpbd.bus")
 
@@ -180,10 +182,34 @@ class Bus:
         self.session.put(key, encode(message))
 
     # -- subscribe ---------------------------------------------------------
+    @overload
     def subscribe(
         self,
         key: str,
         handler: Handler,
+        *,
+        schema: None = None,
+        latest_only: bool = False,
+        history: bool = False,
+        capacity: int = 1024,
+    ) -> None: ...
+
+    @overload
+    def subscribe(
+        self,
+        key: str,
+        handler: Callable[[Any], None],
+        *,
+        schema: str,
+        latest_only: bool = False,
+        history: bool = False,
+        capacity: int = 1024,
+    ) -> None: ...
+
+    def subscribe(
+        self,
+        key: str,
+        handler: Callable[[Any], None],
         *,
         schema: str | None = None,
         latest_only: bool = False,
@@ -192,10 +218,17 @@ class Bus:
     ) -> None:
         """Call ``handler(message)`` on a worker thread for each valid sample.
 
+        With a ``schema`` (a stream name of :data:`shared.messages.TYPES`)
+        ``message`` is that stream's typed object, decoded once; a sample
+        that does not fit it anywhere, nested fields included, is logged and
+        counted in :attr:`rejected` and never reaches the handler. Without
+        one it is the decoded map, with the sample's key under ``_key``.
         ``latest_only`` keeps just the newest pending sample (streams where
         only the present matters); ``history`` also receives the last cached
         sample of each cached publisher, now and when one appears later.
         """
+        if schema is not None and schema not in TYPES:
+            raise ValueError(f"no message type for schema {schema!r}")
 
         def run(sample: zenoh.Sample) -> None:
             if sample.kind != zenoh.SampleKind.PUT:
@@ -203,14 +236,14 @@ class Bus:
             sample_key = str(sample.key_expr)
             try:
                 message = decode(sample.payload.to_bytes())
-                if schema is not None:
-                    validate(schema, message)
+                received = typed(schema, message) if schema is not None else message
             except MessageError as exc:
                 self.rejected[key] += 1
                 log.warning("rejected message on %s: %s", sample_key, exc)
                 return
-            message.setdefault("_key", sample_key)
-            handler(message)
+            if schema is None:
+                message.setdefault("_key", sample_key)
+            handler(received)
 
         channel = _channel(latest_only, capacity)
         sub: zenoh.Subscriber[Any] | zext.AdvancedSubscriber[Any]

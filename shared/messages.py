@@ -8,11 +8,12 @@ counted by the bus) instead of raising deep inside a service minutes later.
 msgspec does the conversion and names the exact place of a problem
 (``objects: Expected `float`, got `str` - at `$.objects[0].position[1]```).
 
-Extra fields are allowed (the design notes welcome them) and optional fields
-may be missing; a field that is present must have the right type.
-``validate`` checks a decoded map and hands it back unchanged, for code that
-reads maps; ``typed`` returns the message as its type, for code that reads
-attributes.
+Extra fields are allowed (the design notes welcome them, and a type drops
+them) and optional fields may be missing; a field that is present must have
+the right type. ``typed`` returns a decoded map as its stream's type, once:
+the bus does this for every subscription with a schema, so services read
+attributes, never unchecked maps. A field absent on the wire reads as its
+default (``None``, or an empty map or list).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from typing import Any, Literal
 import msgspec
 import numpy as np
 
-from shared.codec import MessageError, decode
+from shared.codec import MessageError, decode, encode
 
 Vector3 = tuple[float, float, float]
 Pose = tuple[float, float, float, float, float, float, float]  # x, y, z, qw, qx, qy, qz
@@ -109,6 +110,16 @@ class WorldObject(msgspec.Struct, kw_only=True):
     position: Vector3
     size: Vector3
 
+    def world_state(self) -> dict[str, Any]:
+        """The object as DESIGN.md's world-state JSON writes it, for code that reads that map (the NLU's model)."""
+        return {
+            "id": self.id,
+            "color": self.color,
+            "type": self.type,
+            "position": list(self.position),
+            "size": list(self.size),
+        }
+
 
 class TruthObject(WorldObject):
     dimensions: Vector3 | None = None
@@ -169,11 +180,30 @@ class Objects(Message):
     table: Table | None = None
 
 
+class CommandStep(msgspec.Struct, kw_only=True):
+    """One command inside a result: a further step of a compound (``then``) or a clarification's candidate."""
+
+    procedure: str
+    args: dict[str, Any] = {}
+    phrases: dict[str, str] | None = None
+    text: str | None = None
+
+
 class NluResult(Message):
+    """A command (``procedure``, ``args``, maybe ``then``), a clarification or an answer, for ``utterance``."""
+
     kind: str
     utterance: str
     procedure: str | None = None
     args: dict[str, Any] | None = None
+    confidence: float | None = None
+    text: str | None = None
+    phrases: dict[str, str] | None = None
+    then: list[CommandStep] | None = None
+    params: list[str] | None = None
+    question: str | None = None
+    candidates: list[CommandStep] | None = None
+    topic: str | None = None
 
 
 class Progress(msgspec.Struct, kw_only=True):
@@ -249,17 +279,16 @@ def typed(schema: str, message: dict[str, Any]) -> Message:
         raise MessageError(f"{schema}: {exc}") from None
 
 
-def validate(schema: str, message: dict[str, Any]) -> dict[str, Any]:
-    """Check ``message`` against ``schema`` all the way down and return it unchanged."""
-    typed(schema, message)
-    return message
-
-
-def decode_as(schema: str, payload: bytes | bytearray | memoryview) -> dict[str, Any]:
-    """Decode a payload and validate it against ``schema``."""
-    return validate(schema, decode(payload))
-
-
 def decode_typed(schema: str, payload: bytes | bytearray | memoryview) -> Message:
     """Decode a payload straight into its schema's type."""
     return typed(schema, decode(payload))
+
+
+def as_received(schema: str, message: dict[str, Any]) -> Message:
+    """``message`` as a subscriber with ``schema`` receives it: encoded, decoded and typed.
+
+    For code that runs a publisher's side and a consumer's side in one process
+    (benchmarks, tests on an in-process simulator): the codec turns numpy
+    scalars and tuples into what the wire carries, which the types expect.
+    """
+    return decode_typed(schema, encode(message))

@@ -12,6 +12,7 @@ import sys
 import threading
 
 from shared.bus import Bus
+from shared.messages import Cloud, Utterance
 from shared.service import run_service, wait_until_stopped
 
 NAME = "echo"
@@ -21,13 +22,12 @@ def _body(bus: Bus, _args: argparse.Namespace, stop: threading.Event) -> None:
     keys = bus.keys
     out = bus.publisher(f"pbd/{keys.namespace}/test/out")
 
-    def on_in(message: dict) -> None:
-        message.pop("_key", None)
-        out.put(message)
+    def on_in(message: Utterance) -> None:
+        out.put({"text": message.text})
 
-    def on_cloud(message: dict) -> None:
-        digest = hashlib.sha256(message["xyz"].tobytes() + message["rgb"].tobytes()).hexdigest()
-        out.put({"digest": digest, "shape": list(message["xyz"].shape)})
+    def on_cloud(message: Cloud) -> None:
+        digest = hashlib.sha256(message.xyz.tobytes() + message.rgb.tobytes()).hexdigest()
+        out.put({"digest": digest, "shape": list(message.xyz.shape)})
 
     bus.subscribe(f"pbd/{keys.namespace}/test/in", on_in, schema="utterance")
     bus.subscribe(keys.cloud, on_cloud, schema="cloud")

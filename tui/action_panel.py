@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 from rich.text import Text
 from textual.app import ComposeResult
 from textual.containers import Vertical
 from textual.widgets import Label, ProgressBar, Static
+
+from shared.messages import Robot
 
 
 class ActionPanel(Vertical):
@@ -18,17 +18,17 @@ class ActionPanel(Vertical):
         yield Static("", id="action-steps")
         yield ProgressBar(total=1, show_eta=False, id="action-progress")
 
-    def show(self, robot: dict[str, Any]) -> None:
-        number = robot.get("action")
-        actions = robot.get("actions") or []
-        steps = [str(s) for s in robot.get("steps") or []]
-        progress = robot.get("progress")
+    def show(self, robot: Robot) -> None:
+        number = robot.action
+        actions = robot.actions
+        steps = robot.steps
+        progress = robot.progress
         title = self.query_one("#action-title", Label)
         if number:
             title.update(f"action {number} of {max(len(actions), int(number))} · {len(steps)} step(s)")
         else:
             title.update("no action yet — say “create a new action”")
-        current = int(progress["step"]) if progress else None
+        current = progress.step if progress else None
         lines = Text()
         for n, step in enumerate(steps, start=1):
             running = current == n
@@ -39,4 +39,4 @@ class ActionPanel(Vertical):
         bar = self.query_one("#action-progress", ProgressBar)
         bar.display = progress is not None
         if progress:
-            bar.update(total=max(1, int(progress.get("of") or 1)), progress=int(progress.get("step") or 0))
+            bar.update(total=max(1, progress.of or 1), progress=progress.step)

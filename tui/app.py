@@ -28,6 +28,7 @@ from textual.worker import get_current_worker
 
 from shared.bus import BusTimeout, RemoteError
 from shared.config import SessionOptions
+from shared.messages import Cloud, Robot
 from tui import events
 from tui.action_panel import ActionPanel
 from tui.actions_screen import ActionsScreen
@@ -95,8 +96,8 @@ class PbdApp(App[None]):
         how pictures are drawn (``tui.camera_view.DRAWINGS``: a graphics protocol or half-blocks)."""
         super().__init__()
         self.camera_drawing = camera_drawing
-        self._cloud: dict[str, Any] | None = None  # newest camera frame not yet composed
-        self._last_cloud: dict[str, Any] | None = None
+        self._cloud: Cloud | None = None  # newest camera frame not yet composed
+        self._last_cloud: Cloud | None = None
         self._composing = False
         self._pictures = 0
         self._actions_seen: tuple[Any, ...] = ()
@@ -134,7 +135,7 @@ class PbdApp(App[None]):
         self.main.query_one(StatusBar).set_connection(False, f"connecting to {self._where()}…")
         self.main.query_one(WorldPanel).show_view("map")
         self._refresh_world()
-        self.main.query_one(ActionPanel).show({})
+        self.main.query_one(ActionPanel).show(Robot())
         self.connect()
         if self.probe_seconds:
             self.set_interval(self.probe_seconds, self._probe_alive)
@@ -198,23 +199,23 @@ class PbdApp(App[None]):
     @while_running
     def on_understood(self, event: events.Understood) -> None:
         result = event.result
-        if result.get("kind") != "command":
+        if result.kind != "command":
             return
         self.main.query_one(ClarifyPrompt).close()
-        args: dict[str, Any] = result.get("args") or {}
+        args: dict[str, Any] = result.args or {}
         object_id = args.get("object")
         if isinstance(object_id, str):
             self.world.highlighted = object_id
             self._refresh_world()
         shown = ", ".join(f"{k}={self.world.name_of(v) if k == 'object' else v}" for k, v in args.items())
-        self.main.query_one(Conversation).add("ui", f"understood: {result.get('procedure')}({shown})")
+        self.main.query_one(Conversation).add("ui", f"understood: {result.procedure}({shown})")
 
     @while_running
     def on_objects_seen(self, event: events.ObjectsSeen) -> None:
-        before = {k: v.get("position") for k, v in self.world.objects.items()}
-        self.world.objects = {str(o["id"]): o for o in event.objects}
+        before = {k: v.position for k, v in self.world.objects.items()}
+        self.world.objects = {o.id: o for o in event.objects}
         self._refresh_world()
-        if {k: v.get("position") for k, v in self.world.objects.items()} != before:
+        if {k: v.position for k, v in self.world.objects.items()} != before:
             self.describe_objects()
 
     @while_running
@@ -223,7 +224,7 @@ class PbdApp(App[None]):
         self.world.reach = event.reach
         self._refresh_world()
         self.main.query_one(ActionPanel).show(event.robot)
-        seen = (event.robot.get("action"), tuple(event.robot.get("actions") or ()))
+        seen = (event.robot.action, tuple(event.robot.actions))
         if seen != self._actions_seen:
             self._actions_seen = seen
             if isinstance(self.screen, ActionsScreen):

@@ -16,6 +16,7 @@ from textual.message import Message
 
 from shared.bus import Bus, BusTimeout, RemoteError
 from shared.config import SessionOptions
+from shared.messages import Cloud, ExecutorState, NluResult, Objects, Say, SimState
 from tui import events
 
 # A cheap, side-effect-free request per service, timed for the status bar.
@@ -71,23 +72,22 @@ class Bridge:
             bus.close()
 
     # -- incoming ------------------------------------------------------------
-    def _on_say(self, msg: dict[str, Any]) -> None:
-        candidates = [str(c) for c in msg.get("candidates") or []]
-        self._app.post_message(events.Said(msg["text"], msg["kind"], candidates))
+    def _on_say(self, msg: Say) -> None:
+        self._app.post_message(events.Said(msg.text, msg.kind, list(msg.candidates or [])))
 
-    def _on_nlu_result(self, msg: dict[str, Any]) -> None:
+    def _on_nlu_result(self, msg: NluResult) -> None:
         self._app.post_message(events.Understood(msg))
 
-    def _on_objects(self, msg: dict[str, Any]) -> None:
-        self._app.post_message(events.ObjectsSeen(msg["objects"], msg.get("status")))
+    def _on_objects(self, msg: Objects) -> None:
+        self._app.post_message(events.ObjectsSeen(msg.objects, msg.status))
 
-    def _on_executor_state(self, msg: dict[str, Any]) -> None:
-        self._app.post_message(events.ExecutorChanged(msg["robot"], msg.get("reach") or {}))
+    def _on_executor_state(self, msg: ExecutorState) -> None:
+        self._app.post_message(events.ExecutorChanged(msg.robot, msg.reach))
 
-    def _on_sim_state(self, msg: dict[str, Any]) -> None:
-        self._app.post_message(events.SimMoved(msg["ee"], msg["grippers"], msg.get("moving") or {}))
+    def _on_sim_state(self, msg: SimState) -> None:
+        self._app.post_message(events.SimMoved(msg.ee, msg.grippers, msg.moving))
 
-    def _on_cloud(self, msg: dict[str, Any]) -> None:
+    def _on_cloud(self, msg: Cloud) -> None:
         self._app.post_message(events.CloudSeen(msg))
 
     # -- outgoing ------------------------------------------------------------

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import io
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from PIL import Image, ImageDraw
@@ -26,6 +25,7 @@ from scipy.spatial.transform import Rotation
 from textual.strip import Strip
 from textual_image.renderable.halfcell import Image as HalfBlocks
 
+from shared.messages import Cloud, PerceivedObject
 from tui.world import ARMS, WorldView, hex_color, object_rgb
 
 SAMPLE_PIXELS = 600  # pixels used to fit the intrinsics (plenty for two unknowns per axis)
@@ -121,7 +121,7 @@ def fit_cells(width: int, height: int, columns: int, rows: int, cell: tuple[int,
 
 
 def compose(
-    cloud: dict[str, Any],
+    cloud: Cloud,
     world: WorldView,
     columns: int,
     rows: int,
@@ -144,7 +144,7 @@ def compose(
 
 
 def _marked(
-    cloud: dict[str, Any],
+    cloud: Cloud,
     world: WorldView,
     columns: int,
     rows: int,
@@ -153,15 +153,15 @@ def _marked(
     close_up: bool,
 ) -> Picture:
     """The scaled frame with outlines and gripper marks drawn in, and the labels to lay over it."""
-    rgb = np.asarray(cloud["rgb"], dtype=np.uint8)
+    rgb = np.asarray(cloud.rgb, dtype=np.uint8)
     height, width = rgb.shape[:2]
     frame = Image.fromarray(rgb, "RGB")
-    camera = fit_pinhole(np.asarray(cloud["xyz"]), list(cloud["camera_pose"]))
+    camera = fit_pinhole(np.asarray(cloud.xyz), list(cloud.camera_pose))
     region = _region(camera, world, width, height) if close_up and camera is not None else (0, 0, width, height)
     columns, rows = fit_cells(region[2] - region[0], region[3] - region[1], columns, rows, cell)
     size = (columns * pixels_per_cell[0], rows * pixels_per_cell[1])
     image = frame.resize(size, Image.Resampling.BILINEAR, box=region)
-    picture = Picture(image, columns, rows, stamp=float(cloud.get("stamp") or 0.0))
+    picture = Picture(image, columns, rows, stamp=cloud.stamp)
     if camera is None:
         return picture
     offset = np.array(region[:2], float)
@@ -178,7 +178,7 @@ def _marked(
         marked = object_id == world.highlighted
         draw.rectangle(box, outline=HIGHLIGHT if marked else OUTLINE, width=thickness)
         column, top, _right, bottom = (np.array(box, float) * np.tile(to_cell, 2)).astype(int)
-        name = world.descriptions.get(object_id) or f"a {obj.get('color', '')} {obj.get('type', 'object')}"
+        name = world.descriptions.get(object_id) or f"a {obj.color} {obj.type}"
         style = f"bold black on {hex_color(HIGHLIGHT)}" if marked else f"black on {hex_color(object_rgb(obj))}"
         column, row = places.take(
             int(column),
@@ -194,7 +194,8 @@ def _marked(
         point = (uv[0] - offset) * scale
         if not ahead[0] or not (0 <= point[0] < size[0] and 0 <= point[1] < size[1]):
             continue
-        holding = bool((world.grippers.get(arm) or {}).get("holding"))
+        gripper = world.grippers.get(arm)
+        holding = gripper is not None and bool(gripper.holding)
         colour = GRIPPER[holding]
         radius = max(2, 2 * pixels_per_cell[0])
         draw.ellipse(
@@ -226,14 +227,10 @@ class Placer:
         return column, row
 
 
-def _corners(camera: Pinhole, obj: dict[str, Any]) -> np.ndarray | None:
+def _corners(camera: Pinhole, obj: PerceivedObject) -> np.ndarray | None:
     """Frame pixels (8, 2) of the corners of the object's bounding box, None when it is not in front."""
-    position = obj.get("position")
-    extent = obj.get("size")
-    if not position or not extent:
-        return None
-    half = np.asarray(extent, float) / 2
-    corners = np.asarray(position, float) + half * np.array(
+    half = np.asarray(obj.size, float) / 2
+    corners = np.asarray(obj.position, float) + half * np.array(
         [[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
     )
     uv, ahead = camera.project(corners)
@@ -260,7 +257,7 @@ def _region(camera: Pinhole, world: WorldView, width: int, height: int) -> tuple
 
 
 def _outline(
-    camera: Pinhole, obj: dict[str, Any], offset: np.ndarray, scale: np.ndarray, size: tuple[int, int]
+    camera: Pinhole, obj: PerceivedObject, offset: np.ndarray, scale: np.ndarray, size: tuple[int, int]
 ) -> tuple[int, int, int, int] | None:
     """The object's bounding box as a pixel rectangle of the scaled image, or None when it is out of view."""
     uv = _corners(camera, obj)

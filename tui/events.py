@@ -7,11 +7,10 @@ widget updates happen on Textual's own event loop.
 
 from __future__ import annotations
 
-from typing import Any
-
 from PIL import Image
 from textual.message import Message
 
+from shared.messages import Cloud, Gripper, NluResult, PerceivedObject, Pose, Robot
 from tui.camera import Picture
 
 
@@ -40,7 +39,7 @@ class Said(Message):
 class Understood(Message):
     """An ``nlu/result``: a command or a clarification, with the utterance it answers."""
 
-    def __init__(self, result: dict[str, Any]) -> None:
+    def __init__(self, result: NluResult) -> None:
         super().__init__()
         self.result = result
 
@@ -48,7 +47,7 @@ class Understood(Message):
 class ObjectsSeen(Message):
     """A ``perception/objects`` sample: every perceived object."""
 
-    def __init__(self, objects: list[dict[str, Any]], status: str | None) -> None:
+    def __init__(self, objects: list[PerceivedObject], status: str | None) -> None:
         super().__init__()
         self.objects = objects
         self.status = status
@@ -57,7 +56,7 @@ class ObjectsSeen(Message):
 class ExecutorChanged(Message):
     """An ``executor/state`` sample: robot fields, actions, progress, reach."""
 
-    def __init__(self, robot: dict[str, Any], reach: dict[str, Any]) -> None:
+    def __init__(self, robot: Robot, reach: dict[str, dict[str, dict[str, bool]]]) -> None:
         super().__init__()
         self.robot = robot
         self.reach = reach
@@ -66,7 +65,7 @@ class ExecutorChanged(Message):
 class SimMoved(Message):
     """The latest ``sim/state``: tool poses and gripper readings."""
 
-    def __init__(self, ee: dict[str, Any], grippers: dict[str, Any], moving: dict[str, bool]) -> None:
+    def __init__(self, ee: dict[str, Pose], grippers: dict[str, Gripper], moving: dict[str, bool]) -> None:
         super().__init__()
         self.ee = ee
         self.grippers = grippers
@@ -128,7 +127,7 @@ class Talking(Message):
 class CloudSeen(Message):
     """A ``sim/cloud`` frame (colour image, organised points, camera pose) for the camera view."""
 
-    def __init__(self, cloud: dict[str, Any]) -> None:
+    def __init__(self, cloud: Cloud) -> None:
         super().__init__()
         self.cloud = cloud
 

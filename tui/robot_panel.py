@@ -6,6 +6,7 @@ from rich.table import Table
 from rich.text import Text
 from textual.widgets import Static
 
+from shared.messages import Gripper
 from tui.world import ARMS, WorldView
 
 _GRIPPER_STYLES = {"open": "green", "closed": "yellow", "holding": "bold magenta"}
@@ -20,25 +21,25 @@ class RobotPanel(Static):
 
     def show(self, world: WorldView) -> None:
         robot = world.robot
-        if not robot and not world.grippers:
+        if robot is None and not world.grippers:
             self.fields = {}
             self.update(Text("no robot state yet (executor and sim not heard from)", style="dim"))
             return
         rows: list[tuple[str, Text]] = []
-        states = robot.get("grippers") or {}
+        states = robot.grippers if robot is not None else {}
         for arm in ARMS:
-            state = str(states.get(arm) or _state_from_sim(world.grippers.get(arm)) or "?")
-            width = (world.grippers.get(arm) or {}).get("width")
-            detail = f" {float(width) * 100:.1f} cm" if isinstance(width, (int, float)) else ""
+            reading = world.grippers.get(arm)
+            state = str(states.get(arm) or _state_from_sim(reading) or "?")
+            detail = f" {reading.width * 100:.1f} cm" if reading is not None else ""
             shown = Text(state, style=_GRIPPER_STYLES.get(state, "")) + Text(detail, style="dim")
             rows.append((f"{arm} gripper", shown))
-        rows.append(("last arm", Text(str(robot.get("last_arm") or "—"))))
-        last_object = robot.get("last_object")
+        rows.append(("last arm", Text(str(robot.last_arm if robot is not None and robot.last_arm else "—"))))
+        last_object = robot.last_object if robot is not None else None
         named = last_object in world.descriptions
         rows.append(("last object", Text(world.name_of(last_object) + (f" ({last_object})" if named else ""))))
-        if robot.get("executing"):
+        if robot is not None and robot.executing:
             rows.append(("robot", Text("executing the action", style="bold yellow")))
-        elif robot.get("busy"):
+        elif robot is not None and robot.busy:
             rows.append(("robot", Text("moving", style="yellow")))
         else:
             rows.append(("robot", Text("idle", style="green")))
@@ -51,13 +52,10 @@ class RobotPanel(Static):
         self.update(table)
 
 
-def _state_from_sim(reading: dict | None) -> str | None:
+def _state_from_sim(reading: Gripper | None) -> str | None:
     """A gripper word from the simulator's reading, used until the executor reports one."""
-    if not reading:
+    if reading is None:
         return None
-    if reading.get("holding"):
+    if reading.holding:
         return "holding"
-    width = reading.get("width")
-    if isinstance(width, (int, float)):
-        return "open" if width > 0.01 else "closed"
-    return None
+    return "open" if reading.width > 0.01 else "closed"

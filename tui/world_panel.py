@@ -40,11 +40,17 @@ class ObjectTable(DataTable):
                 Text("██", style=hex_color(object_rgb(obj))),
                 Text(object_id, style="bold" if marked else ""),
                 world.name_of(object_id) if object_id in world.descriptions else Text("…", style="dim"),
-                str(obj.get("type", "?")),
-                size_text(obj.get("size")),
+                obj.type,
+                size_text(obj.size),
                 reach_text(obj, world.reach.get(object_id)),
                 key=object_id,
             )
+
+
+def _holding(world: WorldView, arm: str) -> bool:
+    """Whether the simulator reports ``arm``'s gripper holding something."""
+    gripper = world.grippers.get(arm)
+    return gripper is not None and bool(gripper.holding)
 
 
 def _id_order(object_id: str) -> tuple[int, str]:
@@ -81,7 +87,7 @@ class TableCanvas(Widget):
         xs = [*self.DEFAULT_X]
         ys = [*self.DEFAULT_Y]
         for obj in self.world.objects.values():
-            position = obj.get("position") or [0.0, 0.0, 0.0]
+            position = obj.position
             xs.append(float(position[0]))
             ys.append(float(position[1]))
         for pose in self.world.ee.values():
@@ -114,8 +120,7 @@ class TableCanvas(Widget):
                 styles[row][col] = style
 
         for object_id, obj in self.world.objects.items():
-            position = obj.get("position") or [0.0, 0.0, 0.0]
-            size = obj.get("size") or [0.05, 0.05, 0.05]
+            position, size = obj.position, obj.size
             colour = hex_color(object_rgb(obj))
             marked = object_id == self.world.highlighted
             style = f"bold black on {colour}" if marked else colour
@@ -125,7 +130,7 @@ class TableCanvas(Widget):
                 for col in range(left, max(left, right) + 1):
                     put(row, col, "█" if not marked else " ", style)
             row, col = cell(position[0], position[1])
-            put(row, col, _TYPE_GLYPHS.get(str(obj.get("type")), "?"), f"bold black on {colour}")
+            put(row, col, _TYPE_GLYPHS.get(obj.type, "?"), f"bold black on {colour}")
             if marked:
                 put(row, left - 1, "▶", "bold yellow")
                 put(row, max(left, right) + 1, "◀", "bold yellow")
@@ -134,7 +139,7 @@ class TableCanvas(Widget):
             if pose is None:
                 continue
             row, col = cell(pose[0], pose[1])
-            holding = bool(self.world.grippers.get(arm, {}).get("holding"))
+            holding = _holding(self.world, arm)
             put(row, col, arm[0].upper(), "bold white on magenta" if holding else "bold white on dark_blue")
 
         text = Text()

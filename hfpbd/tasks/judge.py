@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from services.sim.layout import TABLE_TOP_Z
+from shared.messages import Gripper, TruthObject
 
 ON_TABLE = 0.012  # a bottom within this of the table top rests on it
 NEAR = 0.10  # side by side: at most this far apart, edge to edge
@@ -24,11 +25,12 @@ class Verdict:
     reason: str  # what was measured, in words (also when it worked)
 
 
-Truth = dict[str, dict[str, Any]]
+Truth = dict[str, TruthObject]
+Grippers = dict[str, Gripper]
 
 
 def judge(
-    criterion: dict[str, Any], truth: Truth, grippers: dict[str, Any] | None = None, later: Truth | None = None
+    criterion: dict[str, Any], truth: Truth, grippers: Grippers | None = None, later: Truth | None = None
 ) -> Verdict:
     """Apply one task's success criterion; ``later`` is a second truth sample for "held" checks."""
     kind = criterion["kind"]
@@ -42,13 +44,16 @@ def judge(
     return _CRITERIA[kind](criterion, truth, grippers or {}, later or truth)
 
 
-def _box(obj: dict[str, Any]) -> tuple[list[float], list[float]]:
-    low, high = obj["aabb"]
-    return [float(v) for v in low], [float(v) for v in high]
+def box(obj: TruthObject) -> tuple[list[float], list[float]]:
+    """The object's world bounding box (low and high corners), which every ground-truth criterion reads."""
+    if obj.aabb is None:
+        raise ValueError(f"the simulator reports no bounding box for {obj.id}")
+    low, high = obj.aabb
+    return list(low), list(high)
 
 
-def _stacked(c: dict[str, Any], truth: Truth, _g: dict[str, Any], _l: Truth) -> Verdict:
-    (tlo, thi), (blo, bhi) = _box(truth[c["top"]]), _box(truth[c["base"]])
+def _stacked(c: dict[str, Any], truth: Truth, _g: Grippers, _l: Truth) -> Verdict:
+    (tlo, thi), (blo, bhi) = box(truth[c["top"]]), box(truth[c["base"]])
     cx, cy = (tlo[0] + thi[0]) / 2, (tlo[1] + thi[1]) / 2
     over = blo[0] <= cx <= bhi[0] and blo[1] <= cy <= bhi[1]
     raised = tlo[2] - blo[2]
@@ -59,8 +64,8 @@ def _stacked(c: dict[str, Any], truth: Truth, _g: dict[str, Any], _l: Truth) -> 
     return Verdict(True, f"{c['top']} rests on/in {c['base']}, its bottom {raised:.3f} m above the base's bottom")
 
 
-def _side_by_side(c: dict[str, Any], truth: Truth, _g: dict[str, Any], _l: Truth) -> Verdict:
-    (alo, ahi), (blo, bhi) = _box(truth[c["moved"]]), _box(truth[c["landmark"]])
+def _side_by_side(c: dict[str, Any], truth: Truth, _g: Grippers, _l: Truth) -> Verdict:
+    (alo, ahi), (blo, bhi) = box(truth[c["moved"]]), box(truth[c["landmark"]])
     for name, low in ((c["moved"], alo), (c["landmark"], blo)):
         if abs(low[2] - TABLE_TOP_Z) > ON_TABLE:
             return Verdict(False, f"{name} is not standing on the table (bottom at {low[2]:.3f} m)")
@@ -74,8 +79,8 @@ def _side_by_side(c: dict[str, Any], truth: Truth, _g: dict[str, Any], _l: Truth
     return Verdict(True, f"side by side along {'xy'[along]}: {gap:.3f} m apart, offset {offset:.3f} m")
 
 
-def _inside(c: dict[str, Any], truth: Truth, _g: dict[str, Any], _l: Truth) -> Verdict:
-    (olo, ohi), (clo, chi) = _box(truth[c["object"]]), _box(truth[c["container"]])
+def _inside(c: dict[str, Any], truth: Truth, _g: Grippers, _l: Truth) -> Verdict:
+    (olo, ohi), (clo, chi) = box(truth[c["object"]]), box(truth[c["container"]])
     cx, cy = (olo[0] + ohi[0]) / 2, (olo[1] + ohi[1]) / 2
     if not (clo[0] <= cx <= chi[0] and clo[1] <= cy <= chi[1]):
         return Verdict(False, f"{c['object']} is not within {c['container']}'s outline")
@@ -84,8 +89,8 @@ def _inside(c: dict[str, Any], truth: Truth, _g: dict[str, Any], _l: Truth) -> V
     return Verdict(True, f"{c['object']} is in {c['container']}, bottom {olo[2] - clo[2]:.3f} m above its floor")
 
 
-def _lifted(c: dict[str, Any], truth: Truth, _g: dict[str, Any], later: Truth) -> Verdict:
-    heights = [_box(sample[c["object"]])[0][2] - TABLE_TOP_Z for sample in (truth, later)]
+def _lifted(c: dict[str, Any], truth: Truth, _g: Grippers, later: Truth) -> Verdict:
+    heights = [box(sample[c["object"]])[0][2] - TABLE_TOP_Z for sample in (truth, later)]
     if min(heights) < c["height"]:
         return Verdict(
             False,
@@ -95,9 +100,9 @@ def _lifted(c: dict[str, Any], truth: Truth, _g: dict[str, Any], later: Truth) -
     return Verdict(True, f"{c['object']} lifted {min(heights):.3f} m and held")
 
 
-def _off_table_in_gripper(c: dict[str, Any], truth: Truth, grippers: dict[str, Any], _l: Truth) -> Verdict:
-    height = _box(truth[c["object"]])[0][2] - TABLE_TOP_Z
-    holders = [arm for arm, g in grippers.items() if isinstance(g, dict) and g.get("holding") == c["object"]]
+def _off_table_in_gripper(c: dict[str, Any], truth: Truth, grippers: Grippers, _l: Truth) -> Verdict:
+    height = box(truth[c["object"]])[0][2] - TABLE_TOP_Z
+    holders = [arm for arm, g in grippers.items() if g.holding == c["object"]]
     if not holders:
         return Verdict(False, f"no gripper holds {c['object']}")
     if height < c["height"]:
@@ -105,7 +110,7 @@ def _off_table_in_gripper(c: dict[str, Any], truth: Truth, grippers: dict[str, A
     return Verdict(True, f"{c['object']} is held by the {holders[0]} gripper, {height:.3f} m above the table")
 
 
-_CRITERIA: dict[str, Callable[[dict[str, Any], Truth, dict[str, Any], Truth], Verdict]] = {
+_CRITERIA: dict[str, Callable[[dict[str, Any], Truth, Grippers, Truth], Verdict]] = {
     "stacked": _stacked,
     "side_by_side": _side_by_side,
     "inside": _inside,

@@ -12,9 +12,10 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, TypeVar
+from typing import TypeVar
 
 from shared.bus import Bus
+from shared.messages import ExecutorState, NluResult, Objects, PerceivedObject, Say, SimState, Truth, TruthObject
 
 T = TypeVar("T")
 
@@ -36,14 +37,14 @@ class Observer:
     def __init__(self, bus: Bus) -> None:
         self._changed = threading.Condition()
         self.lines: list[Line] = []
-        self.results: list[tuple[float, dict[str, Any]]] = []
-        self.executor: dict[str, Any] | None = None
+        self.results: list[tuple[float, NluResult]] = []
+        self.executor: ExecutorState | None = None
         self.busy_states = 0  # executor states seen with a command running
-        self.sim: dict[str, Any] | None = None
+        self.sim: SimState | None = None
         self.rtf: list[float] = []  # the simulator's real-time factor, one per state
-        self.truth: dict[str, dict[str, Any]] = {}
+        self.truth: dict[str, TruthObject] = {}
         self.truth_at = 0.0
-        self.objects: dict[str, dict[str, Any]] = {}
+        self.objects: dict[str, PerceivedObject] = {}
         self.objects_stamp = 0.0  # when the cloud behind the latest object list was rendered
         self._motion_since: float | None = None
         self.motion_at: float | None = None  # sim stamp of the first arm motion after motion_since
@@ -56,44 +57,43 @@ class Observer:
         bus.subscribe(keys.objects, self._on_objects, schema="objects", latest_only=True, history=True)
 
     # -- handlers (bus worker threads) ---------------------------------------------------
-    def _on_say(self, message: dict[str, Any]) -> None:
+    def _on_say(self, message: Say) -> None:
         with self._changed:
-            self.lines.append(Line(time.time(), message["text"], message["kind"]))
+            self.lines.append(Line(time.time(), message.text, message.kind))
             self._changed.notify_all()
 
-    def _on_result(self, message: dict[str, Any]) -> None:
+    def _on_result(self, message: NluResult) -> None:
         with self._changed:
             self.results.append((time.time(), message))
             self._changed.notify_all()
 
-    def _on_executor(self, message: dict[str, Any]) -> None:
+    def _on_executor(self, message: ExecutorState) -> None:
         with self._changed:
             self.executor = message
-            self.busy_states += bool(message["robot"].get("busy"))
+            self.busy_states += bool(message.robot.busy)
             self._changed.notify_all()
 
-    def _on_sim(self, message: dict[str, Any]) -> None:
+    def _on_sim(self, message: SimState) -> None:
         with self._changed:
             self.sim = message
-            if isinstance(message.get("rtf"), (int, float)):
-                self.rtf.append(float(message["rtf"]))
-            moving = message.get("moving") or {}
-            if self._motion_since is not None and self.motion_at is None and any(moving.values()):
-                stamp = float(message.get("stamp", time.time()))
+            if message.rtf is not None:
+                self.rtf.append(message.rtf)
+            if self._motion_since is not None and self.motion_at is None and any(message.moving.values()):
+                stamp = message.stamp
                 if stamp >= self._motion_since:
                     self.motion_at = stamp
             self._changed.notify_all()
 
-    def _on_truth(self, message: dict[str, Any]) -> None:
+    def _on_truth(self, message: Truth) -> None:
         with self._changed:
-            self.truth = {o["id"]: o for o in message["objects"] if isinstance(o, dict) and "id" in o}
+            self.truth = {o.id: o for o in message.objects}
             self.truth_at = time.time()
             self._changed.notify_all()
 
-    def _on_objects(self, message: dict[str, Any]) -> None:
+    def _on_objects(self, message: Objects) -> None:
         with self._changed:
-            self.objects = {o["id"]: o for o in message["objects"] if isinstance(o, dict) and "id" in o}
-            self.objects_stamp = float(message.get("stamp") or 0.0)
+            self.objects = {o.id: o for o in message.objects}
+            self.objects_stamp = message.stamp
             self._changed.notify_all()
 
     # -- queries ---------------------------------------------------------------------------
@@ -103,7 +103,7 @@ class Observer:
             self._motion_since, self.motion_at = since, None
 
     def busy(self) -> bool:
-        return bool(self.executor and self.executor["robot"].get("busy"))
+        return bool(self.executor and self.executor.robot.busy)
 
     def lines_since(self, since: float) -> list[Line]:
         with self._changed:

@@ -17,15 +17,17 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from hfpbd.tasks.judge import Verdict, judge
+from hfpbd.tasks.judge import Truth, Verdict, judge
 from hfpbd.tasks.observer import Observer, WaitTimeout
 from hfpbd.tasks.scripts import Expected, Task, Utterance, word_count
 from shared.bus import Bus, BusTimeout, RemoteError
+from shared.messages import NluResult
 
 log = logging.getLogger("hfpbd.tasks")
 
@@ -126,7 +128,7 @@ class TaskRunner:
         except WaitTimeout as exc:
             raise RunError(str(exc)) from exc
 
-    def load_scene(self, scene: str, seed: int | None = None) -> dict[str, dict[str, Any]]:
+    def load_scene(self, scene: str, seed: int | None = None) -> Truth:
         """Load (or reload) a scene and wait until perception sees exactly its objects and the robot is idle."""
         try:
             self.watch.wait_for(lambda: not self.watch.busy(), STEP_TIMEOUT, "the executor to finish what it is doing")
@@ -161,10 +163,10 @@ class TaskRunner:
         return dict(self.watch.truth)
 
     def _perceived(self) -> bool:
-        seen = [o for o in self.watch.objects.values() if o.get("visible", True)]
+        seen = [o for o in self.watch.objects.values() if o.visible is not False]
         if len(seen) != len(self.watch.truth) or len(self.watch.objects) != len(seen):
             return False
-        return all(self._nearest_distance(o["position"]) < SEEN_WITHIN for o in seen)
+        return all(self._nearest_distance(o.position) < SEEN_WITHIN for o in seen)
 
     def _seen_against_truth(self) -> str:
         """What perception reports next to where the simulator has the objects, to tell why they disagree."""
@@ -173,19 +175,18 @@ class TaskRunner:
             return "(" + ", ".join(f"{v:.2f}" for v in np.asarray(position, dtype=float)[:3]) + ")"
 
         seen = [
-            f"{o['id']} {o.get('color', '?')} {o.get('type', '?')} at {where(o['position'])}"
-            + ("" if o.get("visible", True) else " unseen")
+            f"{o.id} {o.color} {o.type} at {where(o.position)}" + ("" if o.visible is not False else " unseen")
             for o in self.watch.objects.values()
         ]
-        truth = [f"{tid} at {where(t['position'])}" for tid, t in self.watch.truth.items()]
+        truth = [f"{tid} at {where(t.position)}" for tid, t in self.watch.truth.items()]
         return f"perception reports {'; '.join(seen) or 'nothing'} - the simulator has {'; '.join(truth)}"
 
     def _reach_covers(self) -> bool:
-        reach = (self.watch.executor or {}).get("reach") or {}
+        reach = self.watch.executor.reach if self.watch.executor is not None else {}
         return all(oid in reach for oid in self.watch.objects)
 
-    def _nearest_distance(self, position: list[float]) -> float:
-        return min(float(np.linalg.norm(np.asarray(t["position"]) - position)) for t in self.watch.truth.values())
+    def _nearest_distance(self, position: Sequence[float]) -> float:
+        return min(float(np.linalg.norm(np.subtract(t.position, position))) for t in self.watch.truth.values())
 
     def truth_id(self, perceived_id: str) -> str | None:
         """The simulator's id of the object perception calls ``perceived_id`` (nearest now)."""
@@ -194,9 +195,7 @@ class TaskRunner:
             return None
         return min(
             self.watch.truth,
-            key=lambda t: float(
-                np.linalg.norm(np.asarray(self.watch.truth[t]["position"]) - np.asarray(obj["position"]))
-            ),
+            key=lambda t: float(np.linalg.norm(np.subtract(self.watch.truth[t].position, obj.position))),
         )
 
     # -- one utterance -------------------------------------------------------------------
@@ -218,9 +217,9 @@ class TaskRunner:
         except WaitTimeout as exc:
             step.problem = str(exc)
             return self._finish(step, sent)
-        if result["kind"] != "command":
-            step.understood = {"question": result.get("question", "")}
-            step.problem = f"the robot asked: {result.get('question', '')}"
+        if result.kind != "command":
+            step.understood = {"question": result.question or ""}
+            step.problem = f"the robot asked: {result.question or ''}"
             return self._finish(step, sent)
         step.understood = self._in_scene_ids(result)
         if step.expected is not None and step.understood != step.expected:
@@ -252,22 +251,22 @@ class TaskRunner:
         log.info("%-45r %s %s", step.text, "ok" if step.ok else "FAILED", step.problem)
         return step
 
-    def _result_for(self, text: str, sent: float) -> dict[str, Any] | None:
+    def _result_for(self, text: str, sent: float) -> NluResult | None:
         for at, message in reversed(self.watch.results):
-            if at >= sent and message.get("utterance") == text:
+            if at >= sent and message.utterance == text:
                 return message
         return None
 
-    def _in_scene_ids(self, result: dict[str, Any]) -> dict[str, Any]:
-        args = dict(result.get("args") or {})
+    def _in_scene_ids(self, result: NluResult) -> dict[str, Any]:
+        args = dict(result.args or {})
         if "object" in args:
             args["object"] = self.truth_id(args["object"]) or f"unseen {args['object']}"
-        return {"procedure": result.get("procedure"), "args": args}
+        return {"procedure": result.procedure, "args": args}
 
     # -- a whole task -------------------------------------------------------------------------
     def judge_now(self, task: Task) -> Verdict:
         time.sleep(SETTLE)
-        truth, grippers = dict(self.watch.truth), dict((self.watch.sim or {}).get("grippers") or {})
+        truth, grippers = dict(self.watch.truth), dict(self.watch.sim.grippers if self.watch.sim is not None else {})
         later = None
         if task.success.get("hold_s"):
             time.sleep(float(task.success["hold_s"]))

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from shared import contract
+from shared.messages import NluResult
 
 ARMS = contract.ARMS
 BOTH = contract.BOTH
@@ -60,7 +61,7 @@ class Step:
     text: str
 
 
-def check_compound(message: dict[str, Any]) -> list[Step]:
+def check_compound(message: NluResult) -> list[Step]:
     """The steps of an ``nlu/result`` command (its own, then each of ``then``), all checked before any runs.
 
     A ``then`` item has ``procedure`` and ``args`` and may carry its own
@@ -69,44 +70,26 @@ def check_compound(message: dict[str, Any]) -> list[Step]:
     verb is not narrated for a compound's first step, since it may name a
     later one.
     """
-    extra = message.get("then") or []
-    phrases = _phrases(message.get("phrases"))
+    extra = message.then or []
+    phrases = dict(message.phrases or {})
     if extra:  # the utterance's verb may belong to a later step ("put" in "put the cup on the plate" is the place)
         phrases.pop("verb", None)
-    first = Step(
-        message.get("procedure"),
-        check(message.get("procedure"), message.get("args")),
-        phrases,
-        _text(message.get("text")),
-    )
-    if not isinstance(extra, list):
-        raise CommandError("The further steps of a command ('then') must be a list.")
+    args = check(message.procedure, message.args)
+    first = Step(str(message.procedure), args, phrases, message.text or "")
     if extra and first.procedure in ADMIN:
         raise CommandError(f"{first.procedure.replace('_', ' ').capitalize()} has to be said on its own.")
     steps = [first]
     for number, item in enumerate(extra, start=2):
-        if not isinstance(item, dict):
-            raise CommandError(f"Step {number} of the command is not a command.")
         try:
-            args = check(item.get("procedure"), item.get("args"))
+            args = check(item.procedure, item.args)
         except CommandError as exc:
             raise CommandError(f"I can't do step {number} of that: {str(exc)[:1].lower()}{str(exc)[1:]}") from exc
-        if item["procedure"] in ADMIN:
+        if item.procedure in ADMIN:
             raise CommandError(
-                f"I can't do step {number} of that: {item['procedure'].replace('_', ' ')} has to be said on its own."
+                f"I can't do step {number} of that: {item.procedure.replace('_', ' ')} has to be said on its own."
             )
-        steps.append(Step(item["procedure"], args, _phrases(item.get("phrases")), _text(item.get("text"))))
+        steps.append(Step(item.procedure, args, dict(item.phrases or {}), item.text or ""))
     return steps
-
-
-def _phrases(value: Any) -> dict[str, str]:
-    if not isinstance(value, dict):
-        return {}
-    return {k: v for k, v in value.items() if isinstance(k, str) and isinstance(v, str)}
-
-
-def _text(value: Any) -> str:
-    return value if isinstance(value, str) else ""
 
 
 def check(procedure: Any, args: Any) -> dict[str, Any]:

@@ -34,8 +34,10 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from typing import Any
+from collections.abc import Callable
+from typing import Any, TypeVar
 
+import msgspec
 import numpy as np
 
 from services.executor import wording
@@ -53,12 +55,15 @@ from services.executor.store import ActionStore, StoreError
 from services.executor.undo import before_state, reverse
 from shared.bus import Bus, BusTimeout, RemoteError
 from shared.contract import PLACES
+from shared.messages import NluResult, Objects, PerceivedObject, SimState, Table
 
 log = logging.getLogger("hfpbd.executor")
 
 REACH_POLL = 0.2  # seconds between checks whether the reach map is stale
 JOINT_CHANGE = 0.01  # rad: an arm that moved more than this invalidates the map
 RECORD_TIMEOUT = 15.0
+
+T = TypeVar("T")
 
 
 class Executor:
@@ -122,11 +127,11 @@ class Executor:
         self.bus.publish(self.bus.keys.say, {"text": text, "kind": kind})
 
     # -- inputs --------------------------------------------------------------------------
-    def _on_objects(self, message: dict[str, Any]) -> None:
-        if self.scene.update_objects(message["objects"], message.get("table")):
+    def _on_objects(self, message: Objects) -> None:
+        if self.scene.update_objects(message.objects, message.table):
             self._reach_stale.set()
 
-    def _on_sim_state(self, message: dict[str, Any]) -> None:
+    def _on_sim_state(self, message: SimState) -> None:
         self.scene.update_robot(message)
         grippers = {arm: self.scene.snapshot().gripper_state(arm) for arm in ARMS}
         if grippers != self._grippers:
@@ -134,16 +139,15 @@ class Executor:
             self._reach_stale.set()
             self.publish_state()
 
-    def _on_nlu_result(self, message: dict[str, Any]) -> None:
-        if message.get("kind") != "command":  # a clarification or an answer: nothing moves, nothing is recorded
+    def _on_nlu_result(self, message: NluResult) -> None:
+        if message.kind != "command":  # a clarification or an answer: nothing moves, nothing is recorded
             return
         try:
             steps = check_compound(message)
         except CommandError as exc:
             self.say(str(exc), "error")
             return
-        utterance = message.get("utterance") if isinstance(message.get("utterance"), str) else ""
-        ok, text = self.submit(steps, utterance)
+        ok, text = self.submit(steps, message.utterance)
         if not ok:
             self.say(text, "error")
 
@@ -473,23 +477,28 @@ class Executor:
         if current in snap.objects:
             return current
         taken = {v for k, v in matched.mapping.items() if k != landmark["id"]}
-        again = reground([landmark], [o for o in snap.standing_objects() if o["id"] not in taken])
+        again = reground([landmark], [o for o in snap.standing_objects() if o.id not in taken])
         if landmark["id"] in again.mapping:
             matched.mapping[landmark["id"]] = again.mapping[landmark["id"]]
             return again.mapping[landmark["id"]]
         matched.missing.update(again.missing)
         return None
 
-    def _record_objects(self) -> list[dict[str, Any]]:
-        """A fresh settled observation from perception, taken into the scene at once."""
+    def _record_objects(self) -> list[PerceivedObject]:
+        """A fresh settled observation from perception, taken into the scene at once.
+
+        The reply is a map (a request's answer has no stream type); its
+        objects and table are typed here one by one, and one that does not
+        fit is left out as a malformed object in a stream message would be.
+        """
         try:
             reply = self.bus.request(self.bus.keys.record, {}, timeout=RECORD_TIMEOUT)
         except BusTimeout as exc:
             raise StepFailed("I can't see anything: the perception service is not answering.") from exc
         except RemoteError as exc:
             raise StepFailed(wording.sentence(f"I couldn't get a clear view of the table: {exc}")) from exc
-        objects = [o for o in reply.get("objects", []) if isinstance(o, dict)]
-        if self.scene.update_objects(objects, reply.get("table")):
+        objects = [o for o in map(_typed_or_none(PerceivedObject), reply.get("objects") or []) if o is not None]
+        if self.scene.update_objects(objects, _typed_or_none(Table)(reply.get("table"))):
             self._reach_stale.set()
         return objects
 
@@ -517,7 +526,7 @@ class Executor:
             snap = self.scene.snapshot()
             if snap.robot is None:
                 continue
-            if any((snap.robot.get("moving") or {}).values()):
+            if any(snap.robot.moving.values()):
                 continue
             joints = snap.joints()
             q = {arm: np.array([joints.get(n, 0.0) for n in joint_names(arm)]) for arm in ARMS}
@@ -576,6 +585,18 @@ class Executor:
                 self._state_publisher.put(self.state_message())
             except StoreError as exc:
                 log.error("cannot publish state: %s", exc)
+
+
+def _typed_or_none(kind: type[T]) -> Callable[[Any], T | None]:
+    """A converter of a reply's part to ``kind``: None for one that does not fit it."""
+
+    def convert(value: Any) -> T | None:
+        try:
+            return msgspec.convert(value, kind)
+        except (msgspec.ValidationError, TypeError):
+            return None
+
+    return convert
 
 
 def _context(step: Step, utterance: str) -> dict[str, Any]:

@@ -24,6 +24,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from shared.contract import DISTANCE
+from shared.messages import WorldObject
 
 STEP = DISTANCE.default_m  # a directional move without a distance
 GAP = 0.05
@@ -64,8 +65,8 @@ class Box:
     size: np.ndarray
 
     @staticmethod
-    def of(obj: dict) -> Box:
-        return Box(np.asarray(obj["position"], float), np.asarray(obj["size"], float))
+    def of(obj: WorldObject) -> Box:
+        return Box(np.asarray(obj.position, float), np.asarray(obj.size, float))
 
     @property
     def top(self) -> float:

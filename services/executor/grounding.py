@@ -7,7 +7,9 @@ with the cups moved there. All landmarks of an action are matched together
 on the other red cup" keeps two different cups apart. A candidate whose
 colour or type differs, or whose size differs by more than the tolerance, is
 no match: the step then fails with a message naming what is missing rather
-than grabbing some other object.
+than grabbing some other object. Descriptors are maps because steps are
+stored as JSON; the objects they are matched to are perception's typed
+objects.
 """
 
 from __future__ import annotations
@@ -18,52 +20,57 @@ from typing import Any
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from shared.messages import PerceivedObject
+
 SIZE_TOLERANCE = 0.35  # relative size difference per axis still accepted as "the same object"
 SIZE_SLACK = 0.02  # metres: perception noise on small objects
 REJECT = 1e6
 
 
-def descriptor(obj: dict[str, Any]) -> dict[str, Any]:
+def descriptor(obj: PerceivedObject) -> dict[str, Any]:
     """What a step keeps of a landmark object."""
     return {
-        "id": obj["id"],
-        "color": obj.get("color", "unknown"),
-        "type": obj.get("type", "unknown"),
-        "size": [round(float(v), 4) for v in obj["size"]],
-        "position": [round(float(v), 4) for v in obj["position"]],
+        "id": obj.id,
+        "color": obj.color,
+        "type": obj.type,
+        "size": [round(float(v), 4) for v in obj.size],
+        "position": [round(float(v), 4) for v in obj.position],
     }
 
 
-def describe_kind(desc: dict[str, Any]) -> str:
-    """ "red cup", "blue object", "box" — the words for a descriptor, for messages."""
-    color = desc.get("color", "unknown")
-    kind = desc.get("type", "unknown")
+def kind_words(color: str, kind: str) -> str:
+    """ "red cup", "blue object", "box" — the words for a colour and a type, for messages."""
     noun = kind if kind != "unknown" else "object"
     return f"{color} {noun}" if color != "unknown" else noun
 
 
-def _mismatch(desc: dict[str, Any], obj: dict[str, Any]) -> list[str]:
+def describe_kind(desc: dict[str, Any]) -> str:
+    """The words for a descriptor (see :func:`kind_words`)."""
+    return kind_words(desc.get("color", "unknown"), desc.get("type", "unknown"))
+
+
+def _mismatch(desc: dict[str, Any], obj: PerceivedObject) -> list[str]:
     """What differs between a remembered landmark and a perceived object (empty: a match)."""
     problems = []
-    for field in ("color", "type"):
-        want, have = desc.get(field, "unknown"), obj.get(field, "unknown")
+    for field, have in (("color", obj.color), ("type", obj.type)):
+        want = desc.get(field, "unknown")
         # a type word may be missing for a moment (a partial view); a colour word is always seen
         wildcard = field == "type" and have == "unknown"
         if want != "unknown" and want != have and not wildcard:
             problems.append(field)
     want_size = np.asarray(desc["size"], float)
-    have_size = np.asarray(obj["size"], float)
+    have_size = np.asarray(obj.size, float)
     if np.any(np.abs(want_size - have_size) > SIZE_TOLERANCE * want_size + SIZE_SLACK):
         problems.append("size")
     return problems
 
 
-def cost(desc: dict[str, Any], obj: dict[str, Any]) -> float:
+def cost(desc: dict[str, Any], obj: PerceivedObject) -> float:
     """Lower is better; ``REJECT`` or more means "not this object"."""
     if _mismatch(desc, obj):
         return REJECT
-    unknown_penalty = 0.5 if obj.get("type", "unknown") == "unknown" != desc.get("type", "unknown") else 0.0
-    return float(np.linalg.norm(np.asarray(desc["size"], float) - np.asarray(obj["size"], float))) + unknown_penalty
+    unknown_penalty = 0.5 if obj.type == "unknown" != desc.get("type", "unknown") else 0.0
+    return float(np.linalg.norm(np.asarray(desc["size"], float) - np.asarray(obj.size, float))) + unknown_penalty
 
 
 @dataclass
@@ -74,7 +81,7 @@ class Regrounding:
     missing: dict[str, str]
 
 
-def reground(descriptors: list[dict[str, Any]], objects: list[dict[str, Any]]) -> Regrounding:
+def reground(descriptors: list[dict[str, Any]], objects: list[PerceivedObject]) -> Regrounding:
     """Match remembered landmarks (one descriptor per distinct remembered id) to perceived objects."""
     unique: dict[str, dict[str, Any]] = {}
     for desc in descriptors:
@@ -92,24 +99,24 @@ def reground(descriptors: list[dict[str, Any]], objects: list[dict[str, Any]]) -
     mapping: dict[str, str] = {}
     for r, c in zip(rows, cols):
         if table[r, c] < REJECT:
-            mapping[ids[r]] = objects[c]["id"]
+            mapping[ids[r]] = objects[c].id
     for i in ids:
         if i not in mapping:
             missing[i] = _missing_message(unique[i], objects, taken=set(mapping.values()))
     return Regrounding(mapping, missing)
 
 
-def _missing_message(desc: dict[str, Any], objects: list[dict[str, Any]], taken: set[str]) -> str:
+def _missing_message(desc: dict[str, Any], objects: list[PerceivedObject], taken: set[str]) -> str:
     """Name what is missing: "There is no red cup on the table any more (the closest is a blue cup)."""
     kind = describe_kind(desc)
-    free = [o for o in objects if o["id"] not in taken]
+    free = [o for o in objects if o.id not in taken]
     if any(not _mismatch(desc, o) for o in objects) and not any(not _mismatch(desc, o) for o in free):
         return f"I can only find one {kind}, and this action needs another one."
     if not free:
         return f"There is no {kind} on the table any more."
     best = min(free, key=lambda o: len(_mismatch(desc, o)))
     differences = _mismatch(desc, best)
-    nearest = describe_kind({"color": best.get("color", "unknown"), "type": best.get("type", "unknown")})
+    nearest = kind_words(best.color, best.type)
     if differences == ["size"]:
         return f"There is no {kind} of the size I was taught on the table any more (the {nearest} here is a different size)."
     return f"There is no {kind} on the table any more (the closest I see is a {nearest})."

@@ -43,6 +43,7 @@ from services.executor.referring import refer
 from services.executor.robot import MotionError, SimRobot, Started, Stopped
 from services.executor.scene import ARMS, Scene, SceneSnapshot
 from services.executor.targets import EdgeGrasp, Held, overhang, thin_and_wide
+from shared.messages import PerceivedObject
 from shared.robot import ROBOT
 
 log = logging.getLogger("hfpbd.executor.procedures")
@@ -98,7 +99,7 @@ class Procedures:
         scene: Scene,
         robot: SimRobot,
         arms: dict[str, ArmKinematics],
-        record_objects: Callable[[], list[dict[str, Any]]],
+        record_objects: Callable[[], list[PerceivedObject]],
     ) -> None:
         self.scene = scene
         self.robot = robot
@@ -148,9 +149,9 @@ class Procedures:
                 what = refer(snap.objects, held[arm].object_id) if held[arm] else "something"
                 raise StepFailed(wording.sentence(f"My {arm} hand is already holding {what}"))
             other = "left" if arm == "right" else "right"
-            if (held[other] is not None and held[other].object_id == object_id) or snap.objects[object_id].get(
-                "held_by"
-            ) == other:
+            if (held[other] is not None and held[other].object_id == object_id) or snap.objects[
+                object_id
+            ].held_by == other:
                 raise StepFailed(wording.sentence(f"My {other} hand is holding {refer(snap.objects, object_id)}"))
         elif procedure == "open" and gripper == "open":
             raise StepFailed(wording.sentence(f"My {arm} hand is already open"))
@@ -215,7 +216,7 @@ class Procedures:
         tool = kin.fk()
         return Held(held.object_id, Box(held.center_at(tool), held.box.size), tool)
 
-    def _object(self, snap: SceneSnapshot, object_id: str) -> dict[str, Any]:
+    def _object(self, snap: SceneSnapshot, object_id: str) -> PerceivedObject:
         if object_id not in snap.objects:
             remembered = (snap.remembered or {}).get(object_id)
             if remembered is not None:
@@ -324,7 +325,7 @@ class Procedures:
         tool = kin.fk()
         return [*(tool[:3] - box.center).round(4).tolist(), *np.round(tool[3:], 5).tolist()]
 
-    def _landmark(self, obj: dict[str, Any]) -> dict[str, Any]:
+    def _landmark(self, obj: PerceivedObject) -> dict[str, Any]:
         return descriptor(obj)
 
     # -- p1 ----------------------------------------------------------------------------------
@@ -617,7 +618,7 @@ class Procedures:
             self._release_and_back_off(arm)
         raise StepFailed(wording.cannot_pick(arm, words, reason))
 
-    def _out_of_reach(self, arm: str, kin: ArmKinematics, obj: dict[str, Any], words: str) -> str | None:
+    def _out_of_reach(self, arm: str, kin: ArmKinematics, obj: PerceivedObject, words: str) -> str | None:
         """When no grasp of ``obj`` is within the arm's length at all: how far out it is, and whether the other hand can.
 
         None when some grasp is within reach (something is in the way instead).
@@ -626,7 +627,7 @@ class Procedures:
         if reach.graspable_at(kin, obj, np.zeros(3), near_edge):
             return None
         short = reach.shortfall(
-            kin, lambda offset: reach.graspable_at(kin, obj, offset, near_edge), np.asarray(obj["position"])
+            kin, lambda offset: reach.graspable_at(kin, obj, offset, near_edge), np.asarray(obj.position)
         )
         where = (
             f"{max(1, round(100 * short))} cm beyond my {arm} hand"
@@ -643,10 +644,10 @@ class Procedures:
         return wording.sentence(f"{words} is {where}")
 
     @staticmethod
-    def _in_the_way(kin: ArmKinematics, snap: SceneSnapshot, obj: dict[str, Any]) -> str | None:
+    def _in_the_way(kin: ArmKinematics, snap: SceneSnapshot, obj: PerceivedObject) -> str | None:
         """What the grasps of ``obj`` would hit (other objects, the other arm), as words; None if nothing is named."""
         poses = [grasp.pregrasp for grasp in targets.grasps(obj, snap.near_edge)]
-        blockers = (kin.blockers(poses) or set()) - {obj["id"], "table"}  # the table is always near a grasp
+        blockers = (kin.blockers(poses) or set()) - {obj.id, "table"}  # the table is always near a grasp
         names = sorted(
             refer(snap.objects, b) if b in snap.objects else ("the table" if b == "table" else f"my {b}")
             for b in blockers
@@ -689,7 +690,7 @@ class Procedures:
 
     def _look_again(
         self, arm: str, object_id: str
-    ) -> tuple[ArmKinematics, dict[str, Any], Iterator[tuple[geo.Grasp, np.ndarray]]]:
+    ) -> tuple[ArmKinematics, PerceivedObject, Iterator[tuple[geo.Grasp, np.ndarray]]]:
         """Grasp plans from a fresh settled view, before a pick-up is refused.
 
         The view at hand may date from while a hand was on the object: a plate
@@ -702,7 +703,7 @@ class Procedures:
         obj = self._object(snap, object_id)
         return kin, obj, self._grasp_plans(kin, obj)
 
-    def _grasp_plans(self, kin: ArmKinematics, obj: dict[str, Any]) -> Iterator[tuple[geo.Grasp, np.ndarray]]:
+    def _grasp_plans(self, kin: ArmKinematics, obj: PerceivedObject) -> Iterator[tuple[geo.Grasp, np.ndarray]]:
         """Grasps whose pre-grasp and grasp both have IK solutions, in preference order (with the joints to plan to).
 
         Found one at a time: the arm sets off as soon as the first is known,
@@ -713,16 +714,16 @@ class Procedures:
             if pre_q is None:
                 continue
             if isinstance(grasp, EdgeGrasp):
-                hover_q = self._edge_approach(kin, grasp, pre_q, obj["id"])
+                hover_q = self._edge_approach(kin, grasp, pre_q, obj.id)
                 if hover_q is not None:
                     yield grasp, hover_q
                 continue
-            kin.allow_touching(obj["id"], True)
+            kin.allow_touching(obj.id, True)
             try:
                 grasp_q = kin.ik(grasp.grasp, seeds=[pre_q])
             finally:
-                kin.allow_touching(obj["id"], False)
-            if grasp_q is not None and self._descent_clear(kin, pre_q, grasp.grasp, obj["id"]):
+                kin.allow_touching(obj.id, False)
+            if grasp_q is not None and self._descent_clear(kin, pre_q, grasp.grasp, obj.id):
                 yield grasp, pre_q
 
     def _edge_approach(
@@ -924,7 +925,7 @@ class Procedures:
                     "the way down to %s is blocked now; objects seen: %s",
                     np.round(release[:3], 3),
                     {
-                        k: (np.round(o["position"], 3).tolist(), np.round(o["size"], 3).tolist(), o.get("type"))
+                        k: (np.round(o.position, 3).tolist(), np.round(o.size, 3).tolist(), o.type)
                         for k, o in snap.objects.items()
                     },
                 )
@@ -1002,7 +1003,7 @@ class Procedures:
         snap = self._snapshot()
         obj = self._object(snap, object)
         try:
-            outcome = self.robot.look_at(np.asarray(obj["position"], float))
+            outcome = self.robot.look_at(np.asarray(obj.position, float))
         except MotionError as exc:
             raise StepFailed(wording.sentence(f"I can't turn my head: {exc}")) from exc
         if outcome.status != "done":
@@ -1040,10 +1041,10 @@ class Procedures:
                 nearest = min(
                     snap.objects.values(),
                     default=None,
-                    key=lambda o: float(np.linalg.norm(np.asarray(o["position"]) - tool[:3])),
+                    key=lambda o: float(np.linalg.norm(np.asarray(o.position) - tool[:3])),
                 )
                 if nearest is not None:
-                    self._set_held(hand, Held(nearest["id"], Box.of(nearest), tool))
+                    self._set_held(hand, Held(nearest.id, Box.of(nearest), tool))
         return Done()
 
     # -- p13 -------------------------------------------------------------------------------------------------

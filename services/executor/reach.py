@@ -12,8 +12,8 @@ two IK solves per key.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
+import msgspec
 import numpy as np
 
 from services.executor import geometry as geo
@@ -22,6 +22,7 @@ from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics
 from services.executor.scene import SceneSnapshot
 from services.executor.targets import Held
+from shared.messages import PerceivedObject
 
 HELD_MARGIN = 0.03  # metres around the carried box within which a sighting marked held may lie
 RELATION_KEYS = ("above", "next_to", "left_of", "right_of", "in_front_of", "behind", "on_top_of", "near")
@@ -51,7 +52,7 @@ def _in_hand(arm: str, snap: SceneSnapshot, held: Held | None) -> set[str]:
     return {held.object_id} | {oid for oid, obj in snap.objects.items() if is_held_sighting(obj, arm, held)}
 
 
-def is_held_sighting(obj: dict[str, Any], arm: str, held: Held) -> bool:
+def is_held_sighting(obj: PerceivedObject, arm: str, held: Held) -> bool:
     """Whether perception's object ``obj`` is the one ``arm`` holds: centred in the carried box, or marked
     held by this hand *and* reaching up into the carried box over its footprint.
 
@@ -62,7 +63,7 @@ def is_held_sighting(obj: dict[str, Any], arm: str, held: Held) -> bool:
     if np.all(np.abs(box.center - held.box.center) <= held.box.half):
         return True
     over = np.all(np.abs(box.center[:2] - held.box.center[:2]) <= held.box.half[:2] + HELD_MARGIN)
-    return obj.get("held_by") == arm and bool(over) and box.top >= held.box.bottom
+    return obj.held_by == arm and bool(over) and box.top >= held.box.bottom
 
 
 Interruption = Callable[[], bool]
@@ -81,17 +82,17 @@ def _any(kin: ArmKinematics, poses: list[np.ndarray]) -> bool:
     return kin.first_reachable(poses) is not None
 
 
-def can_pick(kin: ArmKinematics, obj: dict[str, Any], near_edge: float | None) -> bool:
+def can_pick(kin: ArmKinematics, obj: PerceivedObject, near_edge: float | None) -> bool:
     """Some grasp whose pre-grasp is collision-free and whose grasp touches only the object."""
     for grasp in targets.grasps(obj, near_edge):
         if kin.ik(grasp.pregrasp) is None:
             continue
-        kin.allow_touching(obj["id"], True)
+        kin.allow_touching(obj.id, True)
         try:
             if kin.ik(grasp.grasp) is not None:
                 return True
         finally:
-            kin.allow_touching(obj["id"], False)
+            kin.allow_touching(obj.id, False)
     return False
 
 
@@ -113,7 +114,7 @@ def object_reach(
     out["next_to"] = side["left_of"] or side["right_of"]
     out["near"] = out["next_to"] or side["in_front_of"] or side["behind"]
     _give_way(interrupted)
-    out["pick_up"] = held is None and obj.get("held_by") is None and can_pick(kin, obj, snap.near_edge)
+    out["pick_up"] = held is None and obj.held_by is None and can_pick(kin, obj, snap.near_edge)
     # With something in the hand the relation keys above were computed for the *held object*: their
     # poses are the hover poses of placing it there, the first thing place_rel needs, so "place" is
     # their union. With an empty hand it says whether the hand itself gets beside or on top of the
@@ -186,12 +187,12 @@ def shortfall(kin: ArmKinematics, reachable: Callable[[np.ndarray], bool], cente
     return high
 
 
-def graspable_at(kin: ArmKinematics, obj: dict[str, Any], offset: np.ndarray, near_edge: float | None) -> bool:
+def graspable_at(kin: ArmKinematics, obj: PerceivedObject, offset: np.ndarray, near_edge: float | None) -> bool:
     """Whether some grasp of ``obj`` moved by ``offset`` has IK solutions for its pre-grasp and grasp (no collisions).
 
     ``near_edge``: the table's near edge, for the overhang grasps of a flat object (None: not seen).
     """
-    moved = {**obj, "position": (np.asarray(obj["position"], float) + offset).tolist()}
+    moved = msgspec.structs.replace(obj, position=tuple((np.asarray(obj.position, float) + offset).tolist()))
     for grasp in targets.grasps(moved, near_edge):
         pre = kin.ik(grasp.pregrasp, check_collisions=False)
         if pre is not None and kin.ik(grasp.grasp, seeds=[pre], check_collisions=False) is not None:

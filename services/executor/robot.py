@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from shared.bus import Bus, BusTimeout, RemoteError
+from shared.messages import SimEvent
 
 log = logging.getLogger("hfpbd.executor.robot")
 
@@ -61,14 +62,14 @@ class SimRobot:
         self._cond = threading.Condition()
         bus.subscribe(bus.keys.sim_events, self._on_event, schema="sim_event")
 
-    def _on_event(self, message: dict[str, Any]) -> None:
-        motion_id, status = message["motion_id"], message["status"]
+    def _on_event(self, message: SimEvent) -> None:
+        motion_id, status = message.motion_id, message.status
         if status not in ("done", "stopped", "failed"):
             self.bus.rejected[self.bus.keys.sim_events] += 1
             log.warning("ignored a sim event with unknown status %r", status)
             return
         with self._cond:
-            self._events[motion_id] = Outcome(status, str(message.get("message", "")))
+            self._events[motion_id] = Outcome(status, message.message)
             if len(self._events) > 512:  # keep memory bounded; nobody waits on old motions
                 for old in list(self._events)[:256]:
                     del self._events[old]

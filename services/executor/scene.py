@@ -2,7 +2,8 @@
 
 Everything comes from the bus as a real robot would report it: objects and
 the table from perception, joints and grippers (opening and effort) from
-the robot's state.
+the robot's state. They are kept as the bus's typed messages
+(:mod:`shared.messages`), already checked field by field.
 
 Written by subscription threads, read by the command worker and the
 reachability thread, so every read returns a consistent copy. A version
@@ -15,21 +16,25 @@ from __future__ import annotations
 
 import copy
 import threading
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
+import msgspec
 import numpy as np
 
 from services.executor.geometry import Box
 from services.executor.table import Table, parse_table
+from shared import messages
+from shared.messages import PerceivedObject, SimState
 from shared.robot import ROBOT, GripperState
 
 MOVED = 0.01  # metres an object must move to count as a change
 ARMS = ROBOT.arms
 SUPPORT_GAP = 0.025  # metres between an object's bottom and what it stands on
 MAX_STACK = 4
-FLAT_THICKNESS = 0.03  # metres: an object this thin (a plate, a tray) is something others stand on, not beside
-MIN_THICKNESS = 0.003  # metres: a flat object's box cut thinner than this is left out of the planning world
+MIN_THICKNESS = 0.003  # metres: an object's box cut thinner than this is left out of the planning world
+CONTAINERS = ("bowl",)  # types whose walls stand around what is in them
 FAINT_CONFIDENCE = 0.6
 REMEMBER = 256  # objects no longer seen whose descriptions are kept, for "the red cup is gone"
 
@@ -38,12 +43,12 @@ REMEMBER = 256  # objects no longer seen whose descriptions are kept, for "the r
 class SceneSnapshot:
     """A consistent copy of what is known at one moment."""
 
-    objects: dict[str, dict[str, Any]]
+    objects: dict[str, PerceivedObject]
     table: Table | None  # None until perception has seen one
-    robot: dict[str, Any] | None
+    robot: SimState | None
     version: int
     robot_version: int = 0
-    remembered: dict[str, dict[str, Any]] | None = None
+    remembered: dict[str, PerceivedObject] | None = None
 
     def box(self, object_id: str) -> Box:
         return Box.of(self.objects[object_id])
@@ -76,40 +81,45 @@ class SceneSnapshot:
         return boxes
 
     def _below_what_stands_on_it(self, object_id: str) -> Box | None:
-        """A flat object's box, ending where anything standing on it begins (None: nothing of it is left).
+        """An object's box, ending where anything standing on it begins (None: nothing of it is left).
 
         From above, the camera sees only the rim of a plate around the cup
-        standing on it, and perception can then place the plate up at the
-        cup's middle; a plate modelled there would block every grasp of that
-        cup. A flat thing under an object cannot reach above that object's
-        bottom, so its box is moved down (not below the table) to end there.
+        standing on it, or the sides of a box with a cup on its lid, and
+        perception can then place the plate or the box too high, up into the
+        cup; modelled there, it would block every grasp of that cup. What
+        holds an object up ends below that object's bottom, so its box is cut
+        (never below the table) to end there, keeping its height. An object stands on another when
+        its middle is over the other's outline and higher than the other's
+        middle, and it rises above the other's top; a bowl keeps its walls
+        around what is in it.
         """
         box = Box.of(self.objects[object_id])
-        if box.size[2] > FLAT_THICKNESS:
+        if self.objects[object_id].type in CONTAINERS:
             return box
         top = box.top
         for oid, other in self.objects.items():
             above = Box.of(other)
             centred_over = np.all(np.abs(above.center[:2] - box.center[:2]) < box.half[:2])
-            if oid != object_id and centred_over and above.size[2] > box.size[2] and above.bottom < top:
-                top = above.bottom
+            standing = above.center[2] > box.center[2] and above.top > box.top
+            if oid != object_id and centred_over and standing:
+                top = min(top, above.bottom)
         if top >= box.top:
             return box
-        bottom = max(self.table_z, top - float(box.size[2]))
+        bottom = max(self.table_z, min(box.bottom, top - float(box.size[2])))  # its height kept where it fits
         if top - bottom < MIN_THICKNESS:
             return None
         return Box(
             np.array([box.center[0], box.center[1], (top + bottom) / 2]), np.array([*box.size[:2], top - bottom])
         )
 
-    def standing_objects(self) -> list[dict[str, Any]]:
+    def standing_objects(self) -> list[PerceivedObject]:
         """Objects in view now that rest on something (see :meth:`obstacles`): candidates for re-grounding.
 
         Perception keeps reporting an object for a few seconds after it was
         last seen (``visible`` false), so a cup that was just taken away
         does not stand in for the one the action needs.
         """
-        return [o for oid, o in self.objects.items() if o.get("visible", True) and self.supported(oid)]
+        return [o for oid, o in self.objects.items() if o.visible is not False and self.supported(oid)]
 
     def supported(self, object_id: str, depth: int = 0) -> bool:
         """Whether the object rests on the table, or on an object that is itself supported (a stack)."""
@@ -132,25 +142,33 @@ class SceneSnapshot:
     def held_by(self, arm: str) -> str | None:
         """The id of the object perception sees in ``arm``'s gripper, if any."""
         for oid, obj in self.objects.items():
-            if obj.get("held_by") == arm:
+            if obj.held_by == arm:
                 return oid
         return None
 
     def gripper_state(self, arm: str) -> GripperState:
         """``open`` / ``closed`` / ``holding``, from the gripper's opening and squeezing effort."""
-        grippers = (self.robot or {}).get("grippers", {})
-        g = grippers.get(arm)
-        if not isinstance(g, dict):
+        g = self.robot.grippers.get(arm) if self.robot is not None else None
+        if g is None:
             return "open"
-        return ROBOT.gripper.state(_reading(g, "width", ROBOT.gripper.max_opening), _reading(g, "effort", 0.0))
+        return ROBOT.gripper.state(_reading(g.width, ROBOT.gripper.max_opening), _reading(g.effort, 0.0))
 
     def joints(self) -> dict[str, float]:
-        return dict((self.robot or {}).get("joints", {}))
+        return dict(self.robot.joints) if self.robot is not None else {}
 
 
-def _reading(gripper: dict[str, Any], name: str, default: float) -> float:
-    value = gripper.get(name)
-    return float(value) if isinstance(value, (int, float)) and np.isfinite(value) else default
+def _reading(value: float | None, default: float) -> float:
+    return float(value) if value is not None and np.isfinite(value) else default
+
+
+def perceived(objects: Iterable[Mapping[str, Any]]) -> list[PerceivedObject]:
+    """Objects written as world-state maps (ground truth, benchmark scenes) as perception's typed objects."""
+    return msgspec.convert(list(objects), list[PerceivedObject])
+
+
+def measured(joints: Mapping[str, float]) -> SimState:
+    """A robot state that knows only joint angles: for planning without a simulator (benchmarks, figures)."""
+    return SimState(stamp=0.0, joints=dict(joints), ee={}, grippers={})
 
 
 class Scene:
@@ -158,19 +176,19 @@ class Scene:
 
     def __init__(self) -> None:
         self._lock = threading.Condition()
-        self._objects: dict[str, dict[str, Any]] = {}
+        self._objects: dict[str, PerceivedObject] = {}
         self._table: Table | None = None
-        self._robot: dict[str, Any] | None = None
+        self._robot: SimState | None = None
         self._version = 0
         self._robot_version = 0
-        self._remembered: dict[str, dict[str, Any]] = {}
+        self._remembered: dict[str, PerceivedObject] = {}
 
-    def update_objects(self, objects: list[dict[str, Any]], table: dict | None = None) -> bool:
+    def update_objects(self, objects: list[PerceivedObject], table: messages.Table | None = None) -> bool:
         """Take a perception message's objects and table; True when something changed that matters.
 
         A message without a usable ``table`` keeps the table known before.
         """
-        fresh = {o["id"]: o for o in objects if _valid_object(o)}
+        fresh = {o.id: o for o in objects if _finite(o)}
         with self._lock:
             changed = _differs(self._objects, fresh)
             self._objects = fresh
@@ -186,7 +204,7 @@ class Scene:
             self._lock.notify_all()
             return changed
 
-    def update_robot(self, state: dict[str, Any]) -> None:
+    def update_robot(self, state: SimState) -> None:
         with self._lock:
             self._robot = state
             self._robot_version += 1
@@ -206,8 +224,7 @@ class Scene:
     def sim_time(self) -> float | None:
         """The simulation clock of the latest robot state (None before the first)."""
         with self._lock:
-            value = (self._robot or {}).get("sim_time")
-            return float(value) if isinstance(value, (int, float)) else None
+            return self._robot.sim_time if self._robot is not None else None
 
     def wait_robot(self, after_version: int, timeout: float) -> bool:
         """Wait for a robot state newer than ``after_version``."""
@@ -220,23 +237,14 @@ class Scene:
             return self._version
 
 
-def _faint(obj: dict[str, Any]) -> bool:
+def _faint(obj: PerceivedObject) -> bool:
     """A detection without a type word and with low confidence: a glimpse of the arm, not an object."""
-    confidence = obj.get("confidence")
-    return obj.get("type") == "unknown" and isinstance(confidence, (int, float)) and confidence < FAINT_CONFIDENCE
+    return obj.type == "unknown" and obj.confidence is not None and obj.confidence < FAINT_CONFIDENCE
 
 
-def _valid_object(obj: Any) -> bool:
-    try:
-        return (
-            isinstance(obj.get("id"), str)
-            and len(obj["position"]) == 3
-            and len(obj["size"]) == 3
-            and all(np.isfinite(np.asarray(obj["position"], float)))
-            and all(np.isfinite(np.asarray(obj["size"], float)))
-        )
-    except (TypeError, ValueError, KeyError, AttributeError):
-        return False
+def _finite(obj: PerceivedObject) -> bool:
+    """Whether the object's position and size are real numbers (the message's types allow NaN and infinity)."""
+    return bool(np.isfinite(obj.position).all() and np.isfinite(obj.size).all())
 
 
 def _table_moved(old: Table, new: Table) -> bool:
@@ -248,15 +256,15 @@ def _table_moved(old: Table, new: Table) -> bool:
     return any(abs(old.edges[side] - new.edges[side]) > MOVED for side in new.edges)
 
 
-def _differs(old: dict[str, dict], new: dict[str, dict]) -> bool:
+def _differs(old: dict[str, PerceivedObject], new: dict[str, PerceivedObject]) -> bool:
     if set(old) != set(new):
         return True
     for oid, obj in new.items():
         before = old[oid]
-        if np.linalg.norm(np.asarray(obj["position"], float) - np.asarray(before["position"], float)) > MOVED:
+        if np.linalg.norm(np.asarray(obj.position, float) - np.asarray(before.position, float)) > MOVED:
             return True
-        if np.linalg.norm(np.asarray(obj["size"], float) - np.asarray(before["size"], float)) > MOVED:
+        if np.linalg.norm(np.asarray(obj.size, float) - np.asarray(before.size, float)) > MOVED:
             return True
-        if obj.get("held_by") != before.get("held_by"):
+        if obj.held_by != before.held_by:
             return True
     return False

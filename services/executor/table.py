@@ -12,13 +12,12 @@ of the table just because the camera never saw it.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from services.executor.geometry import Box
+from shared import messages
 
 SLAB = 0.04  # m: thickness planned under the top (the camera sees only the top)
 UNSEEN_REACH = 0.5  # m the table is assumed to go on past the last point seen, on a side whose edge was not seen
@@ -50,42 +49,34 @@ class Table:
         return Box(np.array([bounds[0].mean(), bounds[1].mean(), self.height - SLAB / 2]), size)
 
 
-def parse_table(field: Any) -> Table | None:
-    """A :class:`Table` from perception's ``table`` field, or None when it is missing or malformed.
+def parse_table(field: messages.Table | None) -> Table | None:
+    """A :class:`Table` from perception's ``table`` field, or None when it is missing or unusable.
 
     ``extent`` is taken from the field, or from the bounding box of its
-    ``outline`` when a publisher sends only that; ``edges`` entries that are
-    not numbers are ignored.
+    ``outline`` when a publisher sends only that; a height or an extent that
+    is not finite, or an extent with no area, leaves the table unknown, and
+    an edge that is not finite is ignored.
     """
-    if not isinstance(field, Mapping) or not _number(field.get("height")):
+    if field is None or not np.isfinite(field.height):
         return None
     extent = _extent(field)
     if extent is None:
         return None
-    edges = field.get("edges") if isinstance(field.get("edges"), Mapping) else {}
     return Table(
-        float(field["height"]),
+        float(field.height),
         extent,
-        {side: float(value) for side, value in edges.items() if side in SIDES and _number(value)},
+        {side: float(value) for side, value in field.edges.items() if side in SIDES and np.isfinite(value)},
     )
 
 
-def _extent(field: Mapping[str, Any]) -> np.ndarray | None:
-    extent = field.get("extent")
-    try:
-        if isinstance(extent, Mapping):
-            bounds = np.array([extent["x"], extent["y"]], float)
-        else:
-            bounds = np.asarray(field.get("outline"), float)
-            bounds = np.stack([bounds.min(axis=0), bounds.max(axis=0)], axis=1) if bounds.ndim == 2 else None
-    except (KeyError, TypeError, ValueError):
+def _extent(field: messages.Table) -> np.ndarray | None:
+    if field.extent is not None:
+        bounds = np.array([field.extent.x, field.extent.y], float)
+    elif field.outline:
+        points = np.asarray(field.outline, float)
+        bounds = np.stack([points.min(axis=0), points.max(axis=0)], axis=1)
+    else:
         return None
-    if bounds is None or bounds.shape != (2, 2) or not np.isfinite(bounds).all():
-        return None
-    if np.any(bounds[:, 1] <= bounds[:, 0]):
+    if not np.isfinite(bounds).all() or np.any(bounds[:, 1] <= bounds[:, 0]):
         return None
     return bounds
-
-
-def _number(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and bool(np.isfinite(value))

@@ -20,6 +20,7 @@ import numpy as np
 
 from services.executor import geometry as geo
 from services.executor.geometry import Box
+from shared.messages import WorldObject
 
 HOVER = 0.06  # a carried object is brought this far above its release point first
 # Headings (rad about the vertical) a carried object may be turned to: the hand keeps the grasp's
@@ -111,13 +112,13 @@ def place_table(tool_pose: np.ndarray, held: Held, table_z: float) -> list[tuple
     return pairs
 
 
-def grasps(obj: dict, near_edge: float | None) -> list[geo.Grasp]:
+def grasps(obj: WorldObject, near_edge: float | None) -> list[geo.Grasp]:
     """Grasps around the object where it fits the gripper, else on its overhang beyond the table's near edge.
 
     ``near_edge`` is the x of the table edge facing the robot (None: not seen, so no overhang is known).
     """
     box = Box.of(obj)
-    found = geo.grasp_candidates(box, round_shape=obj.get("type") in ROUND_TYPES)
+    found = geo.grasp_candidates(box, round_shape=obj.type in ROUND_TYPES)
     if not found and near_edge is not None and thin_and_wide(box) and overhang(box, near_edge) >= MIN_OVERHANG:
         found.append(edge_grasp(box, near_edge))
     return found

@@ -43,7 +43,7 @@ HEAD_JOINTS = ("head_pan_joint", "head_tilt_joint")
 def before_state(snap: SceneSnapshot, procedures: Procedures) -> dict[str, Any]:
     """What an undo of the step about to run returns to (kept in the step, so it survives a restart)."""
     joints = snap.joints()
-    ee = (snap.robot or {}).get("ee", {})
+    ee = snap.robot.ee if snap.robot is not None else {}
     held = {arm: (h.object_id if h else None) for arm, h in procedures.held().items()}
     return {
         "joints": {arm: [float(joints.get(n, 0.0)) for n in joint_names(arm)] for arm in ARMS},
@@ -94,7 +94,7 @@ def _back_along(procedures: Procedures, arm: str, direction: str, before: dict[s
     """The directional move the other way, as far as the hand (each hand: the farther) really went."""
     unit = np.asarray(DIRECTIONS[direction], float)
     snap = procedures.scene.snapshot()
-    ee = (snap.robot or {}).get("ee", {})
+    ee = snap.robot.ee if snap.robot is not None else {}
     hands = list(ARMS) if arm == BOTH else [arm]
     went = max(float(np.dot(np.asarray(ee[h][:3], float) - np.asarray(before["tools"][h], float), unit)) for h in hands)
     if went < MIN_DISTANCE / 2:  # it hardly moved: nothing to take back

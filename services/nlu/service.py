@@ -13,6 +13,8 @@ import logging
 import threading
 from typing import Any
 
+import msgspec
+
 from services.nlu.context import Dialogue
 from services.nlu.infer import Answer, Clarify, Model, Result
 from services.nlu.lexicon import vocabulary
@@ -20,6 +22,7 @@ from services.nlu.nbest import NOT_MADE_OUT, most_plausible
 from services.nlu.templates import sentence_templates
 from services.nlu.world import COLORS, TYPES, WorldError, parse_world
 from shared.bus import Bus
+from shared.messages import ExecutorState, Objects, PerceivedObject, Robot, Utterance
 from shared.service import run_service, wait_until_stopped
 
 log = logging.getLogger("hfpbd.nlu")
@@ -28,79 +31,81 @@ _ROBOT_FIELDS = ("grippers", "last_arm", "last_object", "executing", "can_move",
 
 
 class LiveWorld:
-    """The world as last heard from perception and the executor, and the dialogue on it."""
+    """The world as last heard from perception and the executor, and the dialogue on it.
+
+    It keeps the bus's typed messages; the model is built from DESIGN.md's
+    world-state JSON, so :meth:`world_json` turns them into that map, and
+    that is the only place they become maps.
+    """
 
     def __init__(self) -> None:
         self.lock = threading.Lock()
-        self.objects: list[dict[str, Any]] = []
-        self.robot: dict[str, Any] = {}
-        self.reach: dict[str, Any] = {}
+        self.objects: list[PerceivedObject] = []
+        self.robot = Robot()
+        self.reach: dict[str, dict[str, dict[str, bool]]] = {}
         self.dialogue = Dialogue()
         self._model: Model | None = None
 
-    def on_objects(self, message: dict[str, Any]) -> None:
-        objects = [_object_fields(item) for item in message["objects"]]
+    def on_objects(self, message: Objects) -> None:
         try:
-            parse_world({"objects": objects}, strict=False)
+            parse_world({"objects": [_object_fields(item) for item in message.objects]}, strict=False)
         except WorldError as exc:
             log.warning("ignoring perception/objects: %s", exc)
             return
         with self.lock:
-            self.objects = objects
+            self.objects = message.objects
             self._model = None
 
-    def on_executor(self, message: dict[str, Any]) -> None:
-        robot = {k: message["robot"][k] for k in _ROBOT_FIELDS if k in message["robot"]}
-        reach = message.get("reach") or {}
+    def on_executor(self, message: ExecutorState) -> None:
+        robot = message.robot
         try:
-            parse_world({"objects": [], "robot": {**robot, "last_object": None}})
-            if not isinstance(reach, dict):
-                raise WorldError("executor/state reach must be a map of object ids")
+            parse_world({"objects": [], "robot": {**_robot_fields(robot), "last_object": None}})
         except WorldError as exc:
             log.warning("ignoring executor/state: %s", exc)
             return
         with self.lock:
-            moved = (robot.get("last_arm"), robot.get("last_object")) != (
-                self.robot.get("last_arm"),
-                self.robot.get("last_object"),
-            )
-            self.robot, self.reach = robot, reach
+            moved = (robot.last_arm, robot.last_object) != (self.robot.last_arm, self.robot.last_object)
+            self.robot, self.reach = robot, message.reach
             if moved:
                 self.dialogue.observe_robot()  # the robot's own account of history is newer
             self._model = None
 
+    def world_json(self, *, reach: bool = True) -> dict[str, Any]:
+        """The world state (DESIGN.md) of what was heard: objects, with their reach when ``reach``, and the robot."""
+        objects = [_object_fields(obj) for obj in self.objects]
+        if reach:
+            objects = [
+                {**fields, "reach": self.reach[fields["id"]]} if fields["id"] in self.reach else fields
+                for fields in objects
+            ]
+        return {"objects": objects, "robot": _robot_fields(self.robot)}
+
     def model(self) -> Model:
         """The model of the current world (built lazily, once per change). Call with the lock held."""
         if self._model is None:
-            objects = [
-                {**obj, "reach": self.reach.get(obj["id"], {})} if isinstance(self.reach.get(obj["id"]), dict) else obj
-                for obj in self.objects
-            ]
             try:
-                world = parse_world({"objects": objects, "robot": self.robot}, strict=False)
+                world = parse_world(self.world_json(), strict=False)
             except WorldError as exc:
                 log.warning("reachability map rejected (%s); using the objects without it", exc)
-                world = parse_world({"objects": self.objects, "robot": self.robot}, strict=False)
+                world = parse_world(self.world_json(reach=False), strict=False)
             self._model = Model(world)
         return self._model
 
 
-def _object_fields(item: dict[str, Any]) -> dict[str, Any]:
+def _object_fields(item: PerceivedObject) -> dict[str, Any]:
     """The world-state fields of a perceived object; unknown colour/type words become 'unknown'."""
-    color = item.get("color") if item.get("color") in COLORS else "unknown"
-    kind = item.get("type") if item.get("type") in TYPES else "unknown"
     return {
-        "id": item.get("id"),
-        "color": color,
-        "type": kind,
-        "position": _listed(item.get("position")),
-        "size": _listed(item.get("size")),
-        "held_by": item.get("held_by"),
+        **item.world_state(),
+        "color": item.color if item.color in COLORS else "unknown",
+        "type": item.type if item.type in TYPES else "unknown",
+        "held_by": item.held_by,
     }
 
 
-def _listed(value: Any) -> Any:
-    return [float(v) for v in value] if hasattr(value, "__len__") and not isinstance(value, (str, dict)) else value
+def _robot_fields(robot: Robot) -> dict[str, Any]:
+    """The world-state fields of the executor's robot state."""
+    fields = msgspec.to_builtins(robot)
+    return {k: fields[k] for k in _ROBOT_FIELDS}
 
 
 class NluService:
@@ -109,18 +114,15 @@ class NluService:
         self.live = LiveWorld()
         self.results = bus.publisher(bus.keys.nlu_result)
 
-    def on_utterance(self, message: dict[str, Any]) -> None:
-        text = message["text"]
-        choice = message.get("choice")
-        if choice is not None and (isinstance(choice, bool) or not isinstance(choice, int)):
-            self._say_error(f"A choice must be a candidate number, got {choice!r}.")
-            return
+    def on_utterance(self, message: Utterance) -> None:
+        text = message.text
+        choice = message.choice
         with self.live.lock:
             model = self.live.model()
             dialogue = self.live.dialogue
             picked = None
-            if choice is None and isinstance(message.get("nbest"), list):
-                picked = most_plausible(model, dialogue.history, message["nbest"])
+            if choice is None and message.nbest is not None:
+                picked = most_plausible(model, dialogue.history, message.nbest)
             result: Result | None = None
             if picked is not None and picked.rejected():  # a guess: the dialogue stays as it was
                 log.info("%r not acted on: only %.0f%% of the n-best means that command", text, 100 * picked.share)

@@ -11,9 +11,10 @@ index (the heights of NaN or infinite points fail every comparison).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
+
+from shared.messages import Cloud as CloudMessage
 
 
 class CloudError(ValueError):
@@ -33,11 +34,9 @@ class Cloud:
 MIN_POINTS = 500
 
 
-def cloud_from_message(message: dict[str, Any]) -> Cloud:
+def cloud_from_message(message: CloudMessage) -> Cloud:
     """The cloud of ``message``; raise :class:`CloudError` naming what is wrong with it."""
-    xyz, rgb = message.get("xyz"), message.get("rgb")
-    if not isinstance(xyz, np.ndarray) or not isinstance(rgb, np.ndarray):
-        raise CloudError("cloud message lacks xyz or rgb arrays")
+    xyz, rgb = message.xyz, message.rgb
     if xyz.ndim != 3 or xyz.shape[-1] != 3:
         raise CloudError(f"cloud xyz must have shape (H, W, 3), got {xyz.shape}")
     if rgb.shape != xyz.shape:
@@ -52,12 +51,9 @@ def cloud_from_message(message: dict[str, Any]) -> Cloud:
     return Cloud(flat, rgb.reshape(-1, 3).astype(np.uint8, copy=False), valid, (xyz.shape[0], xyz.shape[1]))
 
 
-def camera_position(message: dict[str, Any]) -> np.ndarray:
-    """Where the camera was (``camera_pose``'s x, y, z); raise :class:`CloudError` when it is unusable."""
-    try:
-        pose = np.asarray(message.get("camera_pose"), dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        pose = np.empty(0)
-    if len(pose) != 7 or not np.isfinite(pose).all():
+def camera_position(message: CloudMessage) -> np.ndarray:
+    """Where the camera was (``camera_pose``'s x, y, z); raise :class:`CloudError` when it is not finite."""
+    pose = np.asarray(message.camera_pose, dtype=float)
+    if not np.isfinite(pose).all():
         raise CloudError("camera_pose must be 7 finite numbers [x, y, z, qw, qx, qy, qz]")
     return pose[:3]

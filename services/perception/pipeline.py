@@ -10,9 +10,7 @@ what the service runs.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
@@ -24,6 +22,8 @@ from services.perception.segment import SegmentSettings, cluster, object_candida
 from services.perception.support import supported
 from services.perception.table_edges import TableExtent, table_extent
 from services.perception.tracking import holding_tools
+from shared.messages import Cloud as CloudMessage
+from shared.messages import SimState
 
 TABLE_STRIDE = 8  # every 8th table point is plenty for its 2 cm outline grid
 
@@ -45,10 +45,10 @@ class Detection:
 
 
 def detect(
-    message: Mapping[str, Any],
-    state: Mapping[str, Any] | None = None,
+    message: CloudMessage,
+    state: SimState | None = None,
     settings: Settings = Settings(),
-    earlier: Mapping[str, Any] | None = None,
+    earlier: SimState | None = None,
 ) -> Detection:
     """Objects in the ``sim/cloud`` ``message``; ``state`` (``sim/state``) masks the arms.
 
@@ -59,7 +59,7 @@ def detect(
     Raises :class:`~services.perception.cloud.CloudError` when the cloud is
     unusable (empty, malformed, no table in view).
     """
-    cloud = cloud_from_message(dict(message))
+    cloud = cloud_from_message(message)
     arms = segments_from_states([state, earlier])
     votes = cloud.valid[np.random.default_rng(0).integers(0, len(cloud.valid), settings.plane.refit_size)]
     plane = find_table(cloud.xyz[votes], settings.plane, ignore=lambda p: robot_points(p, arms))
@@ -74,7 +74,7 @@ def detect(
     above, xyz = above[~robot], xyz[~robot]
     groups = cluster(xyz, above, cloud.shape, outline, settings.segment)
     rgb = cloud.rgb[above]
-    camera = camera_position(dict(message))
+    camera = camera_position(message)
     objects = supported([describe(xyz[g], rgb[g], plane) for g in groups], holding_tools(state), camera)
     objects.sort(key=lambda d: (round(float(d.position[0]), 3), round(float(d.position[1]), 3)))
     return Detection(objects, plane, outline, extent)

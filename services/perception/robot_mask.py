@@ -14,13 +14,14 @@ phantom object and merges with the objects it touches.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from functools import cache
 from typing import Any
 
 import numpy as np
 
+from shared.messages import SimState
 from shared.robot import ROBOT
 from shared.robot.build_urdf import Shape
 from shared.robot.build_urdf import arm as arm_model
@@ -88,13 +89,11 @@ def _pose(value: Any) -> np.ndarray | None:
     return pose
 
 
-def segments_from_state(state: Mapping[str, Any] | None, margin: float = MARGIN) -> list[Segment]:
+def segments_from_state(state: SimState | None, margin: float = MARGIN) -> list[Segment]:
     """Capsules covering both arms at one ``sim/state`` (its ``links`` poses), padded by ``margin``."""
-    if not state:
+    if state is None:
         return []
-    links = state.get("links") or {}
-    if not isinstance(links, Mapping):
-        return []
+    links = state.links
     shapes = link_capsules()
     segments = []
     for name, capsules in shapes.items():
@@ -107,7 +106,7 @@ def segments_from_state(state: Mapping[str, Any] | None, margin: float = MARGIN)
     return segments
 
 
-def segments_from_states(states: Iterable[Mapping[str, Any] | None], margin: float = MARGIN) -> list[Segment]:
+def segments_from_states(states: Iterable[SimState | None], margin: float = MARGIN) -> list[Segment]:
     """The union of the arms at several states (the ones that bracket a cloud)."""
     return [segment for state in states for segment in segments_from_state(state, margin)]
 

@@ -15,7 +15,9 @@ A cloud is rendered a little before it arrives, so the arms are masked at the
 states that bracket its simulated time, not at the newest one. A scene load
 (the cloud's own ``scene`` name or ``scene_generation`` changes) forgets every
 object at once. Stopping waits for the cloud being processed and publishes
-nothing afterwards, so the bus can close under it.
+nothing afterwards, so the bus can close under it. Clouds are taken from the
+bus as maps and typed here rather than by the subscription: a cloud that
+does not fit its type must still be answered, with a status that says why.
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ from services.perception.robot_mask import hides, segments_from_states
 from services.perception.tracking import Tracker, TrackSettings
 from shared.bus import Bus
 from shared.codec import MessageError
-from shared.messages import validate
+from shared.messages import Cloud, SimState, typed
 
 log = logging.getLogger("hfpbd.perception")
 
@@ -68,7 +70,7 @@ class PerceptionService:
         self.settings = settings
         self.tracker = Tracker(track_settings)
         self.record_timeout = record_timeout
-        self._states: deque[Mapping[str, Any]] = deque(maxlen=STATE_HISTORY)
+        self._states: deque[SimState] = deque(maxlen=STATE_HISTORY)
         self._scene: tuple[object, object] | None = None
         self._working = threading.Lock()  # held while a cloud is processed and published
         self._stopped = False
@@ -92,15 +94,15 @@ class PerceptionService:
         with self._working:
             self._stopped = True
 
-    def on_state(self, message: Mapping[str, Any]) -> None:
+    def on_state(self, message: SimState) -> None:
         self._states.append(message)
 
-    def around(self, sim_time: Any) -> tuple[Mapping[str, Any] | None, Mapping[str, Any] | None]:
+    def around(self, sim_time: float | None) -> tuple[SimState | None, SimState | None]:
         """The states just after and just before ``sim_time`` (the newest one when it is unknown)."""
         states = list(self._states)
         if not states:
             return None, None
-        if not isinstance(sim_time, (int, float)):
+        if sim_time is None:
             return states[-1], None
         after = next((s for s in states if _sim_time(s) >= sim_time), states[-1])
         before = next((s for s in reversed(states) if _sim_time(s) <= sim_time), None)
@@ -113,19 +115,20 @@ class PerceptionService:
                 self._process(message)
 
     def _process(self, message: dict[str, Any]) -> None:
-        stamp = message.get("stamp") if isinstance(message.get("stamp"), (int, float)) else time.time()
-        state, earlier = self.around(message.get("sim_time"))
         try:
-            validate("cloud", message)
-            detection = detect(message, state, self.settings, earlier)
-        except (MessageError, CloudError) as exc:
-            status = f"rejected cloud: {exc}" if isinstance(exc, MessageError) else str(exc)
-            if isinstance(exc, MessageError):
-                self.bus.rejected[self.bus.keys.cloud] += 1
-            log.warning("%s", status)
-            self._publish(stamp, status, message.get("sim_time"))
+            cloud = typed("cloud", message)
+        except MessageError as exc:
+            self.bus.rejected[self.bus.keys.cloud] += 1
+            self._refuse(message, f"rejected cloud: {exc}")
             return
-        scene = _scene_of(message, state)
+        assert isinstance(cloud, Cloud)
+        state, earlier = self.around(cloud.sim_time)
+        try:
+            detection = detect(cloud, state, self.settings, earlier)
+        except CloudError as exc:
+            self._refuse(message, str(exc))
+            return
+        scene = _scene_of(cloud, state)
         if scene is not None and scene != self._scene and self._scene is not None:
             log.info("scene %s loaded (load %s): forgetting every object", *scene)
             self.tracker.reset()
@@ -133,7 +136,7 @@ class PerceptionService:
         self._since_load += 1
         self._scene = scene if scene is not None else self._scene
         arms = segments_from_states([state, earlier])
-        camera = camera_position(message)
+        camera = camera_position(cloud)
         self._objects = self.tracker.update(
             detection.objects, time.monotonic(), state, hidden=lambda position: hides(camera, position, arms)
         )
@@ -145,16 +148,26 @@ class PerceptionService:
             "outline": np.round(detection.table_outline, 3).tolist(),
             **detection.table_extent.message(),
         }
-        self._publish(stamp, OK, message.get("sim_time"))
+        self._publish(cloud.stamp, OK, cloud.sim_time)
 
-    def _publish(self, stamp: float, status: str, sim_time: Any = None) -> None:
+    def _refuse(self, message: dict[str, Any], status: str) -> None:
+        """Republish the last good objects with why this cloud gave none (its map: it may not type)."""
+        log.warning("%s", status)
+        stamp, sim_time = message.get("stamp"), message.get("sim_time")
+        self._publish(
+            stamp if isinstance(stamp, (int, float)) else time.time(),
+            status,
+            sim_time if isinstance(sim_time, (int, float)) else None,
+        )
+
+    def _publish(self, stamp: float, status: str, sim_time: float | None = None) -> None:
         message = {"stamp": float(stamp), "objects": self._objects, "status": status}
         if self._table is not None:
             message["table"] = self._table
         self._publisher.put(message)
         with self._changed:
             number = self._frames[-1].number + 1 if self._frames else 1
-            rendered = float(sim_time) if isinstance(sim_time, (int, float)) else None
+            rendered = float(sim_time) if sim_time is not None else None
             steady = self._since_load >= self.tracker.settings.confirm_frames
             self._frames.append(Frame(number, status, self._objects, rendered, steady))
             self._changed.notify_all()
@@ -182,7 +195,7 @@ class PerceptionService:
                 self._changed.wait(left)
 
 
-def _scene_of(cloud: Mapping[str, Any], state: Mapping[str, Any] | None) -> tuple[object, object] | None:
+def _scene_of(cloud: Cloud, state: SimState | None) -> tuple[object, object] | None:
     """Which load of which scene a cloud shows: its own word when it carries one.
 
     The robot state nearest the cloud is only a fallback: a cloud rendered
@@ -190,14 +203,13 @@ def _scene_of(cloud: Mapping[str, Any], state: Mapping[str, Any] | None) -> tupl
     load's settling advances the clock past the cloud), and the old scene's
     objects would then seed the new scene's tracks.
     """
-    if "scene_generation" in cloud:
-        return cloud.get("scene"), cloud.get("scene_generation")
-    return (state.get("scene"), state.get("scene_generation")) if state else None
+    if cloud.scene_generation is not None:
+        return cloud.scene, cloud.scene_generation
+    return (state.scene, state.scene_generation) if state is not None else None
 
 
-def _sim_time(state: Mapping[str, Any]) -> float:
-    value = state.get("sim_time")
-    return float(value) if isinstance(value, (int, float)) else float("inf")
+def _sim_time(state: SimState) -> float:
+    return state.sim_time if state.sim_time is not None else float("inf")
 
 
 def _rendered_since(frame: Frame, sim_time: float | None) -> bool:

@@ -14,10 +14,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import msgspec
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from services.perception.robot_mask import segments_from_state
+from shared.messages import Cloud, SimState, typed
 from shared.robot import ROBOT
 from shared.robot.pr2 import TOOL_OFFSET
 
@@ -147,8 +149,19 @@ class Camera:
         return directions / np.linalg.norm(directions, axis=-1, keepdims=True)
 
 
-def render(scene: Scene, camera: Camera = Camera(), *, noise: float = 0.0, dropout: float = 0.0, seed: int = 0) -> dict:
-    """Ray-cast ``scene`` and return a ``sim/cloud``-shaped message.
+def render(
+    scene: Scene, camera: Camera = Camera(), *, noise: float = 0.0, dropout: float = 0.0, seed: int = 0
+) -> Cloud:
+    """Ray-cast ``scene`` into a ``sim/cloud`` message as perception's subscription hands it over (see :func:`render_map`)."""
+    cloud = typed("cloud", render_map(scene, camera, noise=noise, dropout=dropout, seed=seed))
+    assert isinstance(cloud, Cloud)
+    return cloud
+
+
+def render_map(
+    scene: Scene, camera: Camera = Camera(), *, noise: float = 0.0, dropout: float = 0.0, seed: int = 0
+) -> dict:
+    """Ray-cast ``scene`` and return the ``sim/cloud`` map a simulator would publish.
 
     ``noise`` is the standard deviation of range noise in metres, ``dropout``
     the fraction of pixels with no return (NaN), both seeded.
@@ -323,11 +336,11 @@ def _frame(x_axis: np.ndarray, origin: np.ndarray) -> list[float]:
 
 def reaching_arm(
     tool: tuple[float, float, float], arm: str = "right", holding: bool = False
-) -> tuple[list[Capsule], dict]:
+) -> tuple[list[Capsule], SimState]:
     """A PR2 arm, with the project model's link lengths, its gripper pointing down at ``tool``.
 
     Returns the capsules to render (the model's link shapes, from the same
-    poses) and the matching ``sim/state`` fields (``links``, ``ee``,
+    poses) and the matching ``sim/state`` (its ``links``, ``ee`` and
     ``grippers``), so masking is exercised exactly as with the simulator's state.
     """
     side = "r" if arm == "right" else "l"
@@ -358,10 +371,13 @@ def reaching_arm(
         f"{side}_gripper_r_finger_link": [*(wrist - palm_y * width / 2), *palm[3:]],
         f"{side}_gripper_tool_frame": [*tool_p, *palm[3:]],
     }
-    state = {
+    fields = {
+        "stamp": 0.0,
+        "joints": {},
         "links": {name: [float(v) for v in pose] for name, pose in links.items()},
         "ee": {arm: [*map(float, tool_p), *POINTING_DOWN]},
         "grippers": {arm: {"width": width, "effort": ROBOT.gripper.default_effort if holding else 0.0}},
     }
+    state = msgspec.convert(fields, SimState)
     capsules = [Capsule(tuple(s.a), tuple(s.b), s.radius) for s in segments_from_state(state, margin=0.0)]
     return capsules, state

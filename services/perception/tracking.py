@@ -21,15 +21,15 @@ Ids are never reused.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Any
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from services.perception.descriptors import Descriptor
 from services.perception.support import HOLD_RADIUS, footprint_share
+from shared.messages import Gripper, SimState
 from shared.robot import ROBOT
 
 ARMS = ROBOT.arms
@@ -85,7 +85,7 @@ class Tracker:
         self,
         detections: list[Descriptor],
         now: float,
-        state: Mapping[str, Any] | None = None,
+        state: SimState | None = None,
         hidden: Callable[[np.ndarray], bool] | None = None,
     ) -> list[dict]:
         """Fold one frame's detections in; return the published object list.
@@ -317,42 +317,34 @@ def _views(track: Track) -> tuple[Descriptor, ...]:
     )
 
 
-def holding_tools(state: Mapping[str, Any] | None) -> dict[str, np.ndarray]:
+def holding_tools(state: SimState | None) -> dict[str, np.ndarray]:
     """Tool-frame positions of the grippers holding something: fingers kept apart while they squeeze."""
-    if not state:
+    if state is None:
         return {}
-    grippers = state.get("grippers") or {}
-    ee = state.get("ee") or {}
     tools = {}
     for arm in ARMS:
-        gripper = grippers.get(arm)
-        if isinstance(gripper, Mapping) and _holding(gripper) and arm in ee:
-            try:
-                pose = np.asarray(ee[arm], dtype=float).reshape(-1)
-            except (TypeError, ValueError):
-                continue
-            if len(pose) >= 3 and np.isfinite(pose[:3]).all():
-                tools[arm] = pose[:3]
+        gripper = state.grippers.get(arm)
+        if gripper is not None and _holding(gripper) and arm in state.ee:
+            position = np.asarray(state.ee[arm][:3], dtype=float)
+            if np.isfinite(position).all():
+                tools[arm] = position
     return tools
 
 
-def _holding(gripper: Mapping[str, Any]) -> bool:
-    width, effort = gripper.get("width"), gripper.get("effort")
-    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in (width, effort)):
+def _holding(gripper: Gripper) -> bool:
+    width, effort = gripper.width, gripper.effort
+    if effort is None or not np.isfinite(width) or not np.isfinite(effort):
         return False
-    return ROBOT.gripper.state(float(width), float(effort)) == "holding"
+    return ROBOT.gripper.state(width, effort) == "holding"
 
 
-def tool_positions(state: Mapping[str, Any] | None) -> list[np.ndarray]:
+def tool_positions(state: SimState | None) -> list[np.ndarray]:
     """Tool-frame positions of both grippers, holding or not."""
     positions = []
-    for pose in ((state or {}).get("ee") or {}).values():
-        try:
-            values = np.asarray(pose, dtype=float).reshape(-1)
-        except (TypeError, ValueError):
-            continue
-        if len(values) >= 3 and np.isfinite(values[:3]).all():
-            positions.append(values[:3])
+    for pose in (state.ee if state is not None else {}).values():
+        position = np.asarray(pose[:3], dtype=float)
+        if np.isfinite(position).all():
+            positions.append(position)
     return positions
 
 

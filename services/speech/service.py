@@ -28,7 +28,7 @@ from services.speech.vocabulary import SpeechVocabulary, nlu_vocabulary
 from services.speech.voice import Speaker
 from shared.bus import Bus, BusTimeout, RemoteError
 from shared.codec import MessageError
-from shared.messages import validate
+from shared.messages import Objects, Say, SpeechAudio, SpeechPtt, typed
 
 log = logging.getLogger("hfpbd.speech")
 
@@ -127,19 +127,19 @@ class SpeechService:
             return  # do not hear the robot's own voice
         self.feed(pcm)
 
-    def _on_stream(self, message: dict[str, Any]) -> None:
-        pcm = np.asarray(message["pcm"])
+    def _on_stream(self, message: SpeechAudio) -> None:
+        pcm = np.asarray(message.pcm)
         if pcm.ndim != 1 or pcm.dtype != np.int16:
             log.warning("speech/audio chunk ignored: pcm must be 1-D int16, got %s %s", pcm.dtype, pcm.shape)
             return
         try:
-            self.feed(resample(pcm, int(message["rate"])))
+            self.feed(resample(pcm, message.rate))
         except AudioError as exc:
             log.warning("speech/audio chunk ignored: %s", exc)
             return
         with self._audio_lock:
-            self._streamed_at = None if message.get("end") else time.monotonic()
-        if message.get("end"):
+            self._streamed_at = None if message.end else time.monotonic()
+        if message.end:
             self.end_of_stream()
 
     def _end_idle_stream(self) -> None:
@@ -154,11 +154,12 @@ class SpeechService:
     # -- push to talk ----------------------------------------------------------
     def _on_ptt(self, request: dict[str, Any]) -> dict[str, Any]:
         try:
-            validate("speech_ptt", request)
+            press = typed("speech_ptt", request)
         except MessageError as exc:
             raise ValueError(f"push-to-talk request: {exc}") from None
-        self.set_talk(request["on"])
-        return {"ok": True, "listening": request["on"]}
+        assert isinstance(press, SpeechPtt)
+        self.set_talk(press.on)
+        return {"ok": True, "listening": press.on}
 
     def set_talk(self, on: bool) -> None:
         """Press: collect all audio from now on. Release: decode it, after a short tail.
@@ -245,15 +246,16 @@ class SpeechService:
         log.info("speech grammar regenerated from the NLU's vocabulary (%d words)", len(vocabulary.words()))
         self._publish_status()
 
-    def _on_objects(self, message: dict[str, Any]) -> None:
-        scene = SceneWords.of(message["objects"])
+    def _on_objects(self, message: Objects) -> None:
+        """The grammar's object words come from the NLU's world-state reading, so the objects go in as that JSON."""
+        scene = SceneWords.of([o.world_state() for o in message.objects])
         self._tasks.put(lambda: self.recogniser.set_scene(scene))
 
     # -- output -------------------------------------------------------------------
-    def _on_say(self, message: dict[str, Any]) -> None:
+    def _on_say(self, message: Say) -> None:
         assert self.speaker is not None
         was_working = self.speaker.working
-        self.speaker.say(message["text"])
+        self.speaker.say(message.text)
         if was_working and not self.speaker.working:
             self._publish_status()
 

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import re
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -9,7 +12,16 @@ from services.executor import wording
 from services.executor.bimanual import MIN_DURATION, PEAK_ACCELERATION, first_clash, timed_together
 from services.executor.commands import CommandError, check, check_compound
 from services.executor.kinematics import JOINT_ACCEL, JOINT_SPEED, ArmKinematics, joint_names
+from shared.codec import MessageError
+from shared.messages import NluResult, typed
 from shared.robot import ROBOT
+
+
+def result(fields: dict[str, Any]) -> NluResult:
+    """An ``nlu/result`` command as the bus hands it to the executor."""
+    message = typed("nlu_result", {"kind": "command", "utterance": "", **fields})
+    assert isinstance(message, NluResult)
+    return message
 
 
 def refer(oid: str) -> str:
@@ -18,20 +30,21 @@ def refer(oid: str) -> str:
 
 def test_a_compound_is_its_steps_in_order_with_their_own_words() -> None:
     steps = check_compound(
-        {
-            "kind": "command",
-            "procedure": "pick_up",
-            "args": {"arm": "right", "object": "obj0"},
-            "phrases": {"verb": "put"},
-            "text": "pick up the red cup",
-            "then": [
-                {
-                    "procedure": "place_rel",
-                    "phrases": {"relation": "on"},
-                    "args": {"arm": "right", "relation": "on_top_of", "object": "obj1"},
-                }
-            ],
-        }
+        result(
+            {
+                "procedure": "pick_up",
+                "args": {"arm": "right", "object": "obj0"},
+                "phrases": {"verb": "put"},
+                "text": "pick up the red cup",
+                "then": [
+                    {
+                        "procedure": "place_rel",
+                        "phrases": {"relation": "on"},
+                        "args": {"arm": "right", "relation": "on_top_of", "object": "obj1"},
+                    }
+                ],
+            }
+        )
     )
     assert [(s.procedure, s.args) for s in steps] == [
         ("pick_up", {"arm": "right", "object": "obj0"}),
@@ -49,14 +62,22 @@ def test_a_compound_is_its_steps_in_order_with_their_own_words() -> None:
             "I can't do step 2 of that: 'under' is not a relation I know",
         ),
         ([{"procedure": "execute", "args": {}}], "I can't do step 2 of that: execute has to be said on its own."),
-        (["place it"], "Step 2 of the command is not a command."),
-        ({"procedure": "open"}, "must be a list"),
     ],
 )
 def test_a_bad_later_step_refuses_the_whole_compound(then: object, message: str) -> None:
     with pytest.raises(CommandError) as caught:
-        check_compound({"procedure": "open", "args": {"arm": "left"}, "then": then})
+        check_compound(result({"procedure": "open", "args": {"arm": "left"}, "then": then}))
     assert message in str(caught.value)
+
+
+@pytest.mark.parametrize(
+    "then, where",
+    [(["place it"], "$.then[0]"), ({"procedure": "open"}, "$.then"), ([{"args": {}}], "$.then[0]")],
+    ids=["not-a-command", "not-a-list", "no-procedure"],
+)
+def test_a_malformed_later_step_never_reaches_the_executor(then: object, where: str) -> None:
+    with pytest.raises(MessageError, match=re.escape(where)):
+        result({"procedure": "open", "args": {"arm": "left"}, "then": then})
 
 
 def test_both_hands_only_where_the_contract_allows_them() -> None:

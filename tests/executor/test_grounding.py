@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from services.executor.grounding import descriptor, reground
+from shared.messages import PerceivedObject
 
 pytestmark = pytest.mark.unit
 
@@ -15,8 +16,8 @@ def obj(
     kind: str,
     size: tuple[float, float, float],
     pos: tuple[float, float, float] = (0.6, 0.0, 0.77),
-) -> dict:
-    return {"id": oid, "color": color, "type": kind, "size": list(size), "position": list(pos)}
+) -> PerceivedObject:
+    return PerceivedObject(id=oid, color=color, type=kind, size=size, position=pos)
 
 
 RED_CUP = obj("a", "red", "cup", (0.07, 0.07, 0.10))

@@ -21,7 +21,7 @@ from services.executor.kinematics import (
 )
 from services.executor.procedures import Procedures, StepFailed
 from services.executor.reach import REACH_KEYS, reach_map, sync
-from services.executor.scene import Scene
+from services.executor.scene import Scene, measured, perceived
 from services.executor.targets import Held
 from services.sim.layout import TABLE_TOP_Z, table_truth
 from shared.robot import ROBOT
@@ -42,8 +42,8 @@ def cup(
 
 def scene_with(*objects: dict, pose: str = "untucked") -> Scene:
     scene = Scene()
-    scene.update_objects(list(objects), table_truth())
-    scene.update_robot({"joints": {ROBOT.torso_joint: ROBOT.working_torso, **ROBOT.arm_pose_map(pose)}})
+    scene.update_objects(perceived(objects), table_truth())
+    scene.update_robot(measured({ROBOT.torso_joint: ROBOT.working_torso, **ROBOT.arm_pose_map(pose)}))
     return scene
 
 
@@ -77,7 +77,7 @@ def test_reach_map_covers_every_object_arm_and_key(arms: dict[str, ArmKinematics
 def test_reach_follows_objects_that_move(arms: dict[str, ArmKinematics]) -> None:
     scene = scene_with(cup("c", 0.55, -0.10))
     assert reach_map(arms, scene.snapshot(), {})[0]["c"]["right"]["above"]
-    assert scene.update_objects([cup("c", 1.12, -0.75)])
+    assert scene.update_objects(perceived([cup("c", 1.12, -0.75)]))
     assert not reach_map(arms, scene.snapshot(), {})[0]["c"]["right"]["above"]
 
 
@@ -98,7 +98,7 @@ def test_a_held_object_is_carried_around_obstacles(arms: dict[str, ArmKinematics
     start = kin.ik(geo.shifted(grasp.grasp, [0, 0, 0.05]), check_collisions=False)
     kin.set_arm(start)
     held = Held("held", Box(snap.box("held").center + [0, 0, 0.05], snap.box("held").size), kin.fk())
-    scene.update_robot({"joints": {**snap.joints(), **dict(zip([kin.names[i] for i in kin.arm_idx], start))}})
+    scene.update_robot(measured({**snap.joints(), **dict(zip([kin.names[i] for i in kin.arm_idx], start))}))
     snap = scene.snapshot()
     sync(kin, snap, held)
     goal = targets.move_relation("left_of", snap.box("wall"), kin.fk(), held, snap.table_z)[0]
@@ -226,7 +226,7 @@ def test_a_cup_just_grasped_beside_the_plate_is_carried_away(arms: dict[str, Arm
     grasp_q = kin.ik(grasp.grasp, seeds=[kin.ik(grasp.pregrasp)])
     kin.allow_touching("red", False)
     assert grasp_q is not None
-    scene.update_robot({"joints": {**snap.joints(), **dict(zip([kin.names[i] for i in kin.arm_idx], grasp_q))}})
+    scene.update_robot(measured({**snap.joints(), **dict(zip([kin.names[i] for i in kin.arm_idx], grasp_q))}))
     snap = scene.snapshot()
     kin.set_arm(grasp_q)
     held = targets.held_in_hand("red", snap.box("red"), kin.fk(), snap.table_z)
@@ -255,10 +255,10 @@ def test_perceptions_sighting_of_the_held_cup_is_no_obstacle(arms: dict[str, Arm
         "color": "red",
         "type": "cup",
         "held_by": "left",
-        "position": [tool[0], tool[1], TABLE_TOP_Z + height / 2],
+        "position": [float(tool[0]), float(tool[1]), TABLE_TOP_Z + height / 2],
         "size": [0.08, 0.08, height],
     }
-    scene.update_objects([sighting])
+    scene.update_objects(perceived([sighting]))
     snap = scene.snapshot()
     assert snap.supported("again")
     sync(kin, snap, None)

@@ -10,9 +10,10 @@ from services.executor import targets
 from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics
 from services.executor.reach import sync
-from services.executor.scene import Scene
+from services.executor.scene import Scene, measured, perceived
 from services.executor.targets import Held
 from services.sim.layout import TABLE_TOP_Z, TABLE_X, table_truth
+from shared.messages import PerceivedObject
 from shared.robot import ROBOT
 
 pytestmark = pytest.mark.unit
@@ -74,12 +75,22 @@ def test_a_turned_heading_reaches_where_the_grasp_heading_does_not() -> None:
     scene = Scene()
     red, blue = standing(0.54, -0.11), standing(0.47, 0.0)
     scene.update_objects(
-        [{"id": "blue", "color": "blue", "type": "cup", "position": blue.center.tolist(), "size": blue.size.tolist()}],
+        perceived(
+            [
+                {
+                    "id": "blue",
+                    "color": "blue",
+                    "type": "cup",
+                    "position": blue.center.tolist(),
+                    "size": blue.size.tolist(),
+                }
+            ]
+        ),
         table_truth(),
     )
-    scene.update_robot({"joints": {ROBOT.torso_joint: ROBOT.working_torso, **ROBOT.arm_pose_map("side")}})
+    scene.update_robot(measured({ROBOT.torso_joint: ROBOT.working_torso, **ROBOT.arm_pose_map("side")}))
     sync(kin, scene.snapshot(), None)
-    red_cup = {"id": "red", "type": "cup", "position": red.center.tolist(), "size": red.size.tolist()}
+    red_cup = PerceivedObject(id="red", type="cup", position=tuple(red.center), size=tuple(red.size))
     grasp = targets.grasps(red_cup, TABLE_X[0])[0]
     lifted = kin.ik(geo.shifted(grasp.grasp, [0.0, 0.0, 0.10]))
     assert lifted is not None
@@ -119,16 +130,23 @@ def _object(oid: str, kind: str, center: list[float], size: list[float]) -> dict
     return {"id": oid, "color": "white", "type": kind, "position": center, "size": size}
 
 
-def test_a_plate_seen_up_around_the_cup_on_it_is_modelled_below_the_cup() -> None:
-    """From above only the plate's rim shows around a cup on it; perception may place the plate too high."""
+def test_what_a_cup_stands_on_is_modelled_below_it_even_when_seen_too_high() -> None:
+    """From above only a plate's rim, or a box's sides, show around a cup on it: perception may place them too high."""
     scene = Scene()
-    plate_top = TABLE_TOP_Z + 0.015
-    cup = _object("cup", "cup", [0.63, 0.0, plate_top + 0.05], [0.07, 0.07, 0.10])
-    plate = _object("plate", "plate", [0.63, 0.02, plate_top + 0.015], [0.16, 0.13, 0.015])
-    beside = _object("saucer", "plate", [0.63, 0.30, TABLE_TOP_Z + 0.0075], [0.16, 0.16, 0.015])
-    scene.update_objects([cup, plate, beside], table_truth())
+    plate_top, box_top = TABLE_TOP_Z + 0.015, TABLE_TOP_Z + 0.06
+    objects = [
+        _object("cup", "cup", [0.63, 0.0, plate_top + 0.05], [0.07, 0.07, 0.10]),
+        _object("plate", "plate", [0.63, 0.02, plate_top + 0.015], [0.16, 0.13, 0.015]),
+        _object("saucer", "plate", [0.63, 0.30, TABLE_TOP_Z + 0.0075], [0.16, 0.16, 0.015]),
+        _object("mug", "cup", [0.48, -0.2, box_top + 0.05], [0.07, 0.07, 0.10]),
+        _object("box", "box", [0.47, -0.2, box_top - 0.01], [0.06, 0.06, 0.06]),  # seen 2 cm up
+        _object("bowl", "bowl", [0.48, 0.2, TABLE_TOP_Z + 0.04], [0.14, 0.14, 0.08]),
+        _object("egg", "cup", [0.48, 0.2, TABLE_TOP_Z + 0.055], [0.05, 0.05, 0.10]),
+    ]
+    scene.update_objects(perceived(objects), table_truth())
     boxes = scene.snapshot().obstacles()
-    assert boxes["plate"].top == pytest.approx(plate_top)
-    assert boxes["plate"].bottom >= TABLE_TOP_Z - 1e-9
+    assert (boxes["plate"].bottom, boxes["plate"].top) == pytest.approx((TABLE_TOP_Z, plate_top))
+    assert (boxes["box"].bottom, boxes["box"].top) == pytest.approx((TABLE_TOP_Z, box_top))
     assert boxes["cup"].bottom == pytest.approx(plate_top)
-    np.testing.assert_allclose(boxes["saucer"].center, beside["position"])  # nothing stands on it: as seen
+    np.testing.assert_allclose(boxes["saucer"].center, objects[2]["position"])  # nothing stands on it: as seen
+    np.testing.assert_allclose(boxes["bowl"].center, objects[5]["position"])  # its walls stay around the egg

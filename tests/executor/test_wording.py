@@ -7,6 +7,7 @@ import pytest
 from services.executor import wording
 from services.executor.commands import CommandError, check
 from services.executor.referring import describe_objects
+from shared.messages import PerceivedObject
 
 pytestmark = pytest.mark.unit
 
@@ -97,9 +98,9 @@ def test_command_arguments_are_exactly_the_procedure_parameters() -> None:
 
 def test_referring_expressions_single_objects_out() -> None:
     objects = {
-        "obj0": {"id": "obj0", "color": "red", "type": "cup", "position": [0.6, 0.2, 0.77], "size": [0.07, 0.07, 0.1]},
-        "obj1": {"id": "obj1", "color": "red", "type": "cup", "position": [0.6, -0.2, 0.77], "size": [0.07, 0.07, 0.1]},
-        "obj2": {"id": "obj2", "color": "blue", "type": "box", "position": [0.7, 0.0, 0.75], "size": [0.1, 0.1, 0.06]},
+        "obj0": PerceivedObject(id="obj0", color="red", type="cup", position=(0.6, 0.2, 0.77), size=(0.07, 0.07, 0.1)),
+        "obj1": PerceivedObject(id="obj1", color="red", type="cup", position=(0.6, -0.2, 0.77), size=(0.07, 0.07, 0.1)),
+        "obj2": PerceivedObject(id="obj2", color="blue", type="box", position=(0.7, 0.0, 0.75), size=(0.1, 0.1, 0.06)),
     }
     words = describe_objects(objects)
     assert len(set(words.values())) == 3

@@ -27,7 +27,7 @@ def test_peers_of_a_listening_peer_reach_each_other_on_loopback() -> None:
                 message = received.get(timeout=0.3)
             except queue.Empty:
                 pass
-        assert message is not None and message["text"] == "hello"
+        assert message is not None and message.text == "hello"
         assert second.session.info.zid() in list(first.session.info.peers_zid()), "the two peers connected directly"
     finally:
         for bus in (second, first, listening):

@@ -17,12 +17,20 @@ from services.perception.pipeline import detect
 sim_world = pytest.importorskip("services.sim.world", reason="the simulator library is not available")
 from services.sim.cloud import cloud_message  # noqa: E402
 from services.sim.scene_file import load_scene  # noqa: E402
+from shared.messages import SimState, as_received  # noqa: E402
 from shared.robot import ROBOT  # noqa: E402
 
 OVER_THE_TABLE = np.array([-0.6, 0.6, 0.0, -1.0, 0.0, -0.9, 0.0])
 ACROSS = np.array([0.3, 0.5, 0.0, -0.8, 0.0, -1.0, 0.0])
 FRAMES = 7
 DELAY = 0.1  # s of simulated time between rendering a cloud and the newest state
+
+
+def sim_state(world) -> SimState:
+    """The world's ``sim/state`` as perception's subscription hands it over."""
+    state = as_received("sim_state", {"stamp": 0.0, **world.state()})
+    assert isinstance(state, SimState)
+    return state
 
 
 @pytest.fixture(scope="module")
@@ -38,10 +46,10 @@ def sweep() -> list[tuple]:
     frames = []
     for _ in range(FRAMES):
         world.settle(0.1)
-        before = world.state()
-        message = cloud_message(world.capture(), world.sim_time)
+        before = sim_state(world)
+        message = as_received("cloud", cloud_message(world.capture(), world.sim_time))
         world.settle(DELAY)
-        frames.append((message, before, world.state(), world.truth()))
+        frames.append((message, before, sim_state(world), world.truth()))
     return frames
 
 
@@ -54,5 +62,5 @@ def test_no_phantom_from_the_arm_with_the_states_around_the_cloud(sweep, frame):
 
 
 def test_the_arm_really_crossed_the_table(sweep):
-    tool_y = [frame[1]["ee"]["right"][1] for frame in sweep]
+    tool_y = [frame[1].ee["right"][1] for frame in sweep]
     assert max(tool_y) - min(tool_y) > 0.3

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import msgspec
 import numpy as np
 import pytest
 
 from services.perception.cloud import CloudError
 from services.perception.pipeline import detect
 from services.perception.synthetic import COLOURS, Box, Camera, Cylinder, Scene, reaching_arm, render
+from shared.messages import Cloud
 
 pytestmark = pytest.mark.unit
 
@@ -139,15 +141,16 @@ def test_noise_and_missing_returns_keep_every_object(noise, dropout):
 
 def test_infinite_and_nan_points_are_ignored(mixed):
     scene, cloud = mixed
-    xyz = cloud["xyz"].copy()
+    xyz = cloud.xyz.copy()
     xyz[::7, ::5, 0] = np.inf
     xyz[1::9, ::3, 2] = -np.inf
     xyz[2::11, ::4, 1] = np.nan
-    assert len(detect({**cloud, "xyz": xyz}).objects) == len(scene.objects)
+    assert len(detect(msgspec.structs.replace(cloud, xyz=xyz)).objects) == len(scene.objects)
 
 
-def cloud_with(xyz: np.ndarray) -> dict:
-    return {"stamp": 0.0, "xyz": xyz.astype(np.float32), "rgb": np.zeros(xyz.shape, np.uint8), "camera_pose": [0.0] * 7}
+def cloud_with(xyz: np.ndarray, rgb: np.ndarray | None = None) -> Cloud:
+    rgb = np.zeros(xyz.shape, np.uint8) if rgb is None else rgb
+    return Cloud(stamp=0.0, xyz=xyz.astype(np.float32), rgb=rgb, camera_pose=(0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0))
 
 
 @pytest.mark.parametrize(
@@ -156,11 +159,7 @@ def cloud_with(xyz: np.ndarray) -> dict:
         (cloud_with(np.full((240, 320, 3), np.nan)), "point cloud is empty"),
         (cloud_with(np.zeros((0, 0, 3))), "point cloud is empty"),
         (cloud_with(np.zeros((240, 320))), "shape (H, W, 3)"),
-        (
-            {"stamp": 0.0, "xyz": np.zeros((4, 4, 3), np.float32), "rgb": np.zeros((2, 2, 3), np.uint8)},
-            "does not match",
-        ),
-        ({"stamp": 0.0, "rgb": np.zeros((2, 2, 3), np.uint8)}, "lacks xyz"),
+        (cloud_with(np.zeros((4, 4, 3)), np.zeros((2, 2, 3), np.uint8)), "does not match"),
     ],
 )
 def test_unusable_cloud_is_a_clear_error(cloud, reason):

@@ -24,7 +24,7 @@ def track(tracker: Tracker, scene: Scene, now: float, state: dict | None = None)
     """One frame through detection and tracking, occlusion judged from the rendered camera."""
     cloud = render(scene, SMALL)
     arms = segments_from_state(state)
-    camera = np.asarray(cloud["camera_pose"][:3])
+    camera = np.asarray(cloud.camera_pose[:3])
     return tracker.update(
         detect(cloud, state).objects, now, state, hidden=lambda position: hides(camera, position, arms)
     )
@@ -101,7 +101,7 @@ def test_an_object_hidden_by_an_arm_keeps_its_id_longer_than_forget_after():
     assert again == ids
 
 
-CAMERA_AT = np.asarray(render(scene_with(), Camera(width=8, height=6))["camera_pose"][:3])
+CAMERA_AT = np.asarray(render(scene_with(), Camera(width=8, height=6)).camera_pose[:3])
 
 
 def test_a_held_cup_keeps_its_type_colour_and_size():

@@ -5,12 +5,14 @@ from __future__ import annotations
 import queue
 import threading
 import time
+from collections.abc import Callable
 
 import numpy as np
 import pytest
 
-from services.perception.synthetic import Box, Camera, Cylinder, Scene, render
+from services.perception.synthetic import Box, Camera, Cylinder, Scene, render_map
 from shared.bus import RemoteError
+from shared.messages import typed
 
 SMALL = Camera(width=320, height=240)
 SCENE = Scene([Cylinder((0.70, -0.15, 0.80), 0.035, 0.10, "red"), Box((0.85, 0.10, 0.79), (0.08, 0.08, 0.08), "blue")])
@@ -20,7 +22,17 @@ MOVED = Scene([Cylinder((0.90, -0.30, 0.80), 0.035, 0.10, "red"), Box((0.65, 0.2
 
 @pytest.fixture(scope="module")
 def good_cloud() -> dict:
-    return render(SCENE, SMALL)
+    return render_map(SCENE, SMALL)
+
+
+def checked(received: queue.Queue[dict]) -> Callable[[dict], None]:
+    """Keep each ``perception/objects`` map as published (these tests read the wire), once it types as the schema."""
+
+    def put(message: dict) -> None:
+        typed("objects", message)
+        received.put(message)
+
+    return put
 
 
 class Feed:
@@ -31,7 +43,7 @@ class Feed:
         self.keys = network.hub.keys
         self.cloud = self.bus.publisher(self.keys.cloud, large=True)
         self.received: queue.Queue[dict] = queue.Queue()
-        self.bus.subscribe(self.keys.objects, self.received.put, schema="objects")
+        self.bus.subscribe(self.keys.objects, checked(self.received))
 
     def once(self, cloud: dict, timeout: float = 5.0) -> dict:
         """Publish ``cloud`` once and return the object list perception published for it."""
@@ -79,7 +91,7 @@ def test_late_joiner_gets_the_current_list_at_once(feed, good_cloud, network):
     feed.until(good_cloud, lambda m: len(m["objects"]) == 2)
     late: queue.Queue[dict] = queue.Queue()
     with network.open_bus() as other:
-        other.subscribe(other.keys.objects, late.put, schema="objects", history=True)
+        other.subscribe(other.keys.objects, checked(late), history=True)
         message = late.get(timeout=10)
     assert len(message["objects"]) == 2
 
@@ -198,7 +210,7 @@ class Recording:
 def test_record_ignores_clouds_rendered_before_the_request(feed):
     """A cloud that arrives after the request may have been rendered before it (a reload, a moving arm)."""
     state = feed.bus.publisher(feed.keys.sim_state)
-    before, after = {**render(SCENE, SMALL), "sim_time": 9.0}, {**render(WITH_GREEN, SMALL), "sim_time": 10.5}
+    before, after = {**render_map(SCENE, SMALL), "sim_time": 9.0}, {**render_map(WITH_GREEN, SMALL), "sim_time": 10.5}
     state.put(sim_state("first", 9.0))
     feed.until(before, lambda m: len(m["objects"]) == 2)
     state.put(sim_state("first", 10.0))
@@ -215,7 +227,7 @@ def test_record_ignores_clouds_rendered_before_the_request(feed):
 def test_record_right_after_a_scene_load_waits_for_the_new_objects(feed):
     """The first frames after a load have no confirmed objects yet; an empty list is not the new scene."""
     state = feed.bus.publisher(feed.keys.sim_state)
-    old, new = render(SCENE, SMALL), render(MOVED, SMALL)
+    old, new = render_map(SCENE, SMALL), render_map(MOVED, SMALL)
     state.put(sim_state("first", 1.0))
     feed.until({**old, "sim_time": 1.0}, lambda m: len(m["objects"]) == 2)
     state.put(sim_state("second", 2.0))

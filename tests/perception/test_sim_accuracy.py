@@ -14,8 +14,16 @@ from services.perception.pipeline import detect
 sim_world = pytest.importorskip("services.sim.world", reason="the simulator library is not available")
 from services.sim.cloud import cloud_message  # noqa: E402
 from services.sim.scene_file import available_scenes, load_scene, with_positions  # noqa: E402
+from shared.messages import SimState, as_received  # noqa: E402
 
 SCENES = available_scenes()
+
+
+def sim_state(world) -> SimState:
+    """The world's ``sim/state`` as perception's subscription hands it over."""
+    state = as_received("sim_state", {"stamp": 0.0, **world.state()})
+    assert isinstance(state, SimState)
+    return state
 
 
 # Two cups whose walls are 1 cm apart (the cups are 7.2 cm across at the rim).
@@ -35,8 +43,8 @@ def world():
 def observe(world, scene) -> Score:
     world.load(scene)
     world.settle(0.5)
-    message = cloud_message(world.capture(), world.sim_time)
-    return score(detect(message, world.state()).objects, world.truth())
+    message = as_received("cloud", cloud_message(world.capture(), world.sim_time))
+    return score(detect(message, sim_state(world)).objects, world.truth())
 
 
 @pytest.fixture(scope="module")

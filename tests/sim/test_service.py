@@ -5,11 +5,13 @@ from __future__ import annotations
 import math
 import queue
 import threading
+from typing import Any
 
 import numpy as np
 import pytest
 
 from shared.bus import Bus, RemoteError
+from shared.messages import typed
 from tests.processes import Network, ServiceProcess
 
 
@@ -17,12 +19,12 @@ class Inbox:
     """Collects the messages of one key for a test to wait on."""
 
     def __init__(self) -> None:
-        self.items: queue.Queue[dict] = queue.Queue()
+        self.items: queue.Queue[Any] = queue.Queue()
 
-    def __call__(self, message: dict) -> None:
+    def __call__(self, message: Any) -> None:
         self.items.put(message)
 
-    def wait(self, predicate=lambda m: True, timeout: float = 20.0) -> dict:
+    def wait(self, predicate=lambda m: True, timeout: float = 20.0) -> Any:
         deadline = threading.Event()
         timer = threading.Timer(timeout, deadline.set)
         timer.start()
@@ -53,8 +55,9 @@ def events(client: Bus) -> Inbox:
 
 def test_state_carries_every_documented_field(client: Bus) -> None:
     inbox = Inbox()
-    client.subscribe(client.keys.sim_state, inbox, schema="sim_state", latest_only=True)
+    client.subscribe(client.keys.sim_state, inbox, latest_only=True)  # the map on the wire, every field present
     state = inbox.wait()
+    typed("sim_state", state)
     for field in (
         "stamp",
         "sim_time",
@@ -80,28 +83,28 @@ def test_cloud_is_organised_in_the_base_frame(client: Bus) -> None:
     inbox = Inbox()
     client.subscribe(client.keys.cloud, inbox, schema="cloud", latest_only=True)
     cloud = inbox.wait()
-    assert cloud["xyz"].shape == (120, 160, 3) and cloud["xyz"].dtype == np.float32
-    assert cloud["rgb"].shape == (120, 160, 3) and cloud["rgb"].dtype == np.uint8
-    assert (cloud["width"], cloud["height"]) == (160, 120)
-    points = cloud["xyz"][np.isfinite(cloud["xyz"]).all(axis=2)]
+    assert cloud.xyz.shape == (120, 160, 3) and cloud.xyz.dtype == np.float32
+    assert cloud.rgb.shape == (120, 160, 3) and cloud.rgb.dtype == np.uint8
+    assert (cloud.width, cloud.height) == (160, 120)
+    points = cloud.xyz[np.isfinite(cloud.xyz).all(axis=2)]
     on_table = np.abs(points[:, 2] - 0.72) < 0.01
     assert on_table.mean() > 0.3
-    assert 1.6 < cloud["camera_pose"][2] < 2.0  # a Kinect on a raised PR2 head
+    assert 1.6 < cloud.camera_pose[2] < 2.0  # a Kinect on a raised PR2 head
 
 
 def test_truth_lists_the_default_objects(client: Bus) -> None:
     inbox = Inbox()
     client.subscribe(client.keys.truth, inbox, schema="truth", latest_only=True)
     truth = inbox.wait()
-    kinds = {(o["color"], o["type"]) for o in truth["objects"]}
+    kinds = {(o.color, o.type) for o in truth.objects}
     assert {("red", "cup"), ("blue", "cup"), ("green", "box")} <= kinds
 
 
 def test_gripper_motion_replies_at_once_and_reports_completion(client: Bus, events: Inbox) -> None:
     reply = client.request(client.keys.sim_control("gripper"), {"arm": "left", "width": 0.03})
     assert reply["ok"] and reply["motion_id"]
-    done = events.wait(lambda e: e["motion_id"] == reply["motion_id"])
-    assert done["status"] == "done"
+    done = events.wait(lambda e: e.motion_id == reply["motion_id"])
+    assert done.status == "done"
 
 
 def test_arm_trajectory_is_followed(client: Bus, events: Inbox) -> None:
@@ -111,8 +114,8 @@ def test_arm_trajectory_is_followed(client: Bus, events: Inbox) -> None:
     reply = client.request(
         client.keys.sim_control("arm"), {"arm": "right", "points": points, "times": np.linspace(0.0, 1.5, 5)}
     )
-    done = events.wait(lambda e: e["motion_id"] == reply["motion_id"])
-    assert done["status"] == "done", done["message"]
+    done = events.wait(lambda e: e.motion_id == reply["motion_id"])
+    assert done.status == "done", done.message
 
 
 BAD_REQUESTS = [
@@ -162,7 +165,7 @@ def test_scene_load_with_seed_and_snapshot(client: Bus) -> None:
     assert picture["png"][:8] == b"\x89PNG\r\n\x1a\n"
     inbox = Inbox()
     client.subscribe(client.keys.sim_state, inbox, schema="sim_state", latest_only=True)
-    before = inbox.wait()["scene_generation"]
+    before = inbox.wait().scene_generation
     client.request(client.keys.sim_control("scene"), {"name": "default"}, timeout=20)
-    state = inbox.wait(lambda m: m["scene_generation"] != before)
-    assert state["scene"] == "default" and state["scene_generation"] == before + 1
+    state = inbox.wait(lambda m: m.scene_generation != before)
+    assert state.scene == "default" and state.scene_generation == before + 1

@@ -58,7 +58,7 @@ def test_crashed_service_is_reported_and_restarted_and_stop_leaves_no_orphans(ro
     nlu = psutil.Process(popen.pid).children()[0]
     nlu.kill()
     message = said.get(timeout=20)
-    assert message["kind"] == "error" and "nlu service stopped" in message["text"] and "restarting" in message["text"]
+    assert message.kind == "error" and "nlu service stopped" in message.text and "restarting" in message.text
     assert _wait(
         lambda: "nlu" in bus.alive_services() and any(c.pid != nlu.pid for c in psutil.Process(popen.pid).children()),
         60,
@@ -325,7 +325,7 @@ def test_each_service_killed_mid_run_is_restarted_and_keeps_the_current_action(t
             deadline = time.monotonic() + 20
             text = ""
             while f"{name} service stopped" not in text and time.monotonic() < deadline:
-                text = said.get(timeout=max(0.1, deadline - time.monotonic()))["text"]
+                text = said.get(timeout=max(0.1, deadline - time.monotonic())).text
             assert f"The {name} service stopped" in text and "restarting it" in text
             assert _wait(
                 lambda name=name, old=child.pid: (

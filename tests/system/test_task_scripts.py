@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
+import msgspec
 import pytest
 
 from hfpbd.tasks import figures
@@ -13,6 +14,7 @@ from hfpbd.tasks.rehearse import rehearse
 from hfpbd.tasks.scripts import STYLES, ScriptError, load_tasks, word_count
 from services.sim.layout import TABLE_TOP_Z
 from services.sim.scene_file import load_scene
+from shared.messages import Gripper, TruthObject
 
 pytestmark = pytest.mark.unit
 
@@ -62,13 +64,13 @@ def test_a_broken_task_file_is_named(tmp_path: Path) -> None:
         load_tasks(bad)
 
 
-def _truth(**boxes: tuple[tuple[float, float, float], tuple[float, float, float]]) -> dict:
+def _truth(**boxes: tuple[tuple[float, float, float], tuple[float, float, float]]) -> dict[str, TruthObject]:
     """Truth items from (centre, size) pairs, as ``sim/truth`` reports them."""
     items = {}
     for oid, (centre, size) in boxes.items():
         low = [c - s / 2 for c, s in zip(centre, size)]
         high = [c + s / 2 for c, s in zip(centre, size)]
-        items[oid] = {"id": oid, "position": list(centre), "size": list(size), "aabb": [low, high]}
+        items[oid] = msgspec.convert({"id": oid, "position": centre, "size": size, "aabb": [low, high]}, TruthObject)
     return items
 
 
@@ -130,13 +132,13 @@ CUP = (0.07, 0.07, 0.10)
         (
             {"kind": "off_table_in_gripper", "object": "a", "height": 0.03},
             _truth(a=((0.40, 0.0, Z + 0.10), (0.22, 0.22, 0.012))),
-            {"right": {"holding": "a"}, "left": {"holding": None}},
+            {"right": Gripper(width=0.0, holding="a"), "left": Gripper(width=0.0)},
             True,
         ),
         (
             {"kind": "off_table_in_gripper", "object": "a", "height": 0.03},
             _truth(a=((0.40, 0.0, Z + 0.006), (0.22, 0.22, 0.012))),
-            {"right": {"holding": None}},
+            {"right": Gripper(width=0.0)},
             False,
         ),
     ],

@@ -5,12 +5,15 @@ from __future__ import annotations
 import io
 import threading
 import time
+from typing import Any
 
+import msgspec
 import numpy as np
 import pytest
 from PIL import Image
 from textual_image import widget as image_widgets
 
+from shared.messages import Cloud, PerceivedObject, SimState, typed
 from tests.tui.camera_frame import FOCAL, HEIGHT, WIDTH, frame
 from tests.tui.helpers import DESCRIPTIONS, OBJECTS, SIM_STATE, fixed_network, stage_world, until
 from tests.tui.test_snapshots import settled
@@ -27,16 +30,26 @@ CELL = (10, 20)
 HALF_BLOCKS = (1, 2)
 
 
-def _world(**changes: object) -> WorldView:
+def _world(objects: list[dict[str, Any]] = OBJECTS, **changes: object) -> WorldView:
+    """The UI's world as the bridge fills it from the bus: ``objects`` and the robot as typed messages."""
+    state = typed("sim_state", {"stamp": 1.0, **SIM_STATE})
+    assert isinstance(state, SimState)
     world = WorldView(
-        objects={o["id"]: o for o in OBJECTS},
+        objects={o["id"]: msgspec.convert(o, PerceivedObject) for o in objects},
         descriptions=dict(DESCRIPTIONS),
-        ee=SIM_STATE["ee"],
-        grippers=SIM_STATE["grippers"],
+        ee=state.ee,
+        grippers=state.grippers,
     )
     for name, value in changes.items():
         setattr(world, name, value)
     return world
+
+
+def _cloud(message: dict[str, Any]) -> Cloud:
+    """A ``sim/cloud`` frame as the bridge hands it to the camera view."""
+    cloud = typed("cloud", message)
+    assert isinstance(cloud, Cloud)
+    return cloud
 
 
 @pytest.mark.unit
@@ -59,7 +72,7 @@ def test_each_object_projects_onto_its_own_colour() -> None:
 
 @pytest.mark.unit
 def test_objects_are_named_by_their_referring_expressions_never_by_id() -> None:
-    picture = compose(frame(), _world(highlighted="obj0"), 60, 20, CELL, HALF_BLOCKS)
+    picture = compose(_cloud(frame()), _world(highlighted="obj0"), 60, 20, CELL, HALF_BLOCKS)
     names = [label.text for label in picture.labels]
     assert sorted(names) == sorted([*DESCRIPTIONS.values(), "L", "R"])
     assert not any(name.startswith("obj") for name in names)
@@ -68,13 +81,13 @@ def test_objects_are_named_by_their_referring_expressions_never_by_id() -> None:
 
 @pytest.mark.unit
 def test_an_object_not_yet_described_reads_by_colour_and_type() -> None:
-    picture = compose(frame(), _world(descriptions={}), 60, 20, CELL, HALF_BLOCKS)
+    picture = compose(_cloud(frame()), _world(descriptions={}), 60, 20, CELL, HALF_BLOCKS)
     assert "a red cup" in [label.text for label in picture.labels]
 
 
 @pytest.mark.unit
 def test_the_outline_surrounds_the_object_in_the_scaled_picture() -> None:
-    picture = compose(frame(), _world(highlighted="obj0"), 60, 20, CELL, HALF_BLOCKS)
+    picture = compose(_cloud(frame()), _world(highlighted="obj0"), 60, 20, CELL, HALF_BLOCKS)
     pixels = np.asarray(picture.image)
     camera = fit_pinhole(frame()["xyz"], frame()["camera_pose"])
     ((u, v),) = camera.project(np.array([OBJECTS[0]["position"]]))[0] * [
@@ -91,10 +104,10 @@ def test_the_outline_surrounds_the_object_in_the_scaled_picture() -> None:
 def test_labels_of_objects_side_by_side_do_not_cover_each_other() -> None:
     cups = [{**OBJECTS[0], "id": f"obj{i}", "position": [0.62, -0.15 + 0.08 * i, 0.80]} for i in range(3)]
     world = _world(
-        objects={c["id"]: c for c in cups},
+        objects=cups,
         descriptions={"obj0": "the rightmost cup", "obj1": "the middle cup", "obj2": "the leftmost cup"},
     )
-    labels = compose(frame(cups), world, 60, 20, CELL, HALF_BLOCKS).labels
+    labels = compose(_cloud(frame(cups)), world, 60, 20, CELL, HALF_BLOCKS).labels
     for i, one in enumerate(labels):
         for other in labels[i + 1 :]:
             apart = one.column + len(one.text) <= other.column or other.column + len(other.text) <= one.column
@@ -104,10 +117,10 @@ def test_labels_of_objects_side_by_side_do_not_cover_each_other() -> None:
 @pytest.mark.unit
 def test_the_close_up_shows_the_objects_larger() -> None:
     cup = {**OBJECTS[0], "position": [0.62, 0.0, 0.80]}
-    world = _world(objects={"obj0": cup})
+    world = _world(objects=[cup])
 
     def red_pixels(close_up: bool) -> int:
-        picture = compose(frame([cup]), world, 60, 20, CELL, HALF_BLOCKS, close_up=close_up)
+        picture = compose(_cloud(frame([cup])), world, 60, 20, CELL, HALF_BLOCKS, close_up=close_up)
         assert abs(picture.columns - 53) <= 1 and picture.rows == 20  # the same space, the frame's shape kept
         pixels = np.asarray(picture.image).astype(int)
         return int((np.abs(pixels - cup["rgb"]).sum(axis=-1) < 60).sum())
@@ -117,7 +130,7 @@ def test_the_close_up_shows_the_objects_larger() -> None:
 
 @pytest.mark.unit
 def test_grippers_are_marked_where_the_tool_frames_are() -> None:
-    picture = compose(frame(), _world(), 60, 20, CELL, HALF_BLOCKS)
+    picture = compose(_cloud(frame()), _world(), 60, 20, CELL, HALF_BLOCKS)
     marks = {label.text: label.column for label in picture.labels if label.text in ("L", "R")}
     assert marks["L"] < picture.columns / 2 < marks["R"], "the robot's left hand must show on the picture's left"
 
@@ -126,7 +139,7 @@ def test_grippers_are_marked_where_the_tool_frames_are() -> None:
 def test_a_frame_without_points_is_shown_without_marks() -> None:
     cloud = frame()
     cloud["xyz"] = np.full_like(cloud["xyz"], np.nan)
-    picture = compose(cloud, _world(), 60, 20, CELL, HALF_BLOCKS)
+    picture = compose(_cloud(cloud), _world(), 60, 20, CELL, HALF_BLOCKS)
     assert picture.labels == [] and picture.image.size == (picture.columns, 2 * picture.rows)
 
 

@@ -42,7 +42,7 @@ async def test_pick_up_through_the_ui(network: Network, launcher: Launcher, tmp_
         await until(
             pilot,
             lambda: (
-                sum(o.get("type") == "cup" for o in app.world.objects.values()) >= 2
+                sum(o.type == "cup" for o in app.world.objects.values()) >= 2
                 and app.world.reach
                 and set(app.world.objects) <= set(app.world.descriptions)
             ),
@@ -67,15 +67,19 @@ async def test_pick_up_through_the_ui(network: Network, launcher: Launcher, tmp_
         while command["kind"] != "command":
             command = results.get(timeout=30)
         cup, arm = command["args"]["object"], command["args"]["arm"]
-        assert app.world.objects[cup]["type"] == "cup"
-        start = np.asarray(app.world.objects[cup]["position"], float)
+        assert app.world.objects[cup].type == "cup"
+        start = np.asarray(app.world.objects[cup].position, float)
         await until(pilot, lambda: truth, timeout=10, what="ground truth")
         cup_truth = truth_id_near(truth, list(start))
         table_z = float(truth[cup_truth]["position"][2])
 
         await until(
             pilot,
-            lambda: (app.world.robot.get("grippers") or {}).get(arm) == "holding" and not app.world.robot.get("busy"),
+            lambda: (
+                app.world.robot is not None
+                and app.world.robot.grippers.get(arm) == "holding"
+                and not app.world.robot.busy
+            ),
             timeout=150,
             what="the cup held and the robot idle",
         )

@@ -257,7 +257,7 @@ async def test_robot_and_action_panels_follow_the_executor(network: Network) -> 
             "progress": {"step": 2, "of": 2},
         }
         state.put({"stamp": time.time(), "robot": running, "reach": REACH})
-        await until(pilot, lambda: app.world.robot.get("executing"), what="executing state")
+        await until(pilot, lambda: app.world.robot is not None and app.world.robot.executing, what="executing state")
         await pilot.pause(0.1)
         robot = app.query_one(RobotPanel).fields
         panel = app.query_one(ActionPanel)

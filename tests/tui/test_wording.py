@@ -4,10 +4,16 @@ from __future__ import annotations
 
 import pytest
 
+from shared.messages import PerceivedObject
 from tui.command_input import VocabularySuggester
 from tui.world import object_rgb, reach_text, size_text
 
 pytestmark = pytest.mark.unit
+
+
+def seen(**fields: object) -> PerceivedObject:
+    """A perceived object with these fields (a cup's place and size unless given)."""
+    return PerceivedObject(**{"id": "obj0", "position": (0.6, 0.0, 0.77), "size": (0.07, 0.07, 0.1), **fields})
 
 
 @pytest.mark.parametrize(
@@ -22,7 +28,7 @@ pytestmark = pytest.mark.unit
     ],
 )
 def test_reach_wording(obj: dict, reach: dict | None, expected: str) -> None:
-    assert reach_text(obj, reach) == expected
+    assert reach_text(seen(**obj), reach) == expected
 
 
 @pytest.mark.parametrize(
@@ -30,25 +36,23 @@ def test_reach_wording(obj: dict, reach: dict | None, expected: str) -> None:
     [
         ([0.07, 0.07, 0.1], "7×7×10 cm"),
         ([0.184, 0.18, 0.021], "18×18×2 cm"),
-        (None, "?"),
-        (["x"], "?"),
     ],
 )
-def test_size_wording(size: object, expected: str) -> None:
+def test_size_wording(size: list[float], expected: str) -> None:
     assert size_text(size) == expected
 
 
 @pytest.mark.parametrize(
     ("obj", "expected"),
     [
-        ({"rgb": [200, 30, 30], "color": "blue"}, (200, 30, 30)),
+        ({"rgb": [200.0, 30.0, 30.0], "color": "blue"}, (200, 30, 30)),
         ({"rgb": [1.0, 0.5, 0.0]}, (255, 127, 0)),
         ({"color": "green"}, (40, 170, 60)),
         ({"color": "chartreuse"}, (160, 160, 160)),
     ],
 )
 def test_swatch_colour_prefers_the_measured_colour(obj: dict, expected: tuple[int, int, int]) -> None:
-    assert object_rgb(obj) == expected
+    assert object_rgb(seen(**obj)) == expected
 
 
 @pytest.mark.parametrize(
