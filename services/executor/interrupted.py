@@ -54,5 +54,5 @@ class InProgress:
 
 def interrupted_sentence(doing: str, action: int, steps: int) -> str:
     """What the restarted executor says: what was cut short, and that the taught steps are all there."""
-    kept = f" Action {action} has its {steps} step{'s' if steps != 1 else ''}." if action else ""
+    kept = f" Action {action} still has {steps} step{'s' if steps != 1 else ''}." if action else ""
     return f"I was interrupted while {doing}: I had to restart, so it was not finished.{kept} Tell me what to do next."
