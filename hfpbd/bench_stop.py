@@ -116,7 +116,7 @@ def measure(trials: int, seed: int = 0) -> tuple[list[float], int]:
         stack = LocalStack(bus, Path(scratch) / "logs")
         session = loopback_options(namespace, port, listen=False).to_argv()
         try:
-            stack.start("sim", session, "--cloud-rate", "0")
+            stack.start("sim", session)  # camera on, as on the robot: its frames take the loop's time too
             stack.start("executor", session, "--data-dir", str(Path(scratch) / "data"))
             watch = ArmWatch(bus)
             watch.wait(lambda: watch.busy is None and len(watch.samples) > 1, 60)
