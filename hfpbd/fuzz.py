@@ -44,6 +44,7 @@ STREAMS: dict[str, str] = {
     "dialog/utterance": "utterance",
     "nlu/result": "nlu_result",
     "executor/state": "executor_state",
+    "speech/audio": "speech_audio",
 }
 # queryable -> well-formed maps the service must refuse (beside payloads that are not messages at all)
 REFUSED: dict[str, list[dict[str, Any]]] = {
@@ -80,6 +81,7 @@ REFUSED: dict[str, list[dict[str, Any]]] = {
     "nlu/ground": [{"text": ["a"]}, {"text": "the cup", "world": []}],
     "nlu/describe": [{"world": 5}, {"world": {"objects": [{"id": 1}]}}],
     "nlu/vocabulary": [],
+    "speech/ptt": [{"on": "yes"}, {"on": 1}, {"on": None}, {}],
     "perception/record": [],
     "executor/control/command": [
         {"procedure": "teleport", "args": {}},
@@ -95,9 +97,10 @@ REFUSED: dict[str, list[dict[str, Any]]] = {
         {},
     ],
 }
-SERVICES = ("sim", "nlu", "perception", "executor")
+SERVICES = ("sim", "nlu", "perception", "executor", "speech")
 # the simulator renders no camera here: perception then sees nothing, so any object it reports came from junk
 SIM_ARGS = ("--cloud-rate", "0")
+SPEECH_ARGS = ("--microphone", "off", "--no-voice")  # heard only through speech/audio
 JOINT_SLACK = 0.01  # rad a joint may settle by while nothing commands it
 POSITION_SLACK = 0.005  # m an object may settle by
 PROBE_TEXT = "pick up the red cup"
@@ -319,15 +322,17 @@ def run(bus: Bus, children: Sequence[ServiceProcess], count: int, seed: int = 0)
             made_up.append(message)
 
     bus.subscribe(bus.keys.objects, on_objects, schema="objects")
-    with_sim = any(child.name == "sim" for child in children)
-    sim = SimView(bus) if with_sim else None
+    heard: list[dict[str, Any]] = []  # utterances that pass the schema: only speech could have made them, from junk
+    bus.subscribe(bus.keys.utterance, heard.append, schema="utterance")
+    started = {child.name for child in children}
+    sim = SimView(bus) if "sim" in started else None
     sim_before = sim.now() if sim else {}
     before = _snapshot(bus)
     for suffix, schema in STREAMS.items():
         key = f"pbd/{bus.keys.namespace}/{suffix}"
         figures.streams[key] = _flood_stream(bus, key, schema, count, rng)
     for suffix in REFUSED:
-        if suffix.startswith("sim/") and not with_sim:
+        if suffix.split("/", 1)[0] not in started:  # a service run elsewhere, or not at all
             continue
         key = f"pbd/{bus.keys.namespace}/{suffix}"
         figures.queries[key], figures.accepted[key] = _flood_queryable(bus, key, count, rng)
@@ -343,6 +348,8 @@ def run(bus: Bus, children: Sequence[ServiceProcess], count: int, seed: int = 0)
     figures.problems += [f"{key}: {n} bad requests were answered ok" for key, n in figures.accepted.items() if n]
     if made_up:
         figures.problems.append(f"perception published {len(made_up)} object lists from malformed clouds")
+    if heard:
+        figures.problems.append(f"{len(heard)} utterances were published from malformed audio: {heard[:3]!r}")
     return figures
 
 
@@ -350,6 +357,8 @@ def service_args(name: str, data_dir: Path) -> tuple[str, ...]:
     """The flags a service runs with under the fuzz (a private actions store; a simulator without a camera)."""
     if name == "executor":
         return ("--data-dir", str(data_dir))
+    if name == "speech":
+        return SPEECH_ARGS
     return SIM_ARGS if name == "sim" else ()
 
 

@@ -1,4 +1,4 @@
-"""Bad input at volume against the real simulator, NLU, perception and executor (``hfpbd bench fuzz``, fewer)."""
+"""Bad input at volume against every real service but the UI (``hfpbd bench fuzz`` with a smaller count)."""
 
 from __future__ import annotations
 
