@@ -187,22 +187,26 @@ async def test_each_service_killed_mid_work_is_restarted_and_the_robot_carries_o
             executor = _child(up, "executor")
             executor.send_signal(signal.SIGKILL)
             await _restarted(pilot, app, robot, up, "executor", since, executor.pid)
-            interrupted = "I was interrupted while picking up the red cup"
+            interrupted = re.compile(r"I was interrupted while picking up the \w+ cup with your right hand: .*")
+
+            def said_interrupted(lines: list[str]) -> bool:
+                return any(interrupted.fullmatch(t) and "Action 1 still has 1 step." in t for t in lines)
+
             await until(
                 pilot,
-                lambda: any(t.startswith(interrupted) for t in robot.lines(since, "error")),
+                lambda: said_interrupted(robot.lines(since, "error")),
                 timeout=60,
                 what="the restarted executor to say the pick-up was interrupted",
             )
             await until(
                 pilot,
-                lambda: any(t.startswith(interrupted) for t in conversation.texts("error")),
+                lambda: said_interrupted(conversation.texts("error")),
                 timeout=10,
                 what="the UI to show the interruption",
             )
             await until(pilot, lambda: robot.robot.get("steps") == taught, timeout=30, what="the steps back")
             await idle("the restarted executor idle")
-            await command("open your right hand", lambda: robot.robot.get("actions") == [2], "the next command done")
+            await command("close your right hand", lambda: robot.robot.get("actions") == [2], "the next command done")
 
             # 2. the simulator, during a move
             since = len(robot.said)
