@@ -211,7 +211,7 @@ async def test_each_service_killed_mid_work_is_restarted_and_the_robot_carries_o
             # 2. the simulator, during a move
             since = len(robot.said)
             await _type(pilot, "move your left hand up")
-            await until(pilot, lambda: (robot.sim.get("moving") or {}).get("left"), 60, "the left arm moving")
+            await until(pilot, lambda: (robot.sim.get("moving") or {}).get("left"), 150, "the left arm moving")
             sim = _child(up, "sim")
             sim.send_signal(signal.SIGKILL)
             lost = "My left arm could not move: the simulator stopped during the motion, so it was interrupted."
