@@ -13,6 +13,9 @@ How it is measured and why:
   descriptors are the simulator's ground truth, so the figure isolates
   grasping from perception. Success is judged physically: after the lift
   the cup is ≥ 5 cm higher and still between the fingers.
+* **Stop latency** — from the stop key (the TUI's request) to the arm at
+  rest in the simulator's own state stream, on real simulator and executor
+  processes (:mod:`hfpbd.bench_stop`); the target is p95 ≤ 100 ms.
 * **Time per procedure** — planning/IK compute time (wall clock) and robot
   motion time (simulated seconds) for each motion procedure, and the compute
   time before its first arm motion starts (what a user waits for after
@@ -333,14 +336,29 @@ def contact_round(
     procedures.open("right")
 
 
+def print_stop(trials: int) -> int:
+    """The stop-latency section; non-zero when the target is missed."""
+    from hfpbd import bench_stop
+
+    print(f"\n## Stop latency: stop key to the arm at rest ({trials} moves stopped midway, real processes)")
+    latencies, missed = bench_stop.measure(trials)
+    for line in bench_stop.report(latencies, missed):
+        print(line)
+    return 0 if latencies and float(np.percentile(latencies, 95)) <= bench_stop.TARGET_P95 else 1
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="hfpbd bench executor", description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5, help="reach maps per object count (default: %(default)s)")
     parser.add_argument("--trials", type=int, default=50, help="randomised pick-ups (default: %(default)s)")
     parser.add_argument("--rounds", type=int, default=3, help="rounds of every procedure (default: %(default)s)")
+    parser.add_argument("--stops", type=int, default=30, help="moves stopped midway (default: %(default)s)")
     parser.add_argument("--skip-physics", action="store_true", help="only the reachability figures")
+    parser.add_argument("--only-stop", action="store_true", help="only the stop latency")
     args = parser.parse_args(list(sys.argv[1:] if argv is None else argv))
 
+    if args.only_stop:
+        return print_stop(args.stops)
     print("## Reachability map (both arms, 12 keys per object)")
     print(markdown_table(["objects", "mean ms", "max ms", "≤ 1 s at 10"], bench_reach(args.repeats)))
     ours, theirs, agree = bench_ik_against_mplib(100)
@@ -361,6 +379,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     for line in failures:
         print(f"  - {line}")
 
+    print_stop(args.stops)
     print(f"\n## Time per procedure ({args.rounds} randomised scenes)")
     print(
         markdown_table(

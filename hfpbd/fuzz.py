@@ -3,7 +3,7 @@
 Why: every decoder validates and a bad message must be logged and dropped
 without touching state (the design notes' contract), however many arrive.
 This sends malformed payloads on every stream key the services read and bad
-requests to every queryable they serve, then checks that each service is
+requests to every queryable they serve (the simulator's controls among them), then checks that each service is
 still alive (process and liveliness token), still serving (a good request
 answered) and unchanged (the same answers as before, no object made up from
 junk), and that no log holds a traceback. The tests run it with a smaller count.
@@ -44,13 +44,44 @@ STREAMS: dict[str, str] = {
     "dialog/utterance": "utterance",
     "nlu/result": "nlu_result",
     "executor/state": "executor_state",
+    "speech/audio": "speech_audio",
 }
 # queryable -> well-formed maps the service must refuse (beside payloads that are not messages at all)
 REFUSED: dict[str, list[dict[str, Any]]] = {
+    "sim/control/arm": [
+        {"arm": "third", "positions": [0.0] * 7},
+        {"arm": "right", "positions": [0.0] * 3},
+        {"arm": "left", "positions": [float("nan")] * 7},
+        {"arm": "right", "points": "x", "times": [1.0]},
+        {"arm": "right", "points": [[0.0] * 7], "times": [-1.0]},
+        {"arm": "left", "joints": ["elbow"], "positions": [0.0] * 7},
+        {"arm": "right"},
+    ],
+    "sim/control/gripper": [
+        {"arm": "right", "width": "wide"},
+        {"arm": "left", "width": 5.0},
+        {"arm": "right", "width": 0.05, "force": -1.0},
+        {"arm": None, "width": 0.05},
+    ],
+    "sim/control/head": [{"look_at": [1.0, 2.0]}, {"pan": "left", "tilt": 0.0}, {"look_at": [float("inf")] * 3}],
+    "sim/control/torso": [{"height": 9.0}, {"height": "up"}, {}],
+    "sim/control/stop": [{"arm": "third"}, {"arm": 7}],
+    "sim/control/scene": [
+        {"name": "nowhere"},
+        {"name": 5},
+        {"name": "default", "seed": "x"},
+        {"name": "default", "poses": [1, 2]},
+        {"scene": {"objects": 3}},
+        {},
+    ],
+    "sim/control/pause": [{"paused": "yes"}, {"paused": 1}],
+    "sim/control/step": [{"steps": -5}, {"steps": "many"}, {"steps": 10**9}, {"steps": 1}],
+    "sim/control/snapshot": [],
     "nlu/parse": [{"text": 7}, {"text": "pick it up", "world": "nowhere"}, {"text": "x", "world": {"objects": 3}}],
     "nlu/ground": [{"text": ["a"]}, {"text": "the cup", "world": []}],
     "nlu/describe": [{"world": 5}, {"world": {"objects": [{"id": 1}]}}],
     "nlu/vocabulary": [],
+    "speech/ptt": [{"on": "yes"}, {"on": 1}, {"on": None}, {}],
     "perception/record": [],
     "executor/control/command": [
         {"procedure": "teleport", "args": {}},
@@ -66,7 +97,12 @@ REFUSED: dict[str, list[dict[str, Any]]] = {
         {},
     ],
 }
-SERVICES = ("nlu", "perception", "executor")
+SERVICES = ("sim", "nlu", "perception", "executor", "speech")
+# the simulator renders no camera here: perception then sees nothing, so any object it reports came from junk
+SIM_ARGS = ("--cloud-rate", "0")
+SPEECH_ARGS = ("--microphone", "off", "--no-voice")  # heard only through speech/audio
+JOINT_SLACK = 0.01  # rad a joint may settle by while nothing commands it
+POSITION_SLACK = 0.005  # m an object may settle by
 PROBE_TEXT = "pick up the red cup"
 
 
@@ -178,6 +214,55 @@ def _snapshot(bus: Bus) -> dict[str, Any]:
     return {"parse": parse, "actions": actions}
 
 
+class SimView:
+    """The simulator's newest robot state and ground truth, to tell whether the junk moved anything."""
+
+    def __init__(self, bus: Bus) -> None:
+        self.state: dict[str, Any] = {}
+        self.truth: dict[str, Any] = {}
+        bus.subscribe(bus.keys.sim_state, lambda m: setattr(self, "state", m), schema="sim_state", latest_only=True)
+        bus.subscribe(bus.keys.truth, lambda m: setattr(self, "truth", m), latest_only=True)
+
+    def now(self, timeout: float = 30.0) -> dict[str, Any]:
+        """Joints, object positions, scene and pause flag, once both streams have been heard."""
+        deadline = time.monotonic() + timeout
+        while not (self.state and self.truth) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        return {
+            "joints": dict(self.state.get("joints", {})),
+            "objects": {o["id"]: o["position"] for o in self.truth.get("objects", [])},
+            "scene": self.truth.get("scene"),
+            "paused": self.state.get("paused"),
+            "sim_time": self.state.get("sim_time"),
+        }
+
+    def changes(self, before: dict[str, Any]) -> list[str]:
+        after = self.now()
+        problems = [
+            f"sim {name} changed: {before[name]!r} -> {after[name]!r}"
+            for name in ("scene", "paused")
+            if before[name] != after[name]
+        ]
+        if not after["sim_time"] or not before["sim_time"] or after["sim_time"] <= before["sim_time"]:
+            problems.append("the simulation clock did not advance")
+        moved = [
+            name for name, q in before["joints"].items() if abs(after["joints"].get(name, q + 1) - q) > JOINT_SLACK
+        ]
+        if moved:
+            problems.append(f"sim joints moved: {', '.join(sorted(moved))}")
+        shifted = [
+            oid
+            for oid, where in before["objects"].items()
+            if oid not in after["objects"]
+            or max(abs(a - b) for a, b in zip(after["objects"][oid], where)) > POSITION_SLACK
+        ]
+        if shifted or set(after["objects"]) != set(before["objects"]):
+            problems.append(
+                f"sim objects changed: {sorted(set(shifted) | set(after['objects']) ^ set(before['objects']))}"
+            )
+        return problems
+
+
 def _flood_stream(bus: Bus, key: str, schema: str, count: int, rng: random.Random) -> float:
     """Put ``count`` malformed payloads on ``key`` (blocking, so none is dropped before it arrives); msg/s."""
     publisher = bus.session.declare_publisher(key, congestion_control=zenoh.CongestionControl.BLOCK)
@@ -237,15 +322,24 @@ def run(bus: Bus, children: Sequence[ServiceProcess], count: int, seed: int = 0)
             made_up.append(message)
 
     bus.subscribe(bus.keys.objects, on_objects, schema="objects")
+    heard: list[dict[str, Any]] = []  # utterances that pass the schema: only speech could have made them, from junk
+    bus.subscribe(bus.keys.utterance, heard.append, schema="utterance")
+    started = {child.name for child in children}
+    sim = SimView(bus) if "sim" in started else None
+    sim_before = sim.now() if sim else {}
     before = _snapshot(bus)
     for suffix, schema in STREAMS.items():
         key = f"pbd/{bus.keys.namespace}/{suffix}"
         figures.streams[key] = _flood_stream(bus, key, schema, count, rng)
     for suffix in REFUSED:
+        if suffix.split("/", 1)[0] not in started:  # a service run elsewhere, or not at all
+            continue
         key = f"pbd/{bus.keys.namespace}/{suffix}"
         figures.queries[key], figures.accepted[key] = _flood_queryable(bus, key, count, rng)
     figures.logged = logged_rejections(children, bus.keys.cloud)
     figures.problems = check_services(bus, children, before)
+    if sim is not None:
+        figures.problems += sim.changes(sim_before)
     figures.problems += [
         f"{_suffix(key)}: no service logged a rejection"
         for key in [*figures.streams, *figures.queries]
@@ -254,15 +348,25 @@ def run(bus: Bus, children: Sequence[ServiceProcess], count: int, seed: int = 0)
     figures.problems += [f"{key}: {n} bad requests were answered ok" for key, n in figures.accepted.items() if n]
     if made_up:
         figures.problems.append(f"perception published {len(made_up)} object lists from malformed clouds")
+    if heard:
+        figures.problems.append(f"{len(heard)} utterances were published from malformed audio: {heard[:3]!r}")
     return figures
+
+
+def service_args(name: str, data_dir: Path) -> tuple[str, ...]:
+    """The flags a service runs with under the fuzz (a private actions store; a simulator without a camera)."""
+    if name == "executor":
+        return ("--data-dir", str(data_dir))
+    if name == "speech":
+        return SPEECH_ARGS
+    return SIM_ARGS if name == "sim" else ()
 
 
 def start_services(bus: Bus, log_dir: Path, data_dir: Path, port: int) -> LocalStack:
     stack = LocalStack(bus, log_dir)
     session = loopback_options(bus.keys.namespace, port, listen=False).to_argv()
     for name in SERVICES:
-        extra = ("--data-dir", str(data_dir)) if name == "executor" else ()
-        stack.start(name, session, *extra)
+        stack.start(name, session, *service_args(name, data_dir))
     return stack
 
 
@@ -283,7 +387,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             stack.stop()
     for line in figures.lines():
         print(line)
-    total = args.count * (len(STREAMS) + len(REFUSED))
+    total = args.count * (len(figures.streams) + len(figures.queries))
     print(f"{total} bad messages and requests in {elapsed:.1f} s")
     return 1 if figures.problems else 0
 

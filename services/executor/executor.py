@@ -45,6 +45,7 @@ from services.executor.actions_control import apply as apply_actions_request
 from services.executor.actions_control import step_words
 from services.executor.commands import ADMIN, BOTH, RECORDED, CommandError, Step, check, check_compound
 from services.executor.grounding import Regrounding, reground
+from services.executor.interrupted import InProgress, interrupted_sentence
 from services.executor.kinematics import ArmKinematics, joint_names
 from services.executor.procedures import Done, Procedures, StepFailed
 from services.executor.reach import reach_map
@@ -62,6 +63,13 @@ log = logging.getLogger("hfpbd.executor")
 REACH_POLL = 0.2  # seconds between checks whether the reach map is stale
 JOINT_CHANGE = 0.01  # rad: an arm that moved more than this invalidates the map
 RECORD_TIMEOUT = 15.0
+ADMIN_DOING = {
+    "record": "looking at the table",
+    "create_action": "creating an action",
+    "switch_action": "switching to another action",
+    "undo": "undoing the last step",
+    "repeat": "repeating the last command",
+}
 
 T = TypeVar("T")
 
@@ -72,6 +80,7 @@ class Executor:
     def __init__(self, bus: Bus, store: ActionStore) -> None:
         self.bus = bus
         self.store = store
+        self.in_progress = InProgress(store.path.parent)
         self.scene = Scene()
         self.cancel = threading.Event()
         self.robot = SimRobot(bus, self.cancel, self.scene.sim_time)
@@ -95,6 +104,7 @@ class Executor:
         self._reach_stale = threading.Event()
         self._grippers: dict[str, str] = {}
         self._closing = threading.Event()
+        self._perception_losses = 0  # times perception's token vanished: one that died while asked is no mystery
         self._state_publisher = bus.publisher(bus.keys.executor_state, cached=True)
         self._threads = [
             threading.Thread(target=self._command_loop, name="executor-commands", daemon=True),
@@ -109,9 +119,20 @@ class Executor:
         bus.subscribe(keys.nlu_result, self._on_nlu_result, schema="nlu_result")
         bus.serve(keys.executor_control("command"), self._on_control_command)
         bus.serve(keys.executor_control("actions"), self._on_control_actions)
+        bus.watch_alive(self._on_alive)
         for thread in self._threads:
             thread.start()
         self.publish_state()
+        self._report_interrupted()
+
+    def _report_interrupted(self) -> None:
+        """Say which command a previous executor was killed in the middle of (see ``interrupted``)."""
+        doing = self.in_progress.take()
+        if doing is None:
+            return
+        number = self.store.current
+        steps = len(self.store.get(number)["steps"]) if number else 0
+        self.say(interrupted_sentence(doing, number, steps), "error")
 
     def close(self) -> None:
         self._closing.set()
@@ -138,6 +159,10 @@ class Executor:
             self._grippers = grippers
             self._reach_stale.set()
             self.publish_state()
+
+    def _on_alive(self, service: str, alive: bool) -> None:
+        if service == "perception" and not alive:
+            self._perception_losses += 1
 
     def _on_nlu_result(self, message: NluResult) -> None:
         if message.kind != "command":  # a clarification or an answer: nothing moves, nothing is recorded
@@ -206,6 +231,7 @@ class Executor:
             self.publish_state()
             procedure = steps[0].procedure
             try:
+                self.in_progress.begin(self._doing(steps))
                 self._run_command(steps, utterance)
             except Exception:  # a bug must not kill the worker: say so and carry on
                 log.exception("command %s failed unexpectedly", procedure)
@@ -215,6 +241,7 @@ class Executor:
                     "error",
                 )
             finally:
+                self.in_progress.end()
                 with self._wake:
                     self._busy = None
                     self._executing = False
@@ -267,6 +294,15 @@ class Executor:
                 context["part"] = {"step": number, "of": len(steps)}
             if not self._step(step.procedure, step.args, context, keep=True, failure_note=note):
                 return
+
+    def _doing(self, steps: list[Step]) -> str:
+        """What the worker is doing, in words a person follows ("picking up the red cup with your right hand")."""
+        first = steps[0]
+        if first.procedure == "execute":
+            return f"executing action {first.args.get('action') or self.store.current}"
+        if first.procedure in ADMIN:
+            return ADMIN_DOING.get(first.procedure, first.procedure.replace("_", " "))
+        return _listed([self._gerund(step) for step in steps])
 
     def _gerund(self, step: Step) -> str:
         """ "placing it on the plate with your right hand": a step not taken, for a compound's failure."""
@@ -491,9 +527,14 @@ class Executor:
         objects and table are typed here one by one, and one that does not
         fit is left out as a malformed object in a stream message would be.
         """
+        losses = self._perception_losses
         try:
             reply = self.bus.request(self.bus.keys.record, {}, timeout=RECORD_TIMEOUT)
         except BusTimeout as exc:
+            if self._perception_losses != losses or "perception" not in self.bus.alive_services(timeout=0.5):
+                raise StepFailed(
+                    "I couldn't finish looking at the table: the perception service stopped, so it was interrupted."
+                ) from exc
             raise StepFailed("I can't see anything: the perception service is not answering.") from exc
         except RemoteError as exc:
             raise StepFailed(wording.sentence(f"I couldn't get a clear view of the table: {exc}")) from exc

@@ -3,7 +3,10 @@
 Long motions answer "accepted" with a motion id and report completion on
 ``sim/events``; a motion is waited for here while a cancel flag is watched,
 so "stop" interrupts a motion in the middle (it sends ``sim/control/stop``
-and the wait ends as "stopped"), not only between steps.
+and the wait ends as "stopped"), not only between steps. The simulator's
+liveliness token is watched too: a simulator that dies in the middle of a
+motion ends the wait at once with a sentence saying so, rather than after
+its silence times out (or never, when a restarted one reports a new clock).
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ EVENT_SLACK = 8.0  # simulated seconds a motion may take beyond its planned dura
 WAIT_SLICE = 0.25  # wall seconds between checks of the simulation clock
 SIM_SILENCE = 10.0  # wall seconds without a new simulator state before it counts as gone
 REQUEST_TIMEOUT = 5.0
+SIM_LOST = "the simulator stopped during the motion, so it was interrupted"
 SHORT_MOTION = 3.0  # simulated seconds a gripper or head motion takes at most
 
 
@@ -60,7 +64,15 @@ class SimRobot:
         self.sim_clock = sim_clock
         self._events: dict[str, Outcome] = {}
         self._cond = threading.Condition()
+        self._sim_losses = 0  # times the simulator's token vanished
         bus.subscribe(bus.keys.sim_events, self._on_event, schema="sim_event")
+        bus.watch_alive(self._on_alive)
+
+    def _on_alive(self, service: str, alive: bool) -> None:
+        if service == "sim" and not alive:
+            with self._cond:
+                self._sim_losses += 1
+                self._cond.notify_all()
 
     def _on_event(self, message: SimEvent) -> None:
         motion_id, status = message.motion_id, message.status
@@ -93,11 +105,18 @@ class SimRobot:
         """
         start_sim = last_sim = self.sim_clock()
         last_progress = time.monotonic()
+        with self._cond:
+            losses = self._sim_losses
         while True:
             with self._cond:
-                self._cond.wait_for(lambda: motion_id in self._events or self.cancel.is_set(), WAIT_SLICE)
+                self._cond.wait_for(
+                    lambda: motion_id in self._events or self.cancel.is_set() or self._sim_losses != losses,
+                    WAIT_SLICE,
+                )
                 if motion_id in self._events:
                     return self._events.pop(motion_id)
+                if self._sim_losses != losses:
+                    raise MotionError(SIM_LOST)
             if self.cancel.is_set():
                 raise Stopped()
             now_sim = self.sim_clock()

@@ -10,10 +10,12 @@ from __future__ import annotations
 
 import time
 
+import msgspec
 import numpy as np
 import pytest
 
 from hfpbd.manipulation_judge import placed
+from shared.messages import TruthObject
 from tests.executor.stack import Stack, texts
 
 pytestmark = pytest.mark.slow
@@ -60,6 +62,7 @@ def test_either_cup_on_the_plate_next_to_the_other_on_the_box_and_down(stack: St
             said = stack.command("place_rel", {"arm": arm, "relation": relation, "object": seen(stack, landmark)})
         assert texts(said, "error") == [], f"placing the {colour} cup {relation or 'down'}: {texts(said)}"
         time.sleep(1.0)  # let it settle before judging
-        verdict = placed(stack.truth, cup, relation or "down", landmark)
+        truth = {oid: msgspec.convert(obj, TruthObject) for oid, obj in stack.truth.items()}
+        verdict = placed(truth, cup, relation or "down", landmark)
         assert verdict.success, verdict.reason
         assert stack.state["robot"]["grippers"][arm] == "open"

@@ -72,13 +72,13 @@ def test_the_readme_walkthrough_is_the_one_judged() -> None:
 def test_the_first_minutes_happen_as_the_readme_says(runner: TaskRunner) -> None:
     runner.load_scene("default")
     for (typed, answer), (outcome, landmark) in zip(walkthrough(), OUTCOMES, strict=True):
-        before = np.asarray(runner.watch.truth[RED_CUP]["position"], dtype=float)
+        before = np.asarray(runner.watch.truth[RED_CUP].position, dtype=float)
         step = runner.say(typed)
         said = " ".join(line.split(": ", 1)[1] for line in step.said)
         assert step.ok, f"{typed!r}: {step.problem}"
         assert by_kind(said) == by_kind(answer), f"{typed!r}: the robot said {said!r}, the README says {answer!r}"
         if outcome == "lifted":
-            now = np.asarray(runner.watch.truth[RED_CUP]["position"], dtype=float)
+            now = np.asarray(runner.watch.truth[RED_CUP].position, dtype=float)
             assert now[2] > before[2] + LIFTED, (
                 f"{typed!r}: the red cup is not lifted (z {before[2]:.3f} → {now[2]:.3f})"
             )
