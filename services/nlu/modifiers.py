@@ -71,6 +71,25 @@ _TWO_ARMS = re.compile(
 
 _ARM_NAMED = re.compile(r"\b(right|left) (?:hand|arm|gripper|claw)s?\b")
 
+# the qualifiers as said aloud, for a speech grammar: every phrase here is read back by :func:`extract`
+SPOKEN_BOTH = ("both hands", "both arms", "both grippers")
+SPOKEN_AMOUNTS = ("a little", "a bit", "a lot")
+
+
+def spoken_distances() -> tuple[str, ...]:
+    """Every whole number of centimetres a move may go, in words ("five centimetres"), then the amounts."""
+    low, high = round(DISTANCE.min_m * 100), round(DISTANCE.max_m * 100)
+    return (
+        tuple(f"{_spoken_number(n)} centimetre{'' if n == 1 else 's'}" for n in range(low, high + 1)) + SPOKEN_AMOUNTS
+    )
+
+
+def _spoken_number(n: int) -> str:
+    if n < len(_SMALL):
+        return _SMALL[n]
+    tens = next(word for word, value in _TENS.items() if value == n - n % 10)
+    return tens if n % 10 == 0 else f"{tens} {_SMALL[n % 10]}"
+
 
 @dataclass(frozen=True)
 class Modifiers:

@@ -58,6 +58,15 @@ _PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple(
         ),
     )
 )
+# questions as they are said aloud, one or more per topic ("{object}" names an object): the speech
+# grammar's sentences for questions, so the recogniser can hear what this reader answers
+SPOKEN: dict[str, tuple[str, ...]] = {
+    "holding": ("what are you holding", "what is in your hand", "are you holding anything"),
+    "scene": ("what do you see", "what can you see", "what is on the table"),
+    "object": ("where is {object}", "do you see {object}", "is there {object}"),
+    "actions": ("how many actions are there", "what is the current action", "list the actions"),
+    "help": ("help", "what can i say", "what can you do"),
+}
 _POLITE = re.compile(
     r"^(?:(?:hey|ok|okay|so|well|and|robot|please|now|tell me|can you tell me|could you tell me|"
     r"do you know),? )+"
