@@ -255,10 +255,15 @@ class TaskRunner:
         return None
 
     def _in_scene_ids(self, result: dict[str, Any]) -> dict[str, Any]:
+        """The command (and, for a compound, its further steps) with the simulator's object ids."""
         args = dict(result.get("args") or {})
         if "object" in args:
             args["object"] = self.truth_id(args["object"]) or f"unseen {args['object']}"
-        return {"procedure": result.get("procedure"), "args": args}
+        out: dict[str, Any] = {"procedure": result.get("procedure"), "args": args}
+        then = [step for step in result.get("then") or [] if isinstance(step, dict)]
+        if then:
+            out["then"] = [self._in_scene_ids(step) for step in then]
+        return out
 
     # -- a whole task -------------------------------------------------------------------------
     def judge_now(self, task: Task) -> Verdict:
