@@ -47,6 +47,10 @@ COMPLEMENTS: dict[str, tuple[str, ...]] = {
 PARTICLES = ("up", "down")  # a two-word verb whose particle may follow the object: "pick the cup up"
 SCENE_LABELS = (*LABELS, "middle")
 _DETERMINERS = ("your", "the")
+# prior weights of a two-step sentence and of a question against a single command: both are rarer, and
+# unweighted, noise at the end of a command is heard as a second step or a question is heard in a command
+COMPOUND_WEIGHT = 0.05
+QUESTION_WEIGHT = 0.2
 _RULE_WORD = re.compile(r"<[^>]*>|/[0-9.]+/|[()\[\]|;=*+]")
 _SLOT = re.compile(r"<(\w+)>")
 _TOKEN = re.compile(r"<[^>]+>|/[0-9.]+/|[()\[\]|]|[^\s()\[\]|<>/]+")
@@ -275,7 +279,8 @@ def build_jsgf(vocabulary: SpeechVocabulary, scene: SceneWords = SceneWords()) -
     join = builder.rules.define("join", vocabulary.spoken.get("join", ()))
     question = builder.question()
     polite = builder.rules.define("polite", (w for w in ("please",) if w in vocabulary.fillers))
-    said = " | ".join(a for a in (_seq(step, _optional(_seq(join, step))), question) if a)
+    forms = ((1.0, step), (COMPOUND_WEIGHT, _seq(step, join, step)), (QUESTION_WEIGHT, question))
+    said = " | ".join(f"/{weight:g}/ {form}" for weight, form in forms if form)
     lines = [
         "#JSGF V1.0;",
         f"grammar {GRAMMAR_NAME};",

@@ -6,6 +6,7 @@ import pytest
 
 from services.nlu.commands import PROCEDURES
 from services.nlu.infer import Model
+from services.nlu.lexicon import NUMBER_WORDS
 from services.nlu.lexicon import vocabulary as nlu_words
 from services.nlu.modifiers import extract
 from services.nlu.results import Answer
@@ -115,6 +116,16 @@ def test_the_ngram_model_is_built_from_grammar_sentences(full):
     } | {"<s>", "</s>"}
 
 
+def test_two_steps_and_questions_are_as_rare_in_the_ngram_model_as_the_grammar_weighs_them(full):
+    sentences = sample_sentences(build_jsgf(full.core(3)), 3000)
+    compounds = sum(any(f" {join} " in s for join in full.spoken["join"]) for s in sentences) / len(sentences)
+    questions = sum(s.removeprefix("please ").split()[0] in ("what", "where", "how") for s in sentences) / len(
+        sentences
+    )
+    assert 0.01 < compounds < 0.1  # 0.05 against 1 for a single command
+    assert 0.08 < questions < 0.25  # 0.2
+
+
 def test_recogniser_loads_the_grammar_and_swaps_it_when_the_scene_changes(full):
     recogniser = Recogniser(full, SCENE)
     before = recogniser.jsgf
@@ -133,7 +144,11 @@ def test_every_spoken_question_and_distance_means_what_the_nlu_reads_from_it(ful
             result = model.parse(question.format(object="the leftmost cup"))
             assert isinstance(result, Answer) and result.topic == topic, question
     distances = [p for p in full.spoken["distance"] if "centimetre" in p]
-    assert len(distances) == 30
-    for centimetres, phrase in enumerate(distances, 1):
+    assert distances[0] == "one centimetre" and distances[-1] == "thirty centimetres" and len(distances) == 14
+    for phrase in distances:
+        number = phrase.split(" centimetre")[0]
+        centimetres = (
+            20 + NUMBER_WORDS[number.split()[1]] if number.startswith("twenty ") else NUMBER_WORDS.get(number, 30)
+        )
         assert extract(f"move up {phrase}").distance == pytest.approx(centimetres / 100), phrase
     assert extract("open both hands").both
