@@ -124,7 +124,8 @@ def test_one_request_starts_both_arms_in_the_same_step(client: Bus, events: Inbo
     for arm in ("right", "left"):
         names = ROBOT.arm_joint_names(arm)
         start = np.array([joints[n] for n in names])
-        goal = start + np.array([0.2, -0.1, 0.0, 0.15, 0.0, 0.1, 0.0])
+        pan = 0.2 if arm == "right" else -0.2  # out of the tuck, away from each arm's shoulder pan limit
+        goal = start + np.array([pan, -0.1, 0.0, 0.15, 0.0, 0.1, 0.0])
         arms[arm] = {"points": np.linspace(start, goal, 5), "times": np.linspace(0.0, 1.0, 5)}
     reply = client.request(client.keys.sim_control("arms"), {"arms": arms})
     ids = reply["motion_ids"]
