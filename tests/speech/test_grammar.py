@@ -117,12 +117,12 @@ def test_the_ngram_model_is_built_from_grammar_sentences(full):
 
 
 def test_two_steps_and_questions_are_as_rare_in_the_ngram_model_as_the_grammar_weighs_them(full):
-    sentences = sample_sentences(build_jsgf(full.core(3)), 3000)
+    sentences = sample_sentences(build_jsgf(full.core(3)), 6000)
     compounds = sum(any(f" {join} " in s for join in full.spoken["join"]) for s in sentences) / len(sentences)
     questions = sum(s.removeprefix("please ").split()[0] in ("what", "where", "how") for s in sentences) / len(
         sentences
     )
-    assert 0.01 < compounds < 0.1  # 0.05 against 1 for a single command
+    assert 0 < compounds < 0.01  # 0.002 against 1 for a single command
     assert 0.08 < questions < 0.25  # 0.2
 
 
