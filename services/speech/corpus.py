@@ -1,7 +1,7 @@
 """A spoken-command corpus over fixed scenes: sentences, the commands they mean, and voices.
 
 The paper's commands come first, then the conversation beyond it (DESIGN.md):
-distances, both hands, questions, undo, repeat and steps joined by "then",
+distances, both hands, questions, undo, repeat and steps joined by "and then",
 each under its category so the benchmark can say how each form is heard.
 Every procedure appears in every scene; each sentence names its objects by
 the scene's own referring expressions, and the robot state is set so that
@@ -178,7 +178,7 @@ CONVERSATION: list[tuple[str, str, str, dict[str, Any]]] = [
     ("repeat", "do it again", "left", {"procedure": "repeat", "args": {}}),
     (
         "then",
-        "pick up {a} then place it on the table",
+        "pick up {a} and then place it on the table",
         "right",
         {
             "procedure": "pick_up",
@@ -188,7 +188,7 @@ CONVERSATION: list[tuple[str, str, str, dict[str, Any]]] = [
     ),
     (
         "then",
-        "move your left hand up then open your left hand",
+        "move your left hand up and then open your left hand",
         "left",
         {**_move("left", "up"), "then": [{"procedure": "open", "args": {"arm": "left"}}]},
     ),

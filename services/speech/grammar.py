@@ -47,10 +47,11 @@ COMPLEMENTS: dict[str, tuple[str, ...]] = {
 PARTICLES = ("up", "down")  # a two-word verb whose particle may follow the object: "pick the cup up"
 SCENE_LABELS = (*LABELS, "middle")
 _DETERMINERS = ("your", "the")
-# prior weights of a two-step sentence and of a question against a single command: both are rarer, and
-# unweighted, noise at the end of a command is heard as a second step or a question is heard in a command;
-# at 0.05 "switch to the next action" was still heard as "switch two then execute" (speech benchmark)
-COMPOUND_WEIGHT = 0.002
+# prior weights of a two-step sentence and of a question against a single command, as the n-gram model
+# samples them: both are rarer. PocketSphinx's grammar search showed no effect of JSGF weights, so there
+# the steps are joined by "and then" only: a bare "then" sounds like "the n(ext)" ("switch to the next
+# action" was heard as "switch two then execute")
+COMPOUND_WEIGHT = 0.05
 QUESTION_WEIGHT = 0.2
 _RULE_WORD = re.compile(r"<[^>]*>|/[0-9.]+/|[()\[\]|;=*+]")
 _SLOT = re.compile(r"<(\w+)>")

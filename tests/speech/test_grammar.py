@@ -41,7 +41,7 @@ def test_every_grammar_word_is_a_word_the_nlu_knows(full, per_meaning):
     spoken = {w for phrases in full.spoken.values() for p in phrases for w in p.split()}
     unknown = sorted(w for w in words if canonical(w) != w and w not in spoken)
     assert unknown == []
-    assert {"centimetres", "both", "holding", "where", "then"} <= words
+    assert {"centimetres", "both", "holding", "where", "and", "then"} <= words
 
 
 def test_every_procedure_has_a_sentence_rule(full):
@@ -92,7 +92,8 @@ def test_the_scene_keeps_only_the_object_words_that_can_name_an_object_in_view(f
         ("where is the blue box", False),
         ("undo", True),
         ("again", True),
-        ("pick up the red cup then place it on the table", True),
+        ("pick up the red cup and then place it on the table", True),
+        ("pick up the red cup then place it on the table", False),  # a bare "then" is heard in "the"
         ("move up and then open both hands", True),
         ("what do you see then undo", False),  # a question is not a step
     ],
@@ -122,7 +123,7 @@ def test_two_steps_and_questions_are_as_rare_in_the_ngram_model_as_the_grammar_w
     questions = sum(s.removeprefix("please ").split()[0] in ("what", "where", "how") for s in sentences) / len(
         sentences
     )
-    assert 0 < compounds < 0.01  # 0.002 against 1 for a single command
+    assert 0.01 < compounds < 0.1  # 0.05 against 1 for a single command
     assert 0.08 < questions < 0.25  # 0.2
 
 
