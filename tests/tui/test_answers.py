@@ -7,8 +7,10 @@ would, so the lines compared are the ones the services really caused.
 
 from __future__ import annotations
 
+import queue
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 from rich.style import Style
@@ -40,6 +42,8 @@ async def test_an_answer_is_shown_once_in_its_own_style_and_spoken(
 ) -> None:
     hub = network.hub
     hub.publisher(hub.keys.objects, cached=True).put({"stamp": time.time(), "objects": OBJECTS})
+    results: queue.Queue[dict[str, Any]] = queue.Queue()
+    hub.subscribe(hub.keys.nlu_result, results.put)
     voice = tmp_path / "voice"
     launcher.start("nlu")
     launcher.start("speech", "--microphone", "off", "--voice-dir", str(voice))
@@ -55,7 +59,9 @@ async def test_an_answer_is_shown_once_in_its_own_style_and_spoken(
         await pilot.press(*"where is the red cup", "enter")
         await until(pilot, lambda: bool(conversation.texts("answer")), timeout=20, what="the answer")
         answer = conversation.texts("answer")[0]
-        assert "cm in front of me" in answer and "red cup" in answer.lower()
+        result = results.get(timeout=5)
+        assert result["kind"] == "answer" and result["topic"] == "object" and answer == result["text"]
+        assert "cm in front of me" in answer and "cup" in answer
         await until(pilot, lambda: len(_spoken(voice)) == 2, timeout=20, what="the answer spoken")
         await pilot.pause(0.5)
         assert answer not in conversation.texts("info"), "the answer was shown a second time as information"
