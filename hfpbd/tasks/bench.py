@@ -1,4 +1,4 @@
-"""``hfpbd bench tasks``: program the paper's five tasks in both language styles and replay them.
+"""``hfpbd bench tasks``: program the paper's five tasks in the three language styles and replay them.
 
 By default the benchmark starts its own services (fresh namespace and port,
 throw-away action store) so it never disturbs a running robot; ``--attach``
@@ -28,7 +28,7 @@ from shared.bus import Bus
 from shared.config import add_session_arguments, free_port, loopback_options, options_from_args
 
 DESCRIPTION = (
-    "Program the paper's five tasks in full and minimal language through the real services, "
+    "Program the paper's five tasks in full, minimal and conversational language through the real services, "
     "judge them from ground truth, replay them on moved objects, and compare with the paper."
 )
 

@@ -11,8 +11,11 @@ import statistics
 from pathlib import Path
 from typing import Any
 
+from hfpbd.tasks.scripts import STYLES
 from shared import stats
 
+TASK4_CONVERSATIONAL_WORDS = 20  # the conversational style's word budget for Task 4 (the paper's minimal: 27)
+COLOURS = {"full": "#4c72b0", "minimal": "#dd8452", "conversational": "#55a868"}
 COLUMNS = ("task", "style", "utterances", "words", "success", "programming_s", "replay", "median_latency_ms")
 
 
@@ -84,6 +87,7 @@ def comparison(runs: list[dict[str, Any]], paper: dict[str, Any]) -> list[str]:
             f"programming time {full['programming_s']:.1f} s -> {minimal['programming_s']:.1f} s "
             f"(saved {saved:.1f} s{paper_saved})"
         )
+    lines += _conversational(runs, paper)
     latencies = [s["motion_latency_s"] for r in runs for s in r["steps"] if s.get("motion_latency_s") is not None]
     target = paper.get("motion_latency_target_s", 0.2)
     if latencies:
@@ -98,8 +102,31 @@ def comparison(runs: list[dict[str, Any]], paper: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _conversational(runs: list[dict[str, Any]], paper: dict[str, Any]) -> list[str]:
+    """The conversational style against the minimal one, and Task 4 against its word budget."""
+    lines = []
+    for task, styles in _pairs(runs).items():
+        talk = styles.get("conversational")
+        if talk is None:
+            continue
+        line = f"{task}: conversational {talk['words']} words in {talk['utterances']} utterances"
+        if "minimal" in styles:
+            line += f" (minimal: {styles['minimal']['words']} in {styles['minimal']['utterances']})"
+        if task == "task4":
+            within = talk["words"] <= TASK4_CONVERSATIONAL_WORDS
+            paper_minimal = paper.get("task4_words", {}).get("minimal")
+            line += (
+                f"; target <= {TASK4_CONVERSATIONAL_WORDS} words ({'met' if within else 'NOT met'}; "
+                f"paper's minimal: {paper_minimal})"
+            )
+        done = "programmed" if talk.get("programmed", talk["success"]) else "NOT programmed"
+        line += f"; {done}, success {'yes' if talk['success'] else 'no'}, replay {'yes' if talk['replay'] else 'no'}"
+        lines.append(line)
+    return lines
+
+
 def chart(runs: list[dict[str, Any]], path: Path) -> None:
-    """Two panels like the paper's Fig. 6(b, c): programming time and words, full vs minimal, per task."""
+    """Two panels like the paper's Fig. 6(b, c): programming time and words per task, one bar per style run."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -107,10 +134,12 @@ def chart(runs: list[dict[str, Any]], path: Path) -> None:
 
     pairs = _pairs(runs)
     tasks = sorted(pairs)
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.4))
-    width = 0.38
+    styles = [style for style in STYLES if any(style in pairs[t] for t in tasks)]
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.4))
+    width = 0.8 / max(1, len(styles))
     for ax, field, label in ((axes[0], "programming_s", "Time (s)"), (axes[1], "words", "Number of words")):
-        for offset, style, colour in ((-width / 2, "full", "#4c72b0"), (width / 2, "minimal", "#dd8452")):
+        for n, style in enumerate(styles):
+            offset, colour = (n - (len(styles) - 1) / 2) * width, COLOURS[style]
             values = [pairs[t].get(style, {}).get(field, 0) for t in tasks]
             failed = [not (pairs[t].get(style, {}).get("success")) for t in tasks]
             bars = ax.bar(

@@ -5,7 +5,9 @@ context the previous steps leave, means what the script intends. Here the
 world state starts from the scene file and each expected command changes it
 the way the robot would (a picked-up object is held and lifted, a placed one
 lands by its landmark, the last arm and object are remembered); the NLU's own
-:class:`Dialogue` carries the conversation exactly as the service does.
+:class:`Dialogue` carries the conversation exactly as the service does. A
+compound changes the world step by step, "again" does the last command once
+more and "undo" takes the last step's change back.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ import copy
 from dataclasses import dataclass
 from typing import Any
 
-from hfpbd.tasks.scripts import Task, Utterance
+from hfpbd.tasks.scripts import Expected, Task, Utterance
 from services.nlu.context import Dialogue
 from services.nlu.infer import Clarify, Model
 from services.nlu.world import parse_world
@@ -34,17 +36,20 @@ class Rehearsed:
 
     @property
     def ok(self) -> bool:
-        return (
-            self.understood.get("kind") == "command"
-            and self.understood.get("procedure") == self.utterance.expect.procedure
-            and self.understood.get("args") == self.utterance.expect.args
-        )
+        return self.understood.get("kind") == "command" and _meaning(self.understood) == self.utterance.expect.as_dict()
 
     def explain(self) -> str:
         if self.understood.get("kind") != "command":
             return f"{self.utterance.text!r}: the robot asked {self.understood.get('question')!r}"
-        got = {"procedure": self.understood["procedure"], "args": self.understood["args"]}
-        return f"{self.utterance.text!r}: understood {got}, expected {self.utterance.expect.as_dict()}"
+        return f"{self.utterance.text!r}: understood {_meaning(self.understood)}, expected {self.utterance.expect.as_dict()}"
+
+
+def _meaning(understood: dict[str, Any]) -> dict[str, Any]:
+    """A command result as a script's ``expect``: procedure, args and, for a compound, the further steps."""
+    out: dict[str, Any] = {"procedure": understood.get("procedure"), "args": understood.get("args")}
+    if understood.get("then"):
+        out["then"] = [{"procedure": step["procedure"], "args": step["args"]} for step in understood["then"]]
+    return out
 
 
 def initial_world(scene_name: str) -> dict[str, Any]:
@@ -70,12 +75,24 @@ def rehearse(task: Task, style: str) -> list[Rehearsed]:
     world = initial_world(task.scene)
     dialogue = Dialogue()
     results = []
+    before: list[dict[str, Any]] = []  # the world before each step, for "undo"
+    last: tuple[Expected, ...] = ()  # the last command's steps, for "again"
     for utterance in task.script(style):
         result = dialogue.understand(Model(parse_world(world)), utterance.text)
         results.append(Rehearsed(utterance, result.to_json()))
         if isinstance(result, Clarify):
             dialogue.pending = None  # the script does not answer questions; the next line starts afresh
-        world = after(world, utterance.expect.procedure, utterance.expect.args)
+        expect = utterance.expect
+        if expect.procedure == "undo":
+            world = before.pop() if before else world
+        else:
+            steps = last if expect.procedure == "repeat" else expect.commands
+            if expect.procedure not in ADMIN | {"repeat"}:
+                last = steps
+            for step in steps:
+                if step.procedure not in ADMIN:
+                    before.append(world)
+                world = after(world, step.procedure, step.args)
         dialogue.observe_robot()  # the executor's state report takes over the history
     return results
 
@@ -86,7 +103,7 @@ def after(world: dict[str, Any], procedure: str, args: dict[str, Any]) -> dict[s
     robot, objects = world["robot"], {o["id"]: o for o in world["objects"]}
     arm, target = args.get("arm"), args.get("object")
     if procedure not in ADMIN:
-        robot["last_arm"] = arm or robot["last_arm"]
+        robot["last_arm"] = arm if arm in ("right", "left") else robot["last_arm"]
         robot["last_object"] = target or robot["last_object"]
     held = next((o for o in objects.values() if o["held_by"] == arm), None) if arm else None
     if procedure == "pick_up":

@@ -27,7 +27,7 @@ from hfpbd.tasks.judge import Truth, Verdict, judge
 from hfpbd.tasks.observer import Observer, WaitTimeout
 from hfpbd.tasks.scripts import Expected, Task, Utterance, word_count
 from shared.bus import Bus, BusTimeout, RemoteError
-from shared.messages import NluResult
+from shared.messages import CommandStep, NluResult
 
 log = logging.getLogger("hfpbd.tasks")
 
@@ -257,11 +257,16 @@ class TaskRunner:
                 return message
         return None
 
-    def _in_scene_ids(self, result: NluResult) -> dict[str, Any]:
+    def _in_scene_ids(self, result: NluResult | CommandStep) -> dict[str, Any]:
+        """The command (and, for a compound, its further steps) with the simulator's object ids."""
         args = dict(result.args or {})
         if "object" in args:
             args["object"] = self.truth_id(args["object"]) or f"unseen {args['object']}"
-        return {"procedure": result.procedure, "args": args}
+        out: dict[str, Any] = {"procedure": result.procedure, "args": args}
+        then = result.then if isinstance(result, NluResult) else None
+        if then:
+            out["then"] = [self._in_scene_ids(step) for step in then]
+        return out
 
     # -- a whole task -------------------------------------------------------------------------
     def judge_now(self, task: Task) -> Verdict:

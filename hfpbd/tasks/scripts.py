@@ -1,5 +1,10 @@
 """The task scripts: the paper's five tasks as data (``tasks.json`` next to this file).
 
+Three styles: the paper's fully specified and minimal language, and a
+conversational one that uses the forms beyond the paper (steps joined by
+"then", both hands, distances, "again"), where one utterance may stand for
+several commands (``expect.then``).
+
 Why data and not code: the same scripts are checked offline against the
 language model, run live through the services, and counted for the
 benchmark; a person can read and edit them without touching Python. Each
@@ -17,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 TASKS_FILE = Path(__file__).resolve().parent / "tasks.json"
-STYLES = ("full", "minimal")
+STYLES = ("full", "minimal", "conversational")
 CRITERIA = ("stacked", "side_by_side", "inside", "lifted", "off_table_in_gripper")
 
 
@@ -31,9 +36,18 @@ class Expected:
 
     procedure: str
     args: dict[str, Any]
+    then: tuple[Expected, ...] = ()  # the further commands the same utterance asks for, in order
 
     def as_dict(self) -> dict[str, Any]:
-        return {"procedure": self.procedure, "args": dict(self.args)}
+        out: dict[str, Any] = {"procedure": self.procedure, "args": dict(self.args)}
+        if self.then:
+            out["then"] = [step.as_dict() for step in self.then]
+        return out
+
+    @property
+    def commands(self) -> tuple[Expected, ...]:
+        """This command and the ones after it."""
+        return (Expected(self.procedure, self.args), *self.then)
 
 
 @dataclass(frozen=True)
@@ -115,7 +129,7 @@ def _task(item: Any, index: int) -> Task:
     styles = {}
     for style, lines in item["styles"].items():
         if style not in STYLES or not isinstance(lines, list) or not lines:
-            raise ScriptError(f"{where}: styles must be {' and '.join(STYLES)}, each a non-empty list")
+            raise ScriptError(f"{where}: styles must be among {', '.join(STYLES)}, each a non-empty list")
         styles[style] = tuple(_utterance(line, f"{where} {style}[{i}]") for i, line in enumerate(lines))
     return Task(item["id"], item["title"], item["scene"], dict(item["success"]), item["replay_seed"], styles)
 
@@ -123,11 +137,16 @@ def _task(item: Any, index: int) -> Task:
 def _utterance(line: Any, where: str) -> Utterance:
     if not isinstance(line, dict) or not isinstance(line.get("text"), str) or not line["text"].strip():
         raise ScriptError(f"{where} needs a non-empty 'text'")
-    expect = line.get("expect")
+    return Utterance(line["text"], _expected(line.get("expect"), where))
+
+
+def _expected(expect: Any, where: str) -> Expected:
     if (
         not isinstance(expect, dict)
         or not isinstance(expect.get("procedure"), str)
         or not isinstance(expect.get("args", {}), dict)
+        or not isinstance(expect.get("then", []), list)
     ):
-        raise ScriptError(f"{where} needs 'expect': {{'procedure', 'args'}}")
-    return Utterance(line["text"], Expected(expect["procedure"], dict(expect.get("args", {}))))
+        raise ScriptError(f"{where} needs 'expect': {{'procedure', 'args'[, 'then': [...]]}}")
+    then = tuple(_expected(step, f"{where} then[{i}]") for i, step in enumerate(expect.get("then", [])))
+    return Expected(expect["procedure"], dict(expect.get("args", {})), then)

@@ -253,9 +253,9 @@ class Procedures:
                 self._press[arm] = None
         version = self.scene.snapshot().robot_version
         try:
-            started = self.robot.start_together(
+            started = self.robot.start_arms(
                 {
-                    arm: partial(self.robot.start_arm, arm, trajectories[arm].points, trajectories[arm].times, contact)
+                    arm: (trajectories[arm].points, trajectories[arm].times, contact)
                     for arm, (_, contact) in paths.items()
                 }
             )

@@ -162,6 +162,29 @@ class SimRobot:
             payload["contact"] = True
         return self._start("arm", payload, float(times[-1]) if len(times) else 0.0)
 
+    def start_arms(self, trajectories: dict[str, tuple[np.ndarray, np.ndarray, bool]]) -> dict[str, Started]:
+        """Start several arms' timed trajectories (``points, times, contact`` each) in one request.
+
+        Why one request: the simulator starts every motion it names in the
+        same physics step, so two arms lifting one box leave the table
+        together; two requests, however close, can be a loaded machine's
+        scheduling delay apart.
+        """
+        if self.cancel.is_set():
+            raise Stopped()
+        payload: dict[str, Any] = {}
+        for arm, (points, times, contact) in trajectories.items():
+            payload[arm] = {"points": np.asarray(points, np.float64), "times": np.asarray(times, np.float64)}
+            if contact:
+                payload[arm]["contact"] = True
+        ids = self._request("arms", {"arms": payload}).get("motion_ids")
+        if not isinstance(ids, dict) or set(ids) != set(trajectories):
+            raise MotionError(f"the simulator did not start every arm: {ids!r}")
+        return {
+            arm: Started(str(ids[arm]), float(times[-1]) if len(times) else 0.0)
+            for arm, (_, times, _) in trajectories.items()
+        }
+
     def start_together(self, starts: dict[str, Callable[[], Started]]) -> dict[str, Started]:
         """Send several motion requests at the same instant, each from its own thread.
 

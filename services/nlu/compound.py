@@ -30,6 +30,7 @@ _ALWAYS = re.compile(
 )
 _AND = re.compile(r"\s*(?:,\s*and\b|\band\b|,)\s*")
 _JOINS = re.compile(r"\b(?:and|then|after|afterwards|next)\b|[,;.]")
+SPOKEN_JOINS = ("and then",)  # how steps are joined aloud, for a speech grammar (a bare "then" is heard in "the")
 MAX_STEPS = 6  # more than this in one breath is almost surely pasted text
 
 

@@ -144,10 +144,6 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
         ((verb(_procs("execute")),),),
     ),
     (
-        ("undo the last move", "undo the move", "undo that move", "undo last", "undo the last one"),
-        ((verb(_procs("undo")),),),
-    ),
-    (
         (
             "undo",
             "undo that",
@@ -163,6 +159,11 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
         ((verb(_procs("undo")),),),
     ),
     (
+        ("undo the last move", "undo the move", "undo that move", "undo last", "undo the last one"),
+        ((verb(_procs("undo")),),),
+    ),
+    (("again",), ((verb(_procs("repeat"), W.option),),)),  # alone it repeats; with another verb it is an adverb
+    (
         (
             "repeat",
             "do it again",
@@ -177,7 +178,6 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
         ),
         ((verb(_procs("repeat")),),),
     ),
-    (("again",), ((verb(_procs("repeat"), W.option),),)),  # alone it repeats; with another verb it is an adverb
     (("go back to", "return to", "back to"), ((verb(_procs("switch_action")),), (verb(MOVE),))),
     (("look at the table", "look at the table again", "look again", "have a look"), ((verb(_procs("record")),),)),
     (

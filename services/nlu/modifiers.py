@@ -71,6 +71,30 @@ _TWO_ARMS = re.compile(
 
 _ARM_NAMED = re.compile(r"\b(right|left) (?:hand|arm|gripper|claw)s?\b")
 
+# the qualifiers as said aloud, for a speech grammar: every phrase here is read back by :func:`extract`
+SPOKEN_BOTH = ("both hands", "both arms")
+
+
+def spoken_distances() -> tuple[str, ...]:
+    """The distances people say, in words ("five centimetres").
+
+    Every whole centimetre up to ten, then every five up to the limit:
+    nobody asks for 17 cm by voice, and each number the grammar offers is
+    one more a spoken number can be misheard as. The amounts ("a little",
+    "a lot") are left out: short and common, they were heard in the noise
+    after a plain command (speech benchmark).
+    """
+    low, high = round(DISTANCE.min_m * 100), round(DISTANCE.max_m * 100)
+    said = [n for n in range(low, high + 1) if n <= 10 or n % 5 == 0]
+    return tuple(f"{_spoken_number(n)} centimetre{'' if n == 1 else 's'}" for n in said)
+
+
+def _spoken_number(n: int) -> str:
+    if n < len(_SMALL):
+        return _SMALL[n]
+    tens = next(word for word, value in _TENS.items() if value == n - n % 10)
+    return tens if n % 10 == 0 else f"{tens} {_SMALL[n % 10]}"
+
 
 @dataclass(frozen=True)
 class Modifiers:

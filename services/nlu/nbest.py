@@ -14,7 +14,10 @@ the scene's prior and the words matched.
 
 Why commands first: a hypothesis that resolves to one command ranks above
 any that the model would have to ask about, whatever their weights ("please
-go up" → a question, against "please stop" → a command).
+go up" → a question, against "please stop" → a command). A question the user
+asks ("what are you holding") is not asked about: its answer competes with
+the commands as one more meaning, so a misheard command among the runners-up
+does not drown a question heard clearly.
 
 Why reject: when the chosen command gathers only a small share of the
 recogniser's probability mass, the recogniser heard mostly something else and
@@ -36,6 +39,7 @@ from typing import Any
 from services.nlu.commands import Command
 from services.nlu.infer import CommandResult, Model, Result
 from services.nlu.prior import History
+from services.nlu.results import Answer
 
 NLU_WEIGHT = 0.1  # λ: weight of the model's log score against the recogniser's log probability
 REJECT_BELOW = 0.1  # the chosen command's least share of the n-best probability mass to act on it
@@ -60,7 +64,7 @@ class Choice:
     """The hypothesis to act on and how much of the n-best agrees with it."""
 
     reading: Reading  # the most plausible hypothesis of the chosen command (or question, if no command)
-    share: float  # of the n-best probability mass, the part that resolves to the chosen command; 0 for a question
+    share: float  # of the n-best probability mass, the part that resolves to the chosen meaning; 0 if none resolved
 
     def rejected(self, below: float = REJECT_BELOW) -> bool:
         """A command too few of the hypotheses support to act on."""
@@ -87,10 +91,13 @@ def choose(readings: Iterable[Reading], nlu_weight: float = NLU_WEIGHT) -> Choic
     usable = list(readings)
     if not usable:
         return None
-    groups: dict[tuple[Command, ...], list[Reading]] = {}  # by every step: "pick it up and lift it" is not "pick it up"
+    # by every step ("pick it up and lift it" is not "pick it up"), or by the question's topic
+    groups: dict[tuple[Command, ...] | str, list[Reading]] = {}
     for reading in usable:
         if isinstance(reading.result, CommandResult):
             groups.setdefault(reading.result.commands, []).append(reading)
+        elif isinstance(reading.result, Answer):
+            groups.setdefault(reading.result.topic, []).append(reading)
     if not groups:
         return Choice(max(usable, key=lambda r: r.weight(nlu_weight)), 0.0)
     best = max(groups.values(), key=lambda group: _log_sum(r.weight(nlu_weight) for r in group))

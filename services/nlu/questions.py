@@ -58,6 +58,16 @@ _PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple(
         ),
     )
 )
+# questions as they are said aloud, the usual one or two per topic ("{object}" names an object): the
+# speech grammar's sentences for questions, so the recogniser can hear what this reader answers (more
+# phrasings would only give a misheard command more questions to be mistaken for)
+SPOKEN: dict[str, tuple[str, ...]] = {
+    "holding": ("what are you holding", "what is in your hand"),
+    "scene": ("what do you see",),
+    "object": ("where is {object}",),
+    "actions": ("how many actions are there",),
+    "help": ("what can i say",),
+}
 _POLITE = re.compile(
     r"^(?:(?:hey|ok|okay|so|well|and|robot|please|now|tell me|can you tell me|could you tell me|"
     r"do you know),? )+"

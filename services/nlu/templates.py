@@ -7,9 +7,13 @@ the lexicon so the two can never drift apart.
 
 from __future__ import annotations
 
+from services.nlu import questions
 from services.nlu.commands import PROCEDURES
+from services.nlu.compound import SPOKEN_JOINS
 from services.nlu.lexicon import COLOR_WORDS, PHRASES, TYPE_WORDS
+from services.nlu.modifiers import SPOKEN_BOTH, spoken_distances
 from services.nlu.weights import LANGUAGE
+from shared.contract import BOTH_ARM_PROCEDURES, DISTANCE_PROCEDURES
 
 _SLOT_NAMES = {"anaphor": "object_reference"}
 
@@ -38,7 +42,13 @@ _SHAPES: dict[str, tuple[str, ...]] = {
 
 
 def sentence_templates() -> dict[str, object]:
-    """``{"procedures": {name: [shape, ...]}, "verbs": {name: [...]}, "slots": {slot: [...]}}``."""
+    """``{"procedures": {name: [shape, ...]}, "verbs": {name: [...]}, "slots": {slot: [...]}}`` and the spoken forms.
+
+    The spoken forms are what the command shapes leave out: ``questions``
+    (by topic, ``{object}`` for an object), ``distance`` (phrases and the
+    procedures that take one), ``both`` (phrases and procedures) and
+    ``joins`` (between the steps of one utterance).
+    """
     verbs: dict[str, list[str]] = {name: [] for name in PROCEDURES}
     slots: dict[str, set[str]] = {}
     for phrase, readings in PHRASES.items():
@@ -57,4 +67,8 @@ def sentence_templates() -> dict[str, object]:
         "procedures": {name: list(shape) for name, shape in _SHAPES.items()},
         "verbs": {name: sorted(set(v)) for name, v in verbs.items()},
         "slots": {name: sorted(values) for name, values in slots.items()},
+        "questions": {topic: list(said) for topic, said in questions.SPOKEN.items()},
+        "distance": {"phrases": list(spoken_distances()), "procedures": sorted(DISTANCE_PROCEDURES)},
+        "both": {"phrases": list(SPOKEN_BOTH), "procedures": sorted(BOTH_ARM_PROCEDURES)},
+        "joins": list(SPOKEN_JOINS),
     }

@@ -93,6 +93,31 @@ def arm_request(request: Mapping[str, Any], joints: Mapping[str, JointInfo]) -> 
     raise ValueError("an arm request needs 'positions' (7 numbers) or 'points' (N × 7) with 'times' (N)")
 
 
+def arms_request(request: Mapping[str, Any], joints: Mapping[str, JointInfo]) -> list[tuple[str, list[str], Any, bool]]:
+    """``[(arm, joint names, goal, contact)]`` for ``{"arms": {arm: <an arm request without "arm">}}``.
+
+    Why one request for several arms: the motions it names start in the
+    same simulation step, which two requests sent at once cannot promise on
+    a busy machine (each is its own round trip). Every arm is checked before
+    any of them moves.
+    """
+    given = request.get("arms")
+    if not isinstance(given, Mapping) or not given:
+        raise ValueError("arms must map each arm ('right', 'left') to its request")
+    out = []
+    for arm, inner in given.items():
+        if not isinstance(inner, Mapping):
+            raise ValueError(f"arms.{arm} must be an arm request (points and times, or positions)")
+        side, names, goal = arm_request({**inner, "arm": arm}, joints)
+        contact = contact_flag(inner)
+        if contact and not isinstance(goal, tuple):
+            raise ValueError(
+                f"arms.{arm}: contact applies to timed waypoints ('points' and 'times'), not to 'positions'"
+            )
+        out.append((side, names, goal, contact))
+    return out
+
+
 def gripper_request(request: Mapping[str, Any]) -> tuple[str, float, float]:
     arm = arm_of(request)
     width = number(request, "width", 0.0, ROBOT.gripper.max_opening)

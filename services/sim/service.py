@@ -231,21 +231,29 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
     joints = world.joints
     keys = bus.keys
 
+    def start_arm(side: str, names: list[str], goal: Any, contact: bool) -> str:
+        """Start one arm's motion (on the simulation thread)."""
+        motion_id = world.new_motion_id()
+        if isinstance(goal, tuple):
+            runner.replaced(world.follow_waypoints(side, names, *goal, motion_id, contact), motion_id)
+        else:
+            runner.replaced(world.move_joints(side, names, goal, motion_id), motion_id)
+        return motion_id
+
     def arm(request: dict) -> dict:
         side, names, goal = control.arm_request(request, joints)
         contact = control.contact_flag(request)
         if contact and not isinstance(goal, tuple):
             raise ValueError("contact applies to timed waypoints ('points' and 'times'), not to 'positions'")
+        return {"ok": True, "motion_id": runner.call(lambda: start_arm(side, names, goal, contact))}
 
-        def start() -> str:
-            motion_id = world.new_motion_id()
-            if isinstance(goal, tuple):
-                runner.replaced(world.follow_waypoints(side, names, *goal, motion_id, contact), motion_id)
-            else:
-                runner.replaced(world.move_joints(side, names, goal, motion_id), motion_id)
-            return motion_id
-
-        return {"ok": True, "motion_id": runner.call(start)}
+    def arms(request: dict) -> dict:
+        motions = control.arms_request(request, joints)
+        # one call on the simulation thread: every arm starts before the next physics step
+        ids = runner.call(
+            lambda: {side: start_arm(side, names, goal, contact) for side, names, goal, contact in motions}
+        )
+        return {"ok": True, "motion_ids": ids}
 
     def gripper(request: dict) -> dict:
         side, width, force = control.gripper_request(request)
@@ -335,6 +343,7 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
 
     handlers = {
         "arm": arm,
+        "arms": arms,
         "gripper": gripper,
         "head": head,
         "torso": torso,

@@ -1,6 +1,7 @@
 """``hfpbd bench speech``: espeak-ng corpus -> PocketSphinx -> NLU, in fixed scenes.
 
-Reports word error rate, command accuracy from the top hypothesis and from
+Reports word error rate, command accuracy (a question counts as right when
+it is answered on its topic; a compound when every step is right) from the top hypothesis and from
 the n-best rescored by the NLU (:func:`services.nlu.nbest.choose`, the NLU
 service's own rule, on each hypothesis parsed once), how many commands it would not act on for too
 little support in the n-best and the accuracy among the rest, and decoding
@@ -25,10 +26,11 @@ from rapidfuzz.distance import Levenshtein
 
 from services.nlu.infer import CommandResult, Model, Result
 from services.nlu.nbest import NLU_WEIGHT, REJECT_BELOW, Choice, Reading, choose
+from services.nlu.results import Answer
 from services.nlu.world import parse_world
 from services.speech import espeak
 from services.speech.audio import RATE, read_wav, silence
-from services.speech.corpus import Item, corpus, held_out
+from services.speech.corpus import PAPER, Item, corpus, held_out
 from services.speech.grammar import SceneWords
 from services.speech.recogniser import (
     ACOUSTIC_SCALE,
@@ -60,8 +62,16 @@ def _words(text: str) -> list[str]:
     return text.lower().replace(",", " ").split()
 
 
-def _command(result: Result) -> dict | None:
-    return result.command.as_dict() if isinstance(result, CommandResult) else None
+def meaning(result: Result) -> dict | None:
+    """What a reading means, in the corpus's terms: the command and its further steps, or the question's topic."""
+    if isinstance(result, Answer):
+        return {"answer": result.topic}
+    if not isinstance(result, CommandResult):
+        return None
+    meaning = result.command.as_dict()
+    if result.then:
+        meaning["then"] = [c.as_dict() for c in result.then]
+    return meaning
 
 
 def rescored(
@@ -78,7 +88,7 @@ def rescored(
 
 
 def _right(outcome: Outcome, choice: Choice | None) -> bool:
-    return choice is not None and _command(choice.reading.result) == outcome.item.expected
+    return choice is not None and meaning(choice.reading.result) == outcome.item.expected
 
 
 def _rejections(outcomes: list[Outcome], choices: list[Choice | None], below: float) -> str:
@@ -117,12 +127,12 @@ def report(outcomes: list[Outcome], vocabulary: str, title: str = "speech benchm
     )
     reference_words = sum(len(_words(o.item.text)) for o in outcomes)
     exact = sum(bool(o.hypotheses) and o.hypotheses[0].text == o.item.text for o in outcomes)
-    top1 = sum(bool(o.results) and _command(o.results[0]) == o.item.expected for o in outcomes)
-    in_nbest = sum(any(_command(r) == o.item.expected for r in o.results) for o in outcomes)
+    top1 = sum(bool(o.results) and meaning(o.results[0]) == o.item.expected for o in outcomes)
+    in_nbest = sum(any(meaning(r) == o.item.expected for r in o.results) for o in outcomes)
     rtf = [o.decode_s / o.seconds for o in outcomes]
     audio = sum(o.seconds for o in outcomes)
     print(
-        f"{title}: {n} utterances, {len({o.item.expected['procedure'] for o in outcomes})} procedures, "
+        f"{title}: {n} utterances, {len({o.item.expected.get('procedure', 'answer') for o in outcomes})} meanings, "
         f"{len({o.item.scene for o in outcomes})} scenes, {len({o.item.voice for o in outcomes})} voices, "
         f"{len({o.item.speed for o in outcomes})} speeds; grammar: {vocabulary} vocabulary"
     )
@@ -153,6 +163,11 @@ def report(outcomes: list[Outcome], vocabulary: str, title: str = "speech benchm
         f"  decode time per second of audio          mean {statistics.mean(rtf):.3f} s, "
         f"p95 {float(np.percentile(rtf, 95)):.3f} s, max {max(rtf):.3f} s ({audio:.0f} s of audio)"
     )
+    for category in dict.fromkeys(o.item.category for o in outcomes):
+        kept = [(o, c) for o, c in zip(outcomes, choices) if o.item.category == category]
+        right = sum(_right(o, c) for o, c in kept)
+        label = "the paper's commands" if category == PAPER else f"new form: {category}"
+        print(f"  ... {label:<37} {right / len(kept):7.2%}  ({right}/{len(kept)})")
     best = sum(_right(o, c) for o, c in zip(outcomes, choices)) / n
     print(f"  command accuracy, n-best rescored        {best:7.2%}; {_rejections(outcomes, choices, REJECT_BELOW)}")
     print(f"  target command accuracy >= {TARGET_ACCURACY:.0%}: {'met' if best >= TARGET_ACCURACY else 'NOT met'}")

@@ -1,5 +1,8 @@
 """A spoken-command corpus over fixed scenes: sentences, the commands they mean, and voices.
 
+The paper's commands come first, then the conversation beyond it (DESIGN.md):
+distances, both hands, questions, undo, repeat and steps joined by "and then",
+each under its category so the benchmark can say how each form is heard.
 Every procedure appears in every scene; each sentence names its objects by
 the scene's own referring expressions, and the robot state is set so that
 the intended command is the sensible one (a hand holds something before a
@@ -64,6 +67,14 @@ SCENES: dict[str, tuple[list[dict[str, Any]], dict[str, tuple[str, str]]]] = {
         {"a": ("the leftmost cup", "obj0"), "b": ("the biggest box", "obj2"), "c": ("the smallest box", "obj3")},
     ),
 }
+
+
+def _move(arm: str, direction: str, distance: float | None = None) -> dict[str, Any]:
+    args: dict[str, Any] = {"arm": arm, "direction": direction}
+    if distance is not None:
+        args["distance"] = distance
+    return {"procedure": "move_abs_dir", "args": args}
+
 
 # robot state name -> the world's robot fields
 STATES: dict[str, dict[str, Any]] = {
@@ -142,6 +153,47 @@ TEMPLATES: list[tuple[str, str, str, dict[str, Any]]] = [
     ("please stop", "executing", "stop", {}),
 ]
 
+PAPER = "paper"
+# (category, sentence, robot state, meaning): a command {"procedure", "args"[, "then"]} or a question {"answer"}
+CONVERSATION: list[tuple[str, str, str, dict[str, Any]]] = [
+    ("distance", "move your right hand up five centimetres", "right", _move("right", "up", 0.05)),
+    ("distance", "move your left hand down ten centimetres", "left", _move("left", "down", 0.10)),
+    ("distance", "move your right hand forward three centimetres", "right", _move("right", "forward", 0.03)),
+    ("distance", "raise your left arm twenty centimetres", "right", _move("left", "up", 0.20)),
+    ("both", "open both hands", "grippers", {"procedure": "open", "args": {"arm": "both"}}),
+    ("both", "close both hands", "right", {"procedure": "close", "args": {"arm": "both"}}),
+    ("both", "move both hands up", "right", _move("both", "up")),
+    (
+        "both",
+        "move both arms to the side",
+        "right",
+        {"procedure": "move_abs_dest", "args": {"arm": "both", "destination": "side"}},
+    ),
+    ("question", "what are you holding", "holding", {"answer": "holding"}),
+    ("question", "where is {a}", "right", {"answer": "object"}),
+    ("question", "what do you see", "right", {"answer": "scene"}),
+    ("undo", "undo", "right", {"procedure": "undo", "args": {}}),
+    ("undo", "undo that", "left", {"procedure": "undo", "args": {}}),
+    ("repeat", "again", "right", {"procedure": "repeat", "args": {}}),
+    ("repeat", "do it again", "left", {"procedure": "repeat", "args": {}}),
+    (
+        "then",
+        "pick up {a} and then place it on the table",
+        "right",
+        {
+            "procedure": "pick_up",
+            "args": {"arm": "right", "object": "a"},
+            "then": [{"procedure": "place_abs", "args": {"arm": "right", "destination": "table"}}],
+        },
+    ),
+    (
+        "then",
+        "move your left hand up and then open your left hand",
+        "left",
+        {**_move("left", "up"), "then": [{"procedure": "open", "args": {"arm": "left"}}]},
+    ),
+]
+
 
 @dataclass(frozen=True)
 class Item:
@@ -153,16 +205,31 @@ class Item:
     expected: dict[str, Any]
     voice: str
     speed: int
+    category: str = PAPER
+
+
+def _templates() -> list[tuple[str, str, str, dict[str, Any]]]:
+    paper = [(PAPER, s, state, {"procedure": p, "args": args}) for s, state, p, args in TEMPLATES]
+    return paper + CONVERSATION
+
+
+def _resolved(meaning: dict[str, Any], refs: dict[str, tuple[str, str]]) -> dict[str, Any]:
+    """The meaning with each object placeholder ("a") replaced by the scene's object id."""
+    out = dict(meaning)
+    if "args" in out:
+        out["args"] = {k: refs[v][1] if k == "object" else v for k, v in out["args"].items()}
+    if "then" in out:
+        out["then"] = [_resolved(step, refs) for step in out["then"]]
+    return out
 
 
 def corpus(voices: tuple[str, ...] = VOICES, speeds: tuple[int, ...] = SPEEDS, rounds: int = 1) -> list[Item]:
-    """Every template in every scene (111 utterances) ``rounds`` times, voices and speeds rotating."""
+    """Every template in every scene (162 utterances) ``rounds`` times, voices and speeds rotating."""
     items: list[Item] = []
     for _round, (scene, (objects, refs)) in itertools.product(range(rounds), SCENES.items()):
-        for sentence, state, procedure, args in TEMPLATES:
+        for category, sentence, state, meaning in _templates():
             n = len(items)
             text = sentence.format(**{k: words for k, (words, _) in refs.items()})
-            expected_args = {k: refs[v][1] if k == "object" else v for k, v in args.items()}
             world = {"objects": copy.deepcopy(objects), "robot": copy.deepcopy(STATES[state])}
             if state == "holding":
                 world["objects"][0]["held_by"] = "right"
@@ -171,14 +238,15 @@ def corpus(voices: tuple[str, ...] = VOICES, speeds: tuple[int, ...] = SPEEDS, r
                     scene,
                     text,
                     world,
-                    {"procedure": procedure, "args": expected_args},
+                    _resolved(meaning, refs),
                     voices[n % len(voices)],
                     speeds[(n // len(voices)) % len(speeds)],
+                    category,
                 )
             )
     return items
 
 
 def held_out() -> list[Item]:
-    """The sentences of :func:`corpus` in other voices and speeds (222 utterances), for choosing weights."""
+    """The sentences of :func:`corpus` in other voices and speeds (324 utterances), for choosing weights."""
     return corpus(HELD_OUT_VOICES, HELD_OUT_SPEEDS, HELD_OUT_ROUNDS)

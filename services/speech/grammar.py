@@ -30,10 +30,14 @@ from services.nlu.commands import PROCEDURES
 from services.nlu.refexp import LABELS, Scene
 from services.nlu.templates import sentence_templates
 from services.nlu.world import WorldError, parse_world
-from services.speech.vocabulary import Implied, SpeechVocabulary
+from services.speech.vocabulary import OBJECT, Implied, SpeechVocabulary
 
 GRAMMAR_NAME = "hfpbd"
-SHAPES: dict[str, list[str]] = sentence_templates()["procedures"]  # type: ignore[assignment]
+_TEMPLATES = sentence_templates()
+SHAPES: dict[str, list[str]] = _TEMPLATES["procedures"]  # type: ignore[assignment]
+# the procedures that take a distance, and those that may run on both arms
+DISTANCE_PROCEDURES: list[str] = _TEMPLATES["distance"]["procedures"]  # type: ignore[index]
+BOTH_ARM_PROCEDURES: list[str] = _TEMPLATES["both"]["procedures"]  # type: ignore[index]
 # the word a parameterless command may end with ("create a new action", "record the objects")
 COMPLEMENTS: dict[str, tuple[str, ...]] = {
     "create_action": ("a new action", "an action", "action"),
@@ -43,6 +47,12 @@ COMPLEMENTS: dict[str, tuple[str, ...]] = {
 PARTICLES = ("up", "down")  # a two-word verb whose particle may follow the object: "pick the cup up"
 SCENE_LABELS = (*LABELS, "middle")
 _DETERMINERS = ("your", "the")
+# prior weights of a two-step sentence and of a question against a single command, as the n-gram model
+# samples them: both are rarer. PocketSphinx's grammar search showed no effect of JSGF weights, so there
+# the steps are joined by "and then" only: a bare "then" sounds like "the n(ext)" ("switch to the next
+# action" was heard as "switch two then execute")
+COMPOUND_WEIGHT = 0.05
+QUESTION_WEIGHT = 0.2
 _RULE_WORD = re.compile(r"<[^>]*>|/[0-9.]+/|[()\[\]|;=*+]")
 _SLOT = re.compile(r"<(\w+)>")
 _TOKEN = re.compile(r"<[^>]+>|/[0-9.]+/|[()\[\]|]|[^\s()\[\]|<>/]+")
@@ -135,6 +145,8 @@ class _Builder:
         arm_side = [p for side in ("right", "left", "*") for p in vocabulary.phrases("arm", side)]
         self.arm = self.rules.define("arm", (p if p.split()[0] in _DETERMINERS else _seq(det, p) for p in arm_side))
         self.object = self._object(scene)
+        self.both = self.rules.define("both", vocabulary.spoken.get("both", ()))
+        self.distance = self.rules.define("distance", vocabulary.spoken.get("distance", ()))
         number = self.rules.define("number", vocabulary.numbers.values())
         target_word = self.group("target_word", "target", PROCEDURES["switch_action"]["target"])
         self.target = self.rules.define(
@@ -165,7 +177,8 @@ class _Builder:
         anaphor = self.group("anaphor", "anaphor", self.vocabulary.values("anaphor"))
         noun = self.rules.define("noun", [kind or "", generic or ""])
         described = _seq(self.the, _optional(label), _optional(color), noun) if noun else None
-        return self.rules.define("object", [anaphor or "", described or ""])
+        self.described = self.rules.define("described", [described or ""])
+        return self.rules.define("object", [anaphor or "", "<described>" if self.described else ""])
 
     def parameter(self, procedure: str, slot: str) -> str | None:
         if slot == "object":
@@ -194,11 +207,41 @@ class _Builder:
             elif slot[1] == "verb":
                 parts.append(verb)
             elif slot[1] == "arm":
-                parts.append(_optional(self.arm))
+                parts.append(self._arm(procedure))
             elif slot[1] not in said:
-                parts.append(self.parameter(procedure, slot[1]))
+                parts += self._with_distance(procedure, slot[1], last=i == len(tokens) - 1)
             i += 1
+        if "direction" in said and procedure in DISTANCE_PROCEDURES:
+            parts.append(_optional(self.distance))  # "raise your right arm five centimetres"
         return _seq(*parts)
+
+    def _arm(self, procedure: str) -> str:
+        """The optional arm; "both hands" too where the procedure can run on both arms."""
+        if procedure in BOTH_ARM_PROCEDURES and self.both:
+            return _optional(" | ".join(a for a in (self.arm, self.both) if a))
+        return _optional(self.arm)
+
+    def _with_distance(self, procedure: str, slot: str, last: bool) -> list[str | None]:
+        """A slot's phrases, and around a direction an optional distance.
+
+        The distance follows a direction that ends the sentence ("move up five
+        centimetres") and comes before one that an object follows ("move five
+        centimetres towards the cup"), the way each is said.
+        """
+        value = self.parameter(procedure, slot)
+        if slot != "direction" or procedure not in DISTANCE_PROCEDURES or not self.distance:
+            return [value]
+        return [value, _optional(self.distance)] if last else [_optional(self.distance), value]
+
+    def question(self) -> str | None:
+        """Every spoken question of the NLU's question reader, objects named as in commands."""
+        return self.rules.define(
+            "question",
+            (
+                _seq(*(self.described if w == OBJECT else w for w in q.split()))
+                for q in self.vocabulary.spoken.get("question", ())
+            ),
+        )
 
     def command(self, procedure: str) -> str | None:
         alternatives = []
@@ -234,11 +277,16 @@ def build_jsgf(vocabulary: SpeechVocabulary, scene: SceneWords = SceneWords()) -
     """The grammar text; every word in it is a word of ``vocabulary``."""
     builder = _Builder(vocabulary, scene)
     bodies = [body for procedure in PROCEDURES if (body := builder.command(procedure))]
+    step = builder.rules.define("step", bodies)
+    join = builder.rules.define("join", vocabulary.spoken.get("join", ()))
+    question = builder.question()
     polite = builder.rules.define("polite", (w for w in ("please",) if w in vocabulary.fillers))
+    forms = ((1.0, step), (COMPOUND_WEIGHT, _seq(step, join, step)), (QUESTION_WEIGHT, question))
+    said = " | ".join(f"/{weight:g}/ {form}" for weight, form in forms if form)
     lines = [
         "#JSGF V1.0;",
         f"grammar {GRAMMAR_NAME};",
-        f"public <command> = {_seq(_optional(polite), '(' + ' | '.join(bodies) + ')', _optional(polite))};",
+        f"public <command> = {_seq(_optional(polite), '(' + said + ')', _optional(polite))};",
     ]
     lines += [f"<{name}> = {body};" for name, body in builder.rules.bodies.items()]
     return "\n".join(lines) + "\n"

@@ -27,7 +27,11 @@ BOS, EOS = "<s>", "</s>"
 
 
 def sample_sentences(jsgf: str, count: int = SAMPLES, seed: int = SEED) -> list[str]:
-    """``count`` sentences of a grammar (as written by :mod:`grammar`), every alternative equally likely."""
+    """``count`` sentences of a grammar (as written by :mod:`grammar`), alternatives as likely as their weights.
+
+    An alternative without a ``/weight/`` weighs 1, so the model learns the
+    grammar's rarer forms (two steps, questions) as rarely as it weighs them.
+    """
     public, rules = parse_rules(jsgf)
     rng = random.Random(seed)
     return [" ".join(_expand(rules, rules[public], rng)) for _ in range(count)]
@@ -35,7 +39,9 @@ def sample_sentences(jsgf: str, count: int = SAMPLES, seed: int = SEED) -> list[
 
 def _expand(rules: dict[str, list[str]], tokens: list[str], rng: random.Random) -> list[str]:
     """Words of one random path through ``tokens`` (alternatives, optional and grouped parts, rule references)."""
-    chosen = rng.choice(split_top(tokens))
+    alternatives = split_top(tokens)
+    weights = [float(a[0].strip("/")) if a and a[0].startswith("/") else 1.0 for a in alternatives]
+    chosen = rng.choices(alternatives, weights)[0]
     words: list[str] = []
     i = 0
     while i < len(chosen):

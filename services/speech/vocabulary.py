@@ -19,14 +19,21 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
 from services.nlu.lexicon import FILLERS, NUMBER_WORDS, PHRASES
+from services.nlu.templates import sentence_templates
 from services.nlu.weights import LANGUAGE
 
 Implied = tuple[tuple[str, str], ...]  # options a verb already says ("raise" = direction up)
+OBJECT = "{object}"  # where a spoken question names an object
 
 
 @dataclass(frozen=True)
 class SpeechVocabulary:
-    """Phrases by meaning: ``verbs[procedure]`` and ``options[(slot, value)]``."""
+    """Phrases by meaning: ``verbs[procedure]`` and ``options[(slot, value)]``.
+
+    ``spoken`` holds the NLU's forms beyond the command shapes, by kind:
+    ``question``, ``distance``, ``both`` and ``join`` (see
+    :func:`services.nlu.templates.sentence_templates`).
+    """
 
     verbs: dict[str, dict[Implied, tuple[str, ...]]] = field(default_factory=dict)
     options: dict[tuple[str, str], tuple[str, ...]] = field(default_factory=dict)
@@ -34,6 +41,7 @@ class SpeechVocabulary:
     fillers: frozenset[str] = frozenset()
     # every word of the NLU's phrases, also those trimmed away by core(): the fixed words of sentence shapes
     known: frozenset[str] = frozenset()
+    spoken: dict[str, tuple[str, ...]] = field(default_factory=dict)
 
     def phrases(self, slot: str, value: str) -> tuple[str, ...]:
         return self.options.get((slot, value), ())
@@ -46,7 +54,8 @@ class SpeechVocabulary:
         phrases = [p for groups in self.verbs.values() for ps in groups.values() for p in ps]
         phrases += [p for ps in self.options.values() for p in ps]
         phrases += list(self.numbers.values())
-        return {w for p in phrases for w in p.split()} | set(self.fillers)
+        phrases += [p for ps in self.spoken.values() for p in ps]
+        return {w for p in phrases for w in p.split() if w != OBJECT} | set(self.fillers)
 
     def knows(self, phrase: str) -> bool:
         """Whether every word of ``phrase`` is a word of the NLU (kept or not by :meth:`core`)."""
@@ -58,7 +67,7 @@ class SpeechVocabulary:
             proc: {implied: ps[:per_meaning] for implied, ps in groups.items()} for proc, groups in self.verbs.items()
         }
         options = {key: ps[:per_meaning] for key, ps in self.options.items()}
-        return SpeechVocabulary(verbs, options, dict(self.numbers), self.fillers, self.known)
+        return SpeechVocabulary(verbs, options, dict(self.numbers), self.fillers, self.known, self.spoken)
 
     def without_homophones(self, sound: Callable[[str], str]) -> SpeechVocabulary:
         """Within each meaning, only the first of phrases that sound alike ("pick up" / "pickup").
@@ -75,7 +84,12 @@ class SpeechVocabulary:
 
         verbs = {proc: {implied: keep(ps) for implied, ps in groups.items()} for proc, groups in self.verbs.items()}
         return SpeechVocabulary(
-            verbs, {key: keep(ps) for key, ps in self.options.items()}, dict(self.numbers), self.fillers, self.known
+            verbs,
+            {key: keep(ps) for key, ps in self.options.items()},
+            dict(self.numbers),
+            self.fillers,
+            self.known,
+            self.spoken,
         )
 
     def restricted(self, known: Iterable[str]) -> SpeechVocabulary:
@@ -83,7 +97,7 @@ class SpeechVocabulary:
         allowed = set(known)
 
         def keep(phrases: Iterable[str]) -> tuple[str, ...]:
-            return tuple(p for p in phrases if all(w in allowed for w in p.split()))
+            return tuple(p for p in phrases if all(w in allowed or w == OBJECT for w in p.split()))
 
         verbs = {
             proc: {implied: kept for implied, ps in groups.items() if (kept := keep(ps))}
@@ -92,7 +106,12 @@ class SpeechVocabulary:
         options = {key: kept for key, ps in self.options.items() if (kept := keep(ps))}
         numbers = {n: w for n, w in self.numbers.items() if w in allowed}
         return SpeechVocabulary(
-            verbs, options, numbers, frozenset(w for w in self.fillers if w in allowed), self.known & allowed
+            verbs,
+            options,
+            numbers,
+            frozenset(w for w in self.fillers if w in allowed),
+            self.known & allowed,
+            {kind: keep(ps) for kind, ps in self.spoken.items()},
         )
 
 
@@ -130,4 +149,20 @@ def nlu_vocabulary(phrases: Iterable[str] | None = None) -> SpeechVocabulary:
         numbers,
         frozenset(FILLERS),
         frozenset(known),
+        spoken_forms(),
     )
+
+
+def spoken_forms() -> dict[str, tuple[str, ...]]:
+    """The NLU's questions, distances, "both" phrases and step joins, as phrases to say."""
+    templates = sentence_templates()
+    questions: dict[str, list[str]] = templates["questions"]  # type: ignore[assignment]
+    distance: dict[str, list[str]] = templates["distance"]  # type: ignore[assignment]
+    both: dict[str, list[str]] = templates["both"]  # type: ignore[assignment]
+    joins: list[str] = templates["joins"]  # type: ignore[assignment]
+    return {
+        "question": tuple(q for said in questions.values() for q in said),
+        "distance": tuple(distance["phrases"]),
+        "both": tuple(both["phrases"]),
+        "join": tuple(joins),
+    }

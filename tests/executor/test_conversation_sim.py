@@ -211,9 +211,8 @@ def test_both_hands_move_together_and_one_holding_refuses_open_both(stack: Stack
     for arm in ("right", "left"):
         assert stack.ee(arm)[2] - start[arm][2] == pytest.approx(0.08, abs=0.01), arm
     (r0, r1), (l0, l1) = recorder.moving_span("right"), recorder.moving_span("left")
-    # The two arms' requests reach the simulator separately: on a loaded machine their starts were seen up to
-    # 0.13 s of simulated time apart (the design target is 0.05 s, which needs one two-arm request).
-    assert abs(r0 - l0) <= 0.2 and abs(r1 - l1) <= 0.2, f"right {r0:.3f}-{r1:.3f}, left {l0:.3f}-{l1:.3f}"
+    # one two-arm request: both start in the same physics step and, on one time law, finish together
+    assert abs(r0 - l0) <= 0.05 and abs(r1 - l1) <= 0.05, f"right {r0:.3f}-{r1:.3f}, left {l0:.3f}-{l1:.3f}"
     assert len(steps_of(stack)) == 1
 
     ok(stack.command("close", {"arm": "both"}, utterance="close both hands"))

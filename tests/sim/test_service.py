@@ -12,6 +12,7 @@ import pytest
 
 from shared.bus import Bus, RemoteError
 from shared.messages import typed
+from shared.robot import ROBOT
 from tests.processes import Network, ServiceProcess
 
 
@@ -118,6 +119,32 @@ def test_arm_trajectory_is_followed(client: Bus, events: Inbox) -> None:
     assert done.status == "done", done.message
 
 
+def test_one_request_starts_both_arms_in_the_same_step(client: Bus, events: Inbox) -> None:
+    states = Inbox()
+    client.subscribe(client.keys.sim_state, states, schema="sim_state")
+    joints = states.wait().joints
+    arms = {}
+    for arm in ("right", "left"):
+        names = ROBOT.arm_joint_names(arm)
+        start = np.array([joints[n] for n in names])
+        pan = 0.2 if arm == "right" else -0.2  # out of the tuck, away from each arm's shoulder pan limit
+        goal = start + np.array([pan, -0.1, 0.0, 0.15, 0.0, 0.1, 0.0])
+        arms[arm] = {"points": np.linspace(start, goal, 5), "times": np.linspace(0.0, 1.0, 5)}
+    reply = client.request(client.keys.sim_control("arms"), {"arms": arms})
+    ids = reply["motion_ids"]
+    assert set(ids) == {"right", "left"} and ids["right"] != ids["left"]
+    for arm in ("right", "left"):
+        done = events.wait(lambda e, arm=arm: e.motion_id == ids[arm])
+        assert done.status == "done", done.message
+    seen = []
+    while not states.items.empty():
+        seen.append(states.items.get())
+    moving = [tuple(s.moving[arm] for arm in ("right", "left")) for s in seen]
+    assert (True, True) in moving
+    started = next(i for i, m in enumerate(moving) if any(m))
+    assert moving[started] == (True, True), "one arm started a state before the other"
+
+
 BAD_REQUESTS = [
     ("arm", {"arm": "middle", "positions": [0] * 7}, "unknown arm"),
     ("arm", {"arm": "right", "positions": [0, 3.0, 0, 0, 0, 0, 0]}, "r_shoulder_lift_joint = 3.0000 is outside"),
@@ -131,6 +158,9 @@ BAD_REQUESTS = [
         "contact must be true or false",
     ),
     ("arm", {"arm": "right", "positions": [0] * 7, "contact": True}, "contact applies to timed waypoints"),
+    ("arms", {"arms": {}}, "arms must map each arm"),
+    ("arms", {"arms": {"right": {"positions": [0] * 7}, "middle": {"positions": [0] * 7}}}, "unknown arm 'middle'"),
+    ("arms", {"arms": {"left": {"positions": [0] * 7, "contact": True}}}, "arms.left: contact applies"),
     ("gripper", {"arm": "left", "width": 0.2}, "width = 0.2 is outside"),
     ("head", {"pan": 0.0, "tilt": 2.0}, "tilt = 2 is outside"),
     ("torso", {"height": "high"}, "height must be a number"),

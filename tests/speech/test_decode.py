@@ -11,6 +11,7 @@ from services.nlu.infer import CommandResult, Model
 from services.nlu.world import parse_world
 from services.speech import espeak
 from services.speech.audio import AudioError, read_wav, seconds, silence, write_wav
+from services.speech.bench import meaning
 from services.speech.grammar import SceneWords
 from services.speech.recogniser import Recogniser
 from services.speech.vad import UtteranceSplitter
@@ -69,6 +70,36 @@ def test_spoken_command_decodes_to_its_text_and_command(recogniser, tmp_path, te
     assert len(recogniser.decode(pcm, acoustic_scale=0.0)) > 1
     result = Model(parse_world(WORLD)).parse(hypotheses[0].text)
     assert isinstance(result, CommandResult) and result.command.as_dict() == expected
+
+
+@pytest.mark.parametrize(
+    ("text", "voice", "speed", "expected"),
+    [
+        (
+            "move your right hand up five centimetres",
+            "en-us",
+            150,
+            {"procedure": "move_abs_dir", "args": {"arm": "right", "direction": "up", "distance": 0.05}},
+        ),
+        ("open both hands", "en-gb", 150, {"procedure": "open", "args": {"arm": "both"}}),
+        ("what are you holding", "en-us", 150, {"answer": "holding"}),
+        (
+            "pick up the red cup and then place it on the table",
+            "en-gb",
+            150,
+            {
+                "procedure": "pick_up",
+                "args": {"arm": "right", "object": "obj0"},
+                "then": [{"procedure": "place_abs", "args": {"arm": "right", "destination": "table"}}],
+            },
+        ),
+    ],
+)
+def test_the_conversation_forms_are_heard_and_understood(recogniser, text, voice, speed, expected):
+    pcm = np.concatenate([silence(0.3), espeak.synthesise(text, voice, speed), silence(0.3)])
+    hypotheses = recogniser.decode(pcm)
+    # the words may differ ("both arms" for "both hands"), the command may not
+    assert meaning(Model(parse_world(WORLD)).parse(hypotheses[0].text)) == expected, hypotheses[0].text
 
 
 def test_voice_activity_splits_a_stream_into_its_utterances():

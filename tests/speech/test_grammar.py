@@ -5,8 +5,14 @@ from __future__ import annotations
 import pytest
 
 from services.nlu.commands import PROCEDURES
+from services.nlu.infer import Model
+from services.nlu.lexicon import NUMBER_WORDS
 from services.nlu.lexicon import vocabulary as nlu_words
+from services.nlu.modifiers import extract
+from services.nlu.results import Answer
+from services.nlu.templates import sentence_templates
 from services.nlu.tokens import canonical
+from services.nlu.world import parse_world
 from services.speech.grammar import SceneWords, build_jsgf, grammar_words, in_grammar, sentence_matcher
 from services.speech.ngram import arpa, sample_sentences
 from services.speech.recogniser import Recogniser
@@ -31,14 +37,18 @@ def test_every_grammar_word_is_a_word_the_nlu_knows(full, per_meaning):
     vocabulary = full.core(per_meaning) if per_meaning else full
     words = grammar_words(build_jsgf(vocabulary, SCENE))
     assert len(words) > 40
-    unknown = sorted(w for w in words if canonical(w) != w)
+    # questions, distances and "both" are read by the NLU's question and modifier readers, not its lexicon
+    spoken = {w for phrases in full.spoken.values() for p in phrases for w in p.split()}
+    unknown = sorted(w for w in words if canonical(w) != w and w not in spoken)
     assert unknown == []
+    assert {"centimetres", "both", "holding", "where", "and", "then"} <= words
 
 
 def test_every_procedure_has_a_sentence_rule(full):
     jsgf = build_jsgf(full.core(3))
+    steps = jsgf.split("<step> =")[1].splitlines()[0]
     for procedure in PROCEDURES:
-        assert f"<command_{procedure}>" in jsgf.split("public <command> =")[1].splitlines()[0]
+        assert f"<command_{procedure}>" in steps
 
 
 def test_the_grammar_follows_the_vocabulary_it_is_given(full):
@@ -70,6 +80,22 @@ def test_the_scene_keeps_only_the_object_words_that_can_name_an_object_in_view(f
         ("place it near", False),  # a partial path: the relation lacks its object
         ("move your right hand above the blue box", False),  # not in this scene
         ("pick up", False),
+        ("move your right hand up five centimetres", True),
+        ("raise your left arm twenty five centimetres", True),
+        ("move your right hand three centimetres towards the red cup", True),
+        ("move your right hand up forty centimetres", False),  # farther than one move may go
+        ("open both hands", True),
+        ("move both arms to the side", True),
+        ("pick up the red cup with both hands", False),  # a pick-up is one hand's
+        ("what are you holding", True),
+        ("where is the leftmost cup", True),
+        ("where is the blue box", False),
+        ("undo", True),
+        ("again", True),
+        ("pick up the red cup and then place it on the table", True),
+        ("pick up the red cup then place it on the table", False),  # a bare "then" is heard in "the"
+        ("move up and then open both hands", True),
+        ("what do you see then undo", False),  # a question is not a step
     ],
 )
 def test_the_matcher_accepts_exactly_the_grammar_sentences(full, sentence, member):
@@ -91,6 +117,16 @@ def test_the_ngram_model_is_built_from_grammar_sentences(full):
     } | {"<s>", "</s>"}
 
 
+def test_two_steps_and_questions_are_as_rare_in_the_ngram_model_as_the_grammar_weighs_them(full):
+    sentences = sample_sentences(build_jsgf(full.core(3)), 6000)
+    compounds = sum(any(f" {join} " in s for join in full.spoken["join"]) for s in sentences) / len(sentences)
+    questions = sum(s.removeprefix("please ").split()[0] in ("what", "where", "how") for s in sentences) / len(
+        sentences
+    )
+    assert 0.01 < compounds < 0.1  # 0.05 against 1 for a single command
+    assert 0.08 < questions < 0.25  # 0.2
+
+
 def test_recogniser_loads_the_grammar_and_swaps_it_when_the_scene_changes(full):
     recogniser = Recogniser(full, SCENE)
     before = recogniser.jsgf
@@ -100,3 +136,20 @@ def test_recogniser_loads_the_grammar_and_swaps_it_when_the_scene_changes(full):
     recogniser.set_scene(SceneWords(frozenset({"green"}), frozenset({"box"})))
     assert recogniser.jsgf != before
     assert "green" in grammar_words(recogniser.jsgf) and "red" not in grammar_words(recogniser.jsgf)
+
+
+def test_every_spoken_question_and_distance_means_what_the_nlu_reads_from_it(full):
+    model = Model(parse_world({"objects": TWO_CUPS, "robot": {"grippers": {"right": "open", "left": "open"}}}))
+    for topic, said in sentence_templates()["questions"].items():  # type: ignore[union-attr]
+        for question in said:
+            result = model.parse(question.format(object="the leftmost cup"))
+            assert isinstance(result, Answer) and result.topic == topic, question
+    distances = [p for p in full.spoken["distance"] if "centimetre" in p]
+    assert distances[0] == "one centimetre" and distances[-1] == "thirty centimetres" and len(distances) == 14
+    for phrase in distances:
+        number = phrase.split(" centimetre")[0]
+        centimetres = (
+            20 + NUMBER_WORDS[number.split()[1]] if number.startswith("twenty ") else NUMBER_WORDS.get(number, 30)
+        )
+        assert extract(f"move up {phrase}").distance == pytest.approx(centimetres / 100), phrase
+    assert extract("open both hands").both

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import json
 from pathlib import Path
 
 import msgspec
@@ -22,7 +23,7 @@ BOOK = load_tasks()
 RUNS = [(task.id, style) for task in BOOK.tasks for style in STYLES]
 
 
-def test_the_five_tasks_of_the_paper_are_scripted_in_both_styles() -> None:
+def test_the_five_tasks_of_the_paper_are_scripted_in_every_style() -> None:
     assert [t.id for t in BOOK.tasks] == ["task1", "task2", "task3", "task4", "task5"]
     for task in BOOK.tasks:
         assert set(task.styles) == set(STYLES)
@@ -46,12 +47,51 @@ def test_task4_minimal_language_still_saves_words() -> None:
     assert task.words("minimal") < task.words("full")
 
 
+def test_task4_in_conversation_fits_its_word_budget_below_the_papers_minimal() -> None:
+    task = BOOK.task("task4")
+    assert task.words("conversational") <= figures.TASK4_CONVERSATIONAL_WORDS < BOOK.paper["task4_words"]["minimal"]
+
+
+@pytest.mark.parametrize("task_id", [t.id for t in BOOK.tasks])
+def test_conversation_uses_the_new_forms_and_fewer_utterances(task_id: str) -> None:
+    task = BOOK.task(task_id)
+    script = task.script("conversational")
+    assert any(u.expect.then for u in script), "no utterance joins steps with 'then'"
+    assert len(script) < len(task.script("minimal"))
+
+
+def test_conversational_forms_across_the_tasks() -> None:
+    expected = [e for t in BOOK.tasks for u in t.script("conversational") for e in u.expect.commands]
+    assert any(e.args.get("arm") == "both" for e in expected)
+    assert any("distance" in e.args for e in expected)
+    assert any(e.procedure == "repeat" for e in expected)
+
+
+def test_a_script_whose_later_step_is_misread_is_caught(tmp_path: Path) -> None:
+    task = BOOK.task("task1")
+    line = task.script("conversational")[1]
+    wrong = {
+        **line.expect.as_dict(),
+        "then": [{"procedure": "place_rel", "args": {"arm": "right", "relation": "next_to", "object": "obj1"}}],
+    }
+    bad = load_tasks(_one_task_file(tmp_path, task.scene, [{"text": line.text, "expect": wrong}]))
+    (rehearsed,) = rehearse(bad.task("t"), "conversational")
+    assert not rehearsed.ok and "expected" in rehearsed.explain()
+
+
 @pytest.mark.parametrize(
     ("text", "words"),
     [("Move your right hand above the red cup.", 8), ("above blue", 2), ("pick it up", 3), ("  side ", 1)],
 )
 def test_words_are_counted_as_typed(text: str, words: int) -> None:
     assert word_count(text) == words
+
+
+def _one_task_file(folder: Path, scene: str, lines: list[dict]) -> Path:
+    path = folder / "one.json"
+    task = {"id": "t", "title": "x", "scene": scene, "success": {"kind": "stacked", "top": "obj0", "base": "obj1"}}
+    path.write_text(json.dumps({"tasks": [{**task, "replay_seed": 1, "styles": {"conversational": lines}}]}))
+    return path
 
 
 def test_a_broken_task_file_is_named(tmp_path: Path) -> None:
@@ -173,17 +213,20 @@ def test_outputs_are_written_and_compared_with_the_paper(tmp_path: Path) -> None
         _run("task1", "minimal", 10, 30.0, True, 0.25),
         _run("task4", "full", 53, 60.0, False, 0.1),
         _run("task4", "minimal", 24, 50.0, False, 0.1),
+        _run("task4", "conversational", 20, 35.0, True, 0.1),
     ]
     rows = figures.table_rows(runs)
     figures.write_csv(rows, tmp_path / "tasks.csv")
     figures.chart(runs, tmp_path / "tasks.png")
     with open(tmp_path / "tasks.csv") as handle:
         read = list(csv.DictReader(handle))
-    assert [r["words"] for r in read] == ["33", "10", "53", "24"]
+    assert [r["words"] for r in read] == ["33", "10", "53", "24", "20"]
     assert read[1]["median_latency_ms"] == "250"
     assert (tmp_path / "tasks.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     lines = figures.comparison(runs, BOOK.paper)
     assert lines[0].startswith("task1: words 33 -> 10 (30%); paper: under half (holds here)")
     assert "paper: 42 -> 27 words" in lines[1]
-    assert lines[-1].endswith("3/4 within the 200 ms target")
+    assert lines[2].startswith("task4: conversational 20 words in 3 utterances (minimal: 24 in 3)")
+    assert "target <= 20 words (met; paper's minimal: 27)" in lines[2] and lines[2].endswith("replay yes")
+    assert lines[-1].endswith("4/5 within the 200 ms target")
     assert "| task1 t | minimal | 3 | 10 | yes | 30.0 | yes | 250 |" in figures.markdown_table(rows)
