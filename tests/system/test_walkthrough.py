@@ -29,19 +29,20 @@ README = Path(__file__).resolve().parents[2] / "README.md"
 HEADING = "## Your first minutes"
 RED_CUP, BLUE_CUP, BOX, PLATE = "obj0", "obj1", "obj2", "obj3"  # the default scene's ids (services/sim/scenes)
 DESCRIPTION = re.compile(r"\bthe (?:[a-z]+ )*?(cup|box|plate|bowl|object)\b")
-LIFTED = 0.05  # metres: a pick-up raises the cup at least this far above where it stood
+LIFTED = 0.05  # metres: a pick-up (or a lift) raises the cup at least this far above where it was
 SETTLE = 1.0  # seconds for a released cup to come to rest before it is judged
 
-# what each row of the walkthrough leaves the red cup doing: lifted, or placed (relation, landmark)
-OUTCOMES: list[tuple[str, str | None]] = [
-    ("lifted", None),
-    ("on_top_of", PLATE),
-    ("lifted", None),
-    ("next_to", BLUE_CUP),
-    ("lifted", None),
-    ("on_top_of", BOX),
-    ("lifted", None),
-    ("down", None),
+# what each row of the walkthrough leaves a cup doing: lifted, or placed (relation, landmark)
+OUTCOMES: list[tuple[str, str, str | None]] = [
+    (RED_CUP, "lifted", None),
+    (RED_CUP, "next_to", BLUE_CUP),
+    (RED_CUP, "lifted", None),
+    (RED_CUP, "on_top_of", PLATE),
+    (BLUE_CUP, "lifted", None),
+    (BLUE_CUP, "lifted", None),
+    (BLUE_CUP, "down", None),
+    (BLUE_CUP, "lifted", None),
+    (BLUE_CUP, "on_top_of", BOX),
 ]
 
 
@@ -71,8 +72,8 @@ def test_the_readme_walkthrough_is_the_one_judged() -> None:
 
 def test_the_first_minutes_happen_as_the_readme_says(runner: TaskRunner) -> None:
     runner.load_scene("default")
-    for (typed, answer), (outcome, landmark) in zip(walkthrough(), OUTCOMES, strict=True):
-        before = np.asarray(runner.watch.truth[RED_CUP].position, dtype=float)
+    for (typed, answer), (cup, outcome, landmark) in zip(walkthrough(), OUTCOMES, strict=True):
+        before = np.asarray(runner.watch.truth[cup].position, dtype=float)
         step = runner.say(typed)
         said = " ".join(line.split(": ", 1)[1] for line in step.said)
         assert step.ok, f"{typed!r}: {step.problem}"
@@ -84,5 +85,5 @@ def test_the_first_minutes_happen_as_the_readme_says(runner: TaskRunner) -> None
             )
         else:
             time.sleep(SETTLE)
-            verdict = placed(runner.watch.truth, RED_CUP, outcome, landmark)
+            verdict = placed(runner.watch.truth, cup, outcome, landmark)
             assert verdict.success, f"{typed!r}: {verdict.reason}"
