@@ -26,6 +26,7 @@ import numpy as np
 from hfpbd.tasks.stack import LocalStack
 from shared.bus import Bus
 from shared.config import free_port, loopback_options
+from shared.messages import SimState
 from shared.robot import ROBOT
 
 ARM = "right"
@@ -47,10 +48,10 @@ class ArmWatch:
         bus.subscribe(bus.keys.sim_state, self._on_state, schema="sim_state")
         bus.subscribe(bus.keys.executor_state, self._on_executor, history=True)
 
-    def _on_state(self, message: dict[str, Any]) -> None:
-        q = np.array([message["joints"].get(n, 0.0) for n in self.names], float)
+    def _on_state(self, message: SimState) -> None:
+        q = np.array([message.joints.get(n, 0.0) for n in self.names], float)
         with self._changed:
-            self.samples.append((float(message["stamp"]), float(message["sim_time"]), q))
+            self.samples.append((float(message.stamp), float(message.sim_time or 0.0), q))
             self._changed.notify_all()
 
     def _on_executor(self, message: dict[str, Any]) -> None:

@@ -33,7 +33,7 @@ from hfpbd.tasks.stack import LocalStack
 from shared.bus import Bus
 from shared.codec import decode, encode
 from shared.config import free_port, loopback_options
-from shared.messages import TYPES, Objects
+from shared.messages import TYPES, Objects, SimState, Truth, Utterance
 
 # stream key (under pbd/<ns>/) -> the schema its readers hold it to
 STREAMS: dict[str, str] = {
@@ -218,22 +218,23 @@ class SimView:
     """The simulator's newest robot state and ground truth, to tell whether the junk moved anything."""
 
     def __init__(self, bus: Bus) -> None:
-        self.state: dict[str, Any] = {}
-        self.truth: dict[str, Any] = {}
+        self.state: SimState | None = None
+        self.truth: Truth | None = None
         bus.subscribe(bus.keys.sim_state, lambda m: setattr(self, "state", m), schema="sim_state", latest_only=True)
-        bus.subscribe(bus.keys.truth, lambda m: setattr(self, "truth", m), latest_only=True)
+        bus.subscribe(bus.keys.truth, lambda m: setattr(self, "truth", m), schema="truth", latest_only=True)
 
     def now(self, timeout: float = 30.0) -> dict[str, Any]:
         """Joints, object positions, scene and pause flag, once both streams have been heard."""
         deadline = time.monotonic() + timeout
         while not (self.state and self.truth) and time.monotonic() < deadline:
             time.sleep(0.1)
+        state, truth = self.state, self.truth
         return {
-            "joints": dict(self.state.get("joints", {})),
-            "objects": {o["id"]: o["position"] for o in self.truth.get("objects", [])},
-            "scene": self.truth.get("scene"),
-            "paused": self.state.get("paused"),
-            "sim_time": self.state.get("sim_time"),
+            "joints": dict(state.joints) if state else {},
+            "objects": {o.id: list(o.position) for o in truth.objects} if truth else {},
+            "scene": truth.scene if truth else None,
+            "paused": state.paused if state else None,
+            "sim_time": state.sim_time if state else None,
         }
 
     def changes(self, before: dict[str, Any]) -> list[str]:
@@ -322,7 +323,7 @@ def run(bus: Bus, children: Sequence[ServiceProcess], count: int, seed: int = 0)
             made_up.append(message)
 
     bus.subscribe(bus.keys.objects, on_objects, schema="objects")
-    heard: list[dict[str, Any]] = []  # utterances that pass the schema: only speech could have made them, from junk
+    heard: list[Utterance] = []  # utterances that pass the schema: only speech could have made them, from junk
     bus.subscribe(bus.keys.utterance, heard.append, schema="utterance")
     started = {child.name for child in children}
     sim = SimView(bus) if "sim" in started else None

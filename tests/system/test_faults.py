@@ -31,6 +31,7 @@ from textual.pilot import Pilot
 
 from shared.bus import Bus
 from shared.config import free_port, loopback_options
+from shared.messages import Say
 from tests.processes import ROOT
 from tests.tui.helpers import until
 from tui.app import PbdApp
@@ -47,7 +48,7 @@ class Robot:
 
     def __init__(self, bus: Bus) -> None:
         self.bus = bus
-        self.said: list[dict[str, Any]] = []
+        self.said: list[Say] = []
         self.state: dict[str, Any] = {}
         self.sim: dict[str, Any] = {}
         self._lock = threading.Lock()
@@ -55,7 +56,7 @@ class Robot:
         bus.subscribe(bus.keys.executor_state, lambda m: self._set("state", m), history=True)
         bus.subscribe(bus.keys.sim_state, lambda m: self._set("sim", m), latest_only=True)
 
-    def _on_say(self, message: dict[str, Any]) -> None:
+    def _on_say(self, message: Say) -> None:
         with self._lock:
             self.said.append(message)
 
@@ -69,7 +70,7 @@ class Robot:
 
     def lines(self, since: int, kind: str | None = None) -> list[str]:
         with self._lock:
-            return [m["text"] for m in self.said[since:] if kind is None or m["kind"] == kind]
+            return [m.text for m in self.said[since:] if kind is None or m.kind == kind]
 
     def moving(self) -> bool:
         return any((self.sim.get("moving") or {}).values())
