@@ -48,10 +48,8 @@ def test_objects_flow_and_a_spoken_command_moves_the_arm(split: tuple[TaskRunner
     runner, _ = split
     runner.wait_for_services()
     truth = runner.load_scene("default")
-    red = np.asarray(truth["obj0"]["position"])
-    assert {o["color"] for o in runner.watch.objects.values()} >= {"red", "blue"}, (
-        "perception saw nothing through the sim"
-    )
+    red = np.asarray(truth["obj0"].position)
+    assert {o.color for o in runner.watch.objects.values()} >= {"red", "blue"}, "perception saw nothing through the sim"
 
     step = runner.say(
         Utterance(
@@ -60,6 +58,7 @@ def test_objects_flow_and_a_spoken_command_moves_the_arm(split: tuple[TaskRunner
         )
     )
     assert step.ok, step.problem
-    tool = np.asarray(runner.watch.sim["ee"]["right"])
+    assert runner.watch.sim is not None
+    tool = np.asarray(runner.watch.sim.ee["right"])
     assert np.linalg.norm(tool[:2] - red[:2]) < 0.04, "the right hand is not over the red cup"
     assert tool[2] > red[2] + 0.08

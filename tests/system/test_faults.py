@@ -164,7 +164,7 @@ async def test_each_service_killed_mid_work_is_restarted_and_the_robot_carries_o
 
             await until(
                 pilot,
-                lambda: sum(o.get("type") == "cup" for o in app.world.objects.values()) >= 2 and bool(app.world.reach),
+                lambda: sum(o.type == "cup" for o in app.world.objects.values()) >= 2 and bool(app.world.reach),
                 timeout=240,
                 what="every service up, the cups seen and reach known",
             )

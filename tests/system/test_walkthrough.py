@@ -79,10 +79,8 @@ def test_the_first_minutes_happen_as_the_readme_says(runner: TaskRunner) -> None
         assert step.ok, f"{typed!r}: {step.problem}"
         assert by_kind(said) == by_kind(answer), f"{typed!r}: the robot said {said!r}, the README says {answer!r}"
         if outcome == "lifted":
-            now = np.asarray(runner.watch.truth[RED_CUP].position, dtype=float)
-            assert now[2] > before[2] + LIFTED, (
-                f"{typed!r}: the red cup is not lifted (z {before[2]:.3f} → {now[2]:.3f})"
-            )
+            now = np.asarray(runner.watch.truth[cup].position, dtype=float)
+            assert now[2] > before[2] + LIFTED, f"{typed!r}: {cup} is not lifted (z {before[2]:.3f} → {now[2]:.3f})"
         else:
             time.sleep(SETTLE)
             verdict = placed(runner.watch.truth, cup, outcome, landmark)
