@@ -258,7 +258,7 @@ async def test_each_service_killed_mid_work_is_restarted_and_the_robot_carries_o
 
             assert robot.robot["action"] == 1 and robot.robot["actions"] == [4]
             assert robot.robot["steps"][0] == taught[0]
-            said = [m["text"] for m in robot.said]
+            said = [m.text for m in robot.said]
             assert not [t for t in said if INTERNAL.search(t)], [t for t in said if INTERNAL.search(t)]
     finally:
         bus.close()
