@@ -107,7 +107,6 @@ class PbdApp(App[None]):
         self.probe_seconds = probe_seconds
         self.sub_title = f"robot {options.namespace!r}"
         self._lost: set[str] = set()
-        self._answers: set[str] = set()  # answers shown from nlu/result, whose dialog/say copy is not shown again
         self._phrases: list[str] = []
 
     def compose(self) -> ComposeResult:
@@ -193,9 +192,6 @@ class PbdApp(App[None]):
     # -- what the services say -----------------------------------------------
     @while_running
     def on_said(self, event: events.Said) -> None:
-        if event.kind == "info" and event.text in self._answers:
-            self._answers.discard(event.text)  # the NLU's spoken copy of an answer already shown as one
-            return
         self.main.query_one(Conversation).add(event.kind, event.text)
         if event.kind == "clarify" and event.candidates:
             self.main.query_one(ClarifyPrompt).ask(event.text, event.candidates)
@@ -203,11 +199,6 @@ class PbdApp(App[None]):
     @while_running
     def on_understood(self, event: events.Understood) -> None:
         result = event.result
-        if result.kind == "answer" and result.text is not None:
-            # shown from the result, in its own style: the dialog/say copy carries the same words as "info"
-            self._answers.add(result.text)
-            self.main.query_one(Conversation).add("answer", result.text)
-            return
         if result.kind != "command":
             return
         self.main.query_one(ClarifyPrompt).close()
