@@ -40,6 +40,7 @@ class Descriptor:
     points: int
     confidence: float
     bottom_on_table: bool
+    raised: bool = False  # seen standing on another object it touches (split from it by colour)
 
     def as_message(self) -> dict:
         """The ``perception/objects`` item (``id``, ``held_by`` and ``visible`` come from tracking)."""
@@ -60,8 +61,12 @@ class Descriptor:
         }
 
 
-def describe(xyz: np.ndarray, rgb: np.ndarray, plane: Plane) -> Descriptor:
-    """Descriptor of one cluster: ``xyz`` (N, 3) base-frame points, ``rgb`` (N, 3) their colours."""
+def describe(xyz: np.ndarray, rgb: np.ndarray, plane: Plane, raised: bool = False) -> Descriptor:
+    """Descriptor of one cluster: ``xyz`` (N, 3) base-frame points, ``rgb`` (N, 3) their colours.
+
+    ``raised``: the cluster is known to stand on another object (a cup on a
+    plate), so its lowest point is its bottom however close to the table.
+    """
     xy = xyz[:, :2].astype(np.float32)
     lo_xy, hi_xy = xy.min(axis=0), xy.max(axis=0)
     centre_xy = (lo_xy + hi_xy) / 2
@@ -69,7 +74,7 @@ def describe(xyz: np.ndarray, rgb: np.ndarray, plane: Plane) -> Descriptor:
     heights = plane.height(xyz)
     top = float(heights.max())
     lowest = float(heights.min())
-    resting = lowest <= RESTING_GAP
+    resting = lowest <= RESTING_GAP and not raised
     bottom = 0.0 if resting else lowest
     z_lo, z_hi = table_z + bottom, table_z + top
 
@@ -98,6 +103,7 @@ def describe(xyz: np.ndarray, rgb: np.ndarray, plane: Plane) -> Descriptor:
         points=count,
         confidence=float(confidence),
         bottom_on_table=resting,
+        raised=raised,
     )
 
 

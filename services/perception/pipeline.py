@@ -1,7 +1,7 @@
 """One cloud in, the objects on the table out: the stages in order.
 
 valid points → table plane → points above it → minus the robot's arms →
-top-down clusters → descriptors → only what is supported (on the table, on
+top-down clusters → stacked objects apart → descriptors → only what is supported (on the table, on
 another object, or in a gripper: anything else floating is a glimpse of the
 robot's own arm). Each stage is its own module; this one only
 wires them and holds their settings, so tests and the benchmark run exactly
@@ -18,7 +18,8 @@ from services.perception.cloud import camera_position, cloud_from_message
 from services.perception.descriptors import Descriptor, describe
 from services.perception.plane import Plane, PlaneSettings, find_table
 from services.perception.robot_mask import robot_points, segments_from_states
-from services.perception.segment import SegmentSettings, cluster, object_candidates, table_outline
+from services.perception.segment import SegmentSettings, cluster, min_points, object_candidates, table_outline
+from services.perception.stacking import split_stacked
 from services.perception.support import supported
 from services.perception.table_edges import TableExtent, table_extent
 from services.perception.tracking import holding_tools
@@ -74,7 +75,9 @@ def detect(
     above, xyz = above[~robot], xyz[~robot]
     groups = cluster(xyz, above, cloud.shape, outline, settings.segment)
     rgb = cloud.rgb[above]
+    pieces = split_stacked(height[above], rgb, groups, min_points(cloud.shape, settings.segment))
     camera = camera_position(message)
-    objects = supported([describe(xyz[g], rgb[g], plane) for g in groups], holding_tools(state), camera)
+    described = [describe(xyz[p.members], rgb[p.members], plane, raised=p.raised) for p in pieces]
+    objects = supported(described, holding_tools(state), camera)
     objects.sort(key=lambda d: (round(float(d.position[0]), 3), round(float(d.position[1]), 3)))
     return Detection(objects, plane, outline, extent)

@@ -81,15 +81,20 @@ def cluster(
     order = np.argsort(labels, kind="stable")
     bounds = np.flatnonzero(np.diff(labels[order])) + 1
     pieces = sorted(np.split(order, bounds), key=len, reverse=True)
-    min_points = max(10, round(settings.min_points_640x480 * height * width / (640 * 480)))
     contour = outline.astype(np.float32).reshape(-1, 1, 2)
     groups = []
-    for members in _merge_contained(xyz, pieces, min_points):
+    for members in _merge_contained(xyz, pieces, min_points(shape, settings)):
         centre = xyz[members, :2].mean(axis=0)
         if cv2.pointPolygonTest(contour, (float(centre[0]), float(centre[1])), True) < -settings.edge_margin:
             continue
         groups.append(members)
     return groups
+
+
+def min_points(shape: tuple[int, int], settings: SegmentSettings) -> int:
+    """The fewest points an object has in an image of ``shape``: fewer is noise."""
+    height, width = shape
+    return max(10, round(settings.min_points_640x480 * height * width / (640 * 480)))
 
 
 def _merge_contained(xyz: np.ndarray, pieces: list[np.ndarray], min_points: int) -> list[np.ndarray]:

@@ -26,12 +26,16 @@ MIN_FOOTPRINT = 0.005  # m: the narrowest a cluster's top-down box counts as
 def supported(objects: Sequence[Descriptor], holding: Mapping[str, np.ndarray], camera: np.ndarray) -> list[Descriptor]:
     """The ``objects`` that stand on the table or another object, or hang in a holding gripper.
 
+    One seen touching the object under it (``raised``) stands on it, however
+    little of that object shows around it.
+
     ``camera`` is the camera's position, to tell a hidden bottom from a missing one.
     """
     return [
         o
         for o in objects
         if o.bottom_on_table
+        or o.raised
         or _near_a_gripper(o, holding)
         or _stands_on_another(o, objects)
         or _bottom_hidden(o, objects, camera)

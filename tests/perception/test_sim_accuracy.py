@@ -6,6 +6,7 @@ scene, camera and cloud conversion as ``hfpbd sim``), rendered once per scene.
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from services.perception.evaluate import Score, score
@@ -13,6 +14,7 @@ from services.perception.pipeline import detect
 
 sim_world = pytest.importorskip("services.sim.world", reason="the simulator library is not available")
 from services.sim.cloud import cloud_message  # noqa: E402
+from services.sim.layout import TABLE_TOP_Z  # noqa: E402
 from services.sim.scene_file import available_scenes, load_scene, with_positions  # noqa: E402
 from shared.messages import SimState, as_received  # noqa: E402
 
@@ -72,3 +74,29 @@ def test_cups_one_centimetre_apart_are_two_objects(world, placement):
     result = observe(world, with_positions(load_scene("refexp_2_cups"), CLOSE_PAIRS[placement]))
     assert result.found == 2 and result.phantoms == 0
     assert max(result.centre_errors) <= 0.01
+
+
+# A cup put on the default table's plate (1.5 cm high) or green box (6 cm): it touches what it stands on.
+CUP_HALF = 0.05
+ON_TOP = {
+    "red cup on the plate": {"obj0": [0.63, 0.0, TABLE_TOP_Z + 0.015 + CUP_HALF]},
+    "red cup off-centre on the plate": {"obj0": [0.66, 0.03, TABLE_TOP_Z + 0.015 + CUP_HALF]},
+    "blue cup on the box": {"obj1": [0.48, 0.0, TABLE_TOP_Z + 0.06 + CUP_HALF]},
+}
+
+
+@pytest.mark.parametrize("placement", sorted(ON_TOP))
+def test_a_cup_standing_on_another_object_is_seen_apart_from_it(world, placement):
+    scene = with_positions(load_scene("default"), ON_TOP[placement])
+    world.load(scene)
+    world.settle(0.5)
+    message = as_received("cloud", cloud_message(world.capture(), world.sim_time))
+    detected = detect(message, sim_state(world)).objects
+    cup_id = next(iter(ON_TOP[placement]))
+    cup = next(t for t in world.truth() if t["id"] == cup_id)
+    seen = [d for d in detected if (d.color, d.type) == (cup["color"], "cup")]
+    assert len(seen) == 1, [(d.color, d.type) for d in detected]
+    assert np.linalg.norm(seen[0].position - np.asarray(cup["position"])) <= 0.01
+    assert abs(seen[0].size[2] - cup["size"][2]) <= 0.015, "the cup took in what it stands on"
+    words = sorted((d.color, d.type) for d in detected)
+    assert words == sorted((t["color"], t["type"]) for t in world.truth()), "an object vanished or was misnamed"
