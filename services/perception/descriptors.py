@@ -41,6 +41,7 @@ class Descriptor:
     confidence: float
     bottom_on_table: bool
     raised: bool = False  # seen standing on another object it touches (split from it by colour)
+    clipped: bool = False  # runs off the picture's edge: only part of it was seen
 
     def as_message(self) -> dict:
         """The ``perception/objects`` item (``id``, ``held_by`` and ``visible`` come from tracking)."""
@@ -61,11 +62,12 @@ class Descriptor:
         }
 
 
-def describe(xyz: np.ndarray, rgb: np.ndarray, plane: Plane, raised: bool = False) -> Descriptor:
+def describe(xyz: np.ndarray, rgb: np.ndarray, plane: Plane, raised: bool = False, clipped: bool = False) -> Descriptor:
     """Descriptor of one cluster: ``xyz`` (N, 3) base-frame points, ``rgb`` (N, 3) their colours.
 
     ``raised``: the cluster is known to stand on another object (a cup on a
     plate), so its lowest point is its bottom however close to the table.
+    ``clipped``: the cluster runs off the picture, so it is only part of an object.
     """
     xy = xyz[:, :2].astype(np.float32)
     lo_xy, hi_xy = xy.min(axis=0), xy.max(axis=0)
@@ -104,6 +106,7 @@ def describe(xyz: np.ndarray, rgb: np.ndarray, plane: Plane, raised: bool = Fals
         confidence=float(confidence),
         bottom_on_table=resting,
         raised=raised,
+        clipped=clipped,
     )
 
 

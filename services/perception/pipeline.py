@@ -10,6 +10,7 @@ what the service runs.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -23,6 +24,7 @@ from services.perception.stacking import split_stacked
 from services.perception.support import supported
 from services.perception.table_edges import TableExtent, table_extent
 from services.perception.tracking import holding_tools
+from services.perception.view import View
 from shared.messages import Cloud as CloudMessage
 from shared.messages import SimState
 
@@ -43,6 +45,7 @@ class Detection:
     plane: Plane
     table_outline: np.ndarray
     table_extent: TableExtent
+    view: View  # what lay inside the picture
 
 
 def detect(
@@ -50,12 +53,14 @@ def detect(
     state: SimState | None = None,
     settings: Settings = Settings(),
     earlier: SimState | None = None,
+    known: Sequence[Descriptor] = (),
 ) -> Detection:
     """Objects in the ``sim/cloud`` ``message``; ``state`` (``sim/state``) masks the arms.
 
     ``earlier`` is a second state (the one just before the cloud when
     ``state`` is the one just after it): the arms are masked at both, so an
-    arm that moved between them is covered all along.
+    arm that moved between them is covered all along. ``known`` are the
+    objects tracked so far, which may hold up what is seen standing on them.
 
     Raises :class:`~services.perception.cloud.CloudError` when the cloud is
     unusable (empty, malformed, no table in view).
@@ -77,7 +82,11 @@ def detect(
     rgb = cloud.rgb[above]
     pieces = split_stacked(height[above], rgb, groups, min_points(cloud.shape, settings.segment))
     camera = camera_position(message)
-    described = [describe(xyz[p.members], rgb[p.members], plane, raised=p.raised) for p in pieces]
-    objects = supported(described, holding_tools(state), camera)
+    view = View(camera, cloud.xyz, cloud.valid, cloud.shape)
+    described = [
+        describe(xyz[p.members], rgb[p.members], plane, raised=p.raised, clipped=view.clipped(above[p.members]))
+        for p in pieces
+    ]
+    objects = supported(described, holding_tools(state), camera, known)
     objects.sort(key=lambda d: (round(float(d.position[0]), 3), round(float(d.position[1]), 3)))
-    return Detection(objects, plane, outline, extent)
+    return Detection(objects, plane, outline, extent, view)

@@ -124,7 +124,7 @@ class PerceptionService:
         assert isinstance(cloud, Cloud)
         state, earlier = self.around(cloud.sim_time)
         try:
-            detection = detect(cloud, state, self.settings, earlier)
+            detection = detect(cloud, state, self.settings, earlier, self.tracker.standing())
         except CloudError as exc:
             self._refuse(message, str(exc))
             return
@@ -138,7 +138,10 @@ class PerceptionService:
         arms = segments_from_states([state, earlier])
         camera = camera_position(cloud)
         self._objects = self.tracker.update(
-            detection.objects, time.monotonic(), state, hidden=lambda position: hides(camera, position, arms)
+            detection.objects,
+            time.monotonic(),
+            state,
+            hidden=lambda position: hides(camera, position, arms) or not detection.view.sees(position),
         )
         plane = detection.plane
         centre = detection.table_outline.mean(axis=0)

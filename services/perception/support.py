@@ -23,8 +23,17 @@ FOOTPRINT_SHARE = 0.3  # share of a cluster's footprint that must lie over its s
 MIN_FOOTPRINT = 0.005  # m: the narrowest a cluster's top-down box counts as
 
 
-def supported(objects: Sequence[Descriptor], holding: Mapping[str, np.ndarray], camera: np.ndarray) -> list[Descriptor]:
+def supported(
+    objects: Sequence[Descriptor],
+    holding: Mapping[str, np.ndarray],
+    camera: np.ndarray,
+    known: Sequence[Descriptor] = (),
+) -> list[Descriptor]:
     """The ``objects`` that stand on the table or another object, or hang in a holding gripper.
+
+    ``known`` are the objects seen before (tracked): one may be hidden now
+    under what stands on it, as a box under the cup a hand just put on it
+    while the hand above hides the box's sides, and it still holds that up.
 
     One seen touching the object under it (``raised``) stands on it, however
     little of that object shows around it.
@@ -37,7 +46,7 @@ def supported(objects: Sequence[Descriptor], holding: Mapping[str, np.ndarray], 
         if o.bottom_on_table
         or o.raised
         or _near_a_gripper(o, holding)
-        or _stands_on_another(o, objects)
+        or _stands_on_another(o, [*objects, *known])
         or _bottom_hidden(o, objects, camera)
     ]
 

@@ -10,8 +10,8 @@ footprint, or on the whole object's as last published); one cluster never
 feeds two tracks, and a cluster on the footprint of a known object, in its
 colour, is a piece of it, not a new object. A new object must be
 seen in consecutive frames before it gets an id (a one-frame flicker never
-becomes an object). An object hidden behind an arm is kept as long as the arm
-hides it; an object unseen in clear view is removed after ``forget_after``
+becomes an object). An object hidden behind an arm, or under an object standing on it, is kept
+as long as it is hidden; an object unseen in clear view is removed after ``forget_after``
 seconds, or after ``gone_frames`` frames when new objects appear elsewhere
 meanwhile (the scene was rearranged or reloaded). A held object, or one only
 partly seen, keeps its last confident colour, type and size; a partly seen
@@ -28,12 +28,13 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from services.perception.descriptors import Descriptor
-from services.perception.support import HOLD_RADIUS, footprint_share
+from services.perception.support import HOLD_RADIUS, STACK_GAP, footprint_share
 from shared.messages import Gripper, SimState
 from shared.robot import ROBOT
 
 ARMS = ROBOT.arms
 NO_MATCH = 1e6
+COVERED_SHARE = 0.5  # of an unseen object's footprint under something seen standing on it: covered by it
 
 
 @dataclass(frozen=True)
@@ -91,7 +92,8 @@ class Tracker:
         """Fold one frame's detections in; return the published object list.
 
         ``hidden(position)`` says whether something (an arm) blocks the
-        camera's view of a position, so an unseen object there is kept.
+        camera's view of a position, or it lies outside the picture, so an
+        unseen object there is kept.
         """
         tools = holding_tools(state)
         hands = tool_positions(state)
@@ -111,8 +113,8 @@ class Tracker:
             track.visible = id(track) in seen
             if track.visible or track.held_by is not None:
                 track.missed = 0
-            elif hidden is not None and hidden(track.descriptor.position):
-                track.last_seen, track.missed = now, 0  # behind an arm: not gone, just out of sight
+            elif (hidden is not None and hidden(track.descriptor.position)) or _covered(track, detections):
+                track.last_seen, track.missed = now, 0  # behind an arm or under a cup: not gone, just out of sight
             else:
                 track.missed += 1
         fresh = [d for d in unmatched if not self._inside_held(d, tools) and not self._piece_of_known(d)]
@@ -126,6 +128,10 @@ class Tracker:
                 self._next_id += 1
             track.shown = self._shown(track)
         return self.objects()
+
+    def standing(self) -> list[Descriptor]:
+        """The confirmed objects nobody holds, as last published: what may hold up a cluster seen on it."""
+        return [t.shown or t.descriptor for t in self.tracks if t.confirmed and t.held_by is None]
 
     def objects(self) -> list[dict]:
         """The confirmed objects as ``perception/objects`` items, by id number."""
@@ -173,7 +179,7 @@ class Tracker:
         current, known = track.descriptor, track.identity
         if known is None or known is current:
             return current
-        partial = current.points < self.settings.partial_share * known.points
+        partial = current.clipped or current.points < self.settings.partial_share * known.points
         if (
             track.held_by is None
             and not track.near_hand
@@ -235,7 +241,7 @@ class Tracker:
         track.hits += 1
         if track.held_by is not None:
             return
-        partial = detection.points < self.settings.partial_share * track.descriptor.points
+        partial = detection.clipped or detection.points < self.settings.partial_share * track.descriptor.points
         moved = float(np.linalg.norm(track.descriptor.position - detection.position))
         if partial and moved < 0.02:
             return
@@ -243,6 +249,7 @@ class Tracker:
         known = track.identity
         if (
             not track.near_hand
+            and not detection.clipped
             and detection.confidence >= self.settings.confident
             and (
                 known is None
@@ -300,6 +307,20 @@ class Tracker:
         if track.missed >= self.settings.gone_frames and newest > track.last_seen:
             return False  # plainly absent while new objects appeared: it moved, or the scene changed
         return now - track.last_seen <= self.settings.forget_after
+
+
+def _covered(track: Track, detections: list[Descriptor]) -> bool:
+    """Whether something seen now stands on the track's object and covers it from the camera.
+
+    A box with a cup just put on it can show nothing of itself: the cup
+    covers its lid and the hand above the cup its sides. It is still there.
+    """
+    whole = track.shown or track.descriptor
+    top = whole.position[2] + whole.size[2] / 2
+    return any(
+        d.position[2] - d.size[2] / 2 >= top - STACK_GAP and footprint_share(whole, d) >= COVERED_SHARE
+        for d in detections
+    )
 
 
 def _views(track: Track) -> tuple[Descriptor, ...]:
