@@ -53,6 +53,7 @@ class Say(Message):
     text: str
     kind: SayKind
     candidates: list[str] | None = None
+    topic: str | None = None  # set on the NLU's spoken copy of an answer: the screen shows it once, as an answer
 
 
 class Cloud(Message):

@@ -192,14 +192,20 @@ class PbdApp(App[None]):
     # -- what the services say -----------------------------------------------
     @while_running
     def on_said(self, event: events.Said) -> None:
-        self.main.query_one(Conversation).add(event.kind, event.text)
+        """Show what the robot says; an answer (a line with a topic) in its own style.
+
+        Answers are shown from this spoken copy and never from ``nlu/result``
+        (see ``on_understood``): the two travel apart and either may come
+        first, so showing one source only is what keeps an answer to one line.
+        """
+        self.main.query_one(Conversation).add("answer" if event.topic else event.kind, event.text)
         if event.kind == "clarify" and event.candidates:
             self.main.query_one(ClarifyPrompt).ask(event.text, event.candidates)
 
     @while_running
     def on_understood(self, event: events.Understood) -> None:
         result = event.result
-        if result.kind != "command":
+        if result.kind != "command":  # a clarification or an answer shows from its dialog/say line
             return
         self.main.query_one(ClarifyPrompt).close()
         args: dict[str, Any] = result.args or {}

@@ -73,7 +73,7 @@ class Bridge:
 
     # -- incoming ------------------------------------------------------------
     def _on_say(self, msg: Say) -> None:
-        self._app.post_message(events.Said(msg.text, msg.kind, list(msg.candidates or [])))
+        self._app.post_message(events.Said(msg.text, msg.kind, list(msg.candidates or []), msg.topic))
 
     def _on_nlu_result(self, msg: NluResult) -> None:
         self._app.post_message(events.Understood(msg))

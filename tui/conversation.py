@@ -12,6 +12,7 @@ _STYLES: dict[str, tuple[str, str]] = {
     "user": ("you   › ", "bold"),
     "narration": ("robot › ", "green"),
     "info": ("robot › ", "cyan"),
+    "answer": ("robot = ", "bold magenta"),  # a question answered: not narration, not an error
     "clarify": ("robot ? ", "bold yellow"),
     "error": ("robot ! ", "bold red"),
     "ui": ("      · ", "dim"),
@@ -39,7 +40,7 @@ class Conversation(RichLog):
         self.entries: list[Line] = []
 
     def add(self, kind: str, text: str) -> None:
-        """Append a line; ``kind`` is 'user', a ``dialog/say`` kind, 'ui' or 'warning'."""
+        """Append a line; ``kind`` is 'user', a ``dialog/say`` kind, 'answer', 'ui' or 'warning'."""
         prefix, style = _STYLES.get(kind, _STYLES["info"])
         self.entries.append(Line(kind, text))
         line = Text(prefix, style=style)

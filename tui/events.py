@@ -27,13 +27,14 @@ class BusUnavailable(Message):
 
 
 class Said(Message):
-    """A line the robot says on ``dialog/say``."""
+    """A line the robot says on ``dialog/say``; ``topic`` is set when it answers a question."""
 
-    def __init__(self, text: str, kind: str, candidates: list[str]) -> None:
+    def __init__(self, text: str, kind: str, candidates: list[str], topic: str | None = None) -> None:
         super().__init__()
         self.text = text
         self.kind = kind
         self.candidates = candidates
+        self.topic = topic
 
 
 class Understood(Message):

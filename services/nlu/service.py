@@ -141,7 +141,9 @@ class NluService:
                 self.bus.keys.say, {"text": result.question, "kind": "clarify", "candidates": result.labels}
             )
         elif isinstance(result, Answer):
-            self.bus.publish(self.bus.keys.say, {"text": result.text, "kind": "info"})
+            # the topic marks the spoken copy as this answer's: the screen shows it from here, so it
+            # shows once whichever of the two messages arrives first
+            self.bus.publish(self.bus.keys.say, {"text": result.text, "kind": "info", "topic": result.topic})
         log.info("%r -> %s", text, result.to_json())
 
     def _say_error(self, text: str) -> None:

@@ -8,6 +8,7 @@ for the tool frames, the grippers and when each arm moved).
 
 from __future__ import annotations
 
+import queue
 import threading
 import time
 from collections.abc import Iterator
@@ -94,6 +95,39 @@ def test_nothing_to_repeat_nothing_to_undo_and_answers_move_nothing(stack: Stack
         time.sleep(1.5)
         assert stack.lines[start:] == [], "the executor said something about an answer"
         assert stack.state["robot"]["busy"] is None and stack.state["robot"]["actions"] == counts
+
+
+def test_a_question_during_a_motion_is_answered_at_once_and_moves_nothing_else(stack: Stack) -> None:
+    """Asked through the real NLU while the executor is busy with a motion: answered then, not after it."""
+    stack.launcher.start("nlu")
+    answers: queue.Queue[tuple[float, bool, dict[str, Any]]] = queue.Queue()
+
+    def on_result(message: dict[str, Any]) -> None:  # when it came, and whether the move was still running then
+        if message["kind"] == "answer":
+            answers.put((time.monotonic(), bool(stack.state and stack.state["robot"]["busy"]), message))
+
+    stack.hub.subscribe(stack.hub.keys.nlu_result, on_result)
+    stack.load_scene("default")
+    stack.command("move_abs_dest", {"arm": "left", "destination": "side"})
+    ok(stack.command("create_action", utterance="create a new action"))
+    right = stack.ee("right")[:3]
+    stack.command("move_rel_dest", {"arm": "left", "relation": "above", "object": stack.pid("obj1")}, wait=False)
+    stack.wait_for(lambda: stack.robot["moving"]["left"], 20, "the left arm to start moving")
+    start = len(stack.lines)
+    asked = time.monotonic()
+    stack.hub.publish(stack.hub.keys.utterance, {"text": "what are you holding", "source": "script"})
+    came, busy, answer = answers.get(timeout=10)
+    assert came - asked < 2.0, f"answered {came - asked:.2f} s after the question"
+    assert busy, "the answer waited for the motion to end"
+    assert answer["topic"] == "holding" and "my left hand is empty" in answer["text"], answer
+    spoken = stack.wait_for(lambda: texts(stack.lines[start:], "info"), 5, "the answer said")
+    assert spoken == [answer["text"]]
+
+    stack.idle()
+    time.sleep(0.5)
+    assert texts(stack.lines[start:], "error") == [] and texts(stack.lines[start:], "narration") == []
+    assert np.linalg.norm(stack.ee("right")[:3] - right) < 0.01, "the right arm moved"
+    assert len(steps_of(stack)) == 1, "the question was recorded as a step"
 
 
 def test_a_compound_puts_the_red_cup_on_the_plate_as_two_steps(stack: Stack) -> None:

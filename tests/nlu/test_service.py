@@ -147,7 +147,7 @@ def test_queryables(live: Network) -> None:
         live.hub.request(keys.nlu_query("ground"), {})
 
 
-def test_a_question_is_answered_on_the_result_and_said_as_info(live: Network) -> None:
+def test_a_question_is_answered_on_the_result_and_said_as_info_with_its_topic(live: Network) -> None:
     results = collect(live, live.hub.keys.nlu_result)
     spoken = collect(live, live.hub.keys.say)
     time.sleep(0.3)
@@ -156,6 +156,7 @@ def test_a_question_is_answered_on_the_result_and_said_as_info(live: Network) ->
     assert answer["kind"] == "answer" and answer["topic"] == "scene" and answer["utterance"] == "what do you see?"
     said = spoken.get(timeout=10)
     assert said["kind"] == "info" and said["text"] == answer["text"] and "I see 4 objects" in said["text"]
+    assert said["topic"] == "scene", "the spoken copy is not marked as the answer's"
 
 
 def test_a_compound_is_one_result_with_then(live: Network) -> None:
