@@ -14,10 +14,17 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TypeVar
 
+import numpy as np
+
 from shared.bus import Bus
 from shared.messages import ExecutorState, NluResult, Objects, PerceivedObject, Say, SimState, Truth, TruthObject
 
 T = TypeVar("T")
+
+
+STILL_DISTANCE = 0.001  # m an object may move and still be at rest
+STILL_FOR = 0.3  # s of truth samples that must show every object at rest
+STILL_TIMEOUT = 3.0  # s after which objects are judged wherever they are
 
 
 class WaitTimeout(TimeoutError):
@@ -108,6 +115,33 @@ class Observer:
     def lines_since(self, since: float) -> list[Line]:
         with self._changed:
             return [line for line in self.lines if line.at >= since]
+
+    def settled(self, timeout: float = STILL_TIMEOUT) -> dict[str, TruthObject]:
+        """The ground truth once every object has come to rest (or ``timeout`` s have passed, for a rolling one).
+
+        At rest means no object moved more than ``STILL_DISTANCE`` over
+        ``STILL_FOR`` seconds of truth samples: a cup just released may still
+        tilt or slide, and judging it then would judge it in motion.
+        """
+        deadline = time.monotonic() + timeout
+        history: list[tuple[float, dict[str, np.ndarray]]] = []
+        while True:
+            with self._changed:
+                self._changed.wait(0.1)
+                now, truth = self.truth_at, dict(self.truth)
+            positions = {oid: np.asarray(o.position, dtype=float) for oid, o in truth.items()}
+            if not history or now > history[-1][0]:
+                history.append((now, positions))
+            recent = [p for at, p in history if at >= now - STILL_FOR]
+            span = history[-1][0] - history[0][0]
+            still = all(
+                float(np.linalg.norm(p[oid] - positions[oid])) <= STILL_DISTANCE
+                for p in recent
+                for oid in positions
+                if oid in p
+            )
+            if (span >= STILL_FOR and still) or time.monotonic() >= deadline:
+                return truth
 
     def wait_for(self, condition: Callable[[], T | None], timeout: float, what: str) -> T:
         """Wait until ``condition()`` (called under the lock) is truthy; return its value."""

@@ -37,7 +37,6 @@ START_TIMEOUT = 10.0  # s for the executor to take a command up (or refuse it)
 STEP_TIMEOUT = 240.0  # s for one programmed step
 REPLAY_TIMEOUT = 900.0  # s for a whole replay
 TAKEN_UP_GRACE = 0.5  # s for a busy state sent just after the first line to arrive
-SETTLE = 1.0  # s to let objects come to rest before judging
 SEEN_WITHIN = 0.04  # m: perception's object must be this close to the simulator's
 SETTLE_AFTER_LOAD = (
     0.5  # s: only clouds rendered this long after a load count, when perception has surely seen the load
@@ -270,8 +269,8 @@ class TaskRunner:
 
     # -- a whole task -------------------------------------------------------------------------
     def judge_now(self, task: Task) -> Verdict:
-        time.sleep(SETTLE)
-        truth, grippers = dict(self.watch.truth), dict(self.watch.sim.grippers if self.watch.sim is not None else {})
+        truth = self.watch.settled()
+        grippers = dict(self.watch.sim.grippers if self.watch.sim is not None else {})
         later = None
         if task.success.get("hold_s"):
             time.sleep(float(task.success["hold_s"]))

@@ -14,7 +14,6 @@ what the ground truth judges.
 from __future__ import annotations
 
 import re
-import time
 from pathlib import Path
 
 import numpy as np
@@ -30,7 +29,6 @@ HEADING = "## Your first minutes"
 RED_CUP, BLUE_CUP, BOX, PLATE = "obj0", "obj1", "obj2", "obj3"  # the default scene's ids (services/sim/scenes)
 DESCRIPTION = re.compile(r"\bthe (?:[a-z]+ )*?(cup|box|plate|bowl|object)\b")
 LIFTED = 0.05  # metres: a pick-up (or a lift) raises the cup at least this far above where it was
-SETTLE = 1.0  # seconds for a released cup to come to rest before it is judged
 
 # what each row of the walkthrough leaves a cup doing: lifted, or placed (relation, landmark)
 OUTCOMES: list[tuple[str, str, str | None]] = [
@@ -82,6 +80,5 @@ def test_the_first_minutes_happen_as_the_readme_says(runner: TaskRunner) -> None
             now = np.asarray(runner.watch.truth[cup].position, dtype=float)
             assert now[2] > before[2] + LIFTED, f"{typed!r}: {cup} is not lifted (z {before[2]:.3f} → {now[2]:.3f})"
         else:
-            time.sleep(SETTLE)
-            verdict = placed(runner.watch.truth, cup, outcome, landmark)
+            verdict = placed(runner.watch.settled(), cup, outcome, landmark)
             assert verdict.success, f"{typed!r}: {verdict.reason}"
