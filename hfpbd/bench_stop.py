@@ -5,9 +5,10 @@ the path being measured is the one a person's stop takes — the TUI's stop
 request to ``executor/control/command``, the executor's stop request to
 ``sim/control/stop``, the simulator's loop taking it up, and the arm coming
 to rest. The arm counts as halted at the first ``sim/state`` sample (by its
-publication stamp) whose arm joints moved slower than :data:`HALTED` since
-the sample before; each trial stops an arm that was moving faster than
-:data:`MOVING`.
+publication stamp) whose arm joints, as the physics engine reports their
+velocities, are all slower than :data:`HALTED` and stay so for
+:data:`HELD` of simulated time; each trial stops an arm that was moving
+faster than :data:`MOVING`.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from shared.robot import ROBOT
 
 ARM = "right"
 HALTED = 0.05  # rad/s: the fastest arm joint slower than this
+HELD = 0.2  # s of simulated time the arm must stay halted (a stop that rebounds is no stop)
 MOVING = 0.2  # rad/s: an arm moving at least this fast when the stop is sent
 DISTANCE = 0.15  # m of each move, long enough to be stopped in the middle
 TARGET_P95 = 0.100  # s
@@ -41,7 +43,7 @@ class ArmWatch:
 
     def __init__(self, bus: Bus) -> None:
         self.names = ROBOT.arm_joint_names(ARM)
-        self.samples: deque[tuple[float, float, np.ndarray]] = deque(maxlen=200)  # (stamp, sim time, q)
+        self.samples: deque[tuple[float, float, float]] = deque(maxlen=200)  # (stamp, sim time, fastest joint)
         self.busy: Any = None
         self.runs = 0  # executor states seen with a command running
         self._changed = threading.Condition()
@@ -49,9 +51,9 @@ class ArmWatch:
         bus.subscribe(bus.keys.executor_state, self._on_executor, history=True)
 
     def _on_state(self, message: SimState) -> None:
-        q = np.array([message.joints.get(n, 0.0) for n in self.names], float)
+        fastest = max(abs(message.velocities.get(n, 0.0)) for n in self.names)
         with self._changed:
-            self.samples.append((float(message.stamp), float(message.sim_time or 0.0), q))
+            self.samples.append((float(message.stamp), float(message.sim_time or 0.0), fastest))
             self._changed.notify_all()
 
     def _on_executor(self, message: dict[str, Any]) -> None:
@@ -60,17 +62,13 @@ class ArmWatch:
             self.runs += self.busy is not None
             self._changed.notify_all()
 
-    def recent(self) -> list[tuple[float, float, np.ndarray]]:
+    def recent(self) -> list[tuple[float, float, float]]:
         with self._changed:
             return list(self.samples)
 
-    def speed_at(self, index: int) -> float:
-        """The fastest arm joint's speed between sample ``index - 1`` and ``index`` (rad per simulated s)."""
-        (_, t0, q0), (_, t1, q1) = self.samples[index - 1], self.samples[index]
-        return float(np.max(np.abs(q1 - q0)) / (t1 - t0)) if t1 > t0 else 0.0
-
     def moving(self) -> bool:
-        return len(self.samples) > 1 and self.speed_at(-1) > MOVING
+        with self._changed:
+            return bool(self.samples) and self.samples[-1][2] > MOVING
 
     def wait(self, condition: Any, timeout: float) -> bool:
         with self._changed:
@@ -78,17 +76,18 @@ class ArmWatch:
 
 
 def _halted_after(watch: ArmWatch, sent: float, timeout: float = 5.0) -> float | None:
-    """Seconds from ``sent`` to the stamp of the first sample showing the arm at rest."""
+    """Seconds from ``sent`` to the stamp of the first sample from which the arm stays at rest."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
-        samples = watch.recent()
-        for i in range(1, len(samples)):
-            stamp, sim_t, q = samples[i]
-            _, sim_prev, q_prev = samples[i - 1]
-            if stamp <= sent or sim_t <= sim_prev:
+        samples = [sample for sample in watch.recent() if sample[0] > sent]
+        for i, (stamp, sim_time, fastest) in enumerate(samples):
+            if fastest >= HALTED:
                 continue
-            if float(np.max(np.abs(q - q_prev)) / (sim_t - sim_prev)) < HALTED:
-                return stamp - sent
+            later = samples[i + 1 :]
+            if later and later[-1][1] - sim_time >= HELD:
+                if all(speed < HALTED for _, t, speed in later if t - sim_time <= HELD):
+                    return stamp - sent
+            break  # not yet seen held (or it moved again): look again when more samples are in
         time.sleep(0.01)
     return None
 

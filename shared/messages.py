@@ -91,6 +91,7 @@ class SimState(Message):
     joints: dict[str, float]
     ee: dict[str, Pose]
     grippers: dict[str, Gripper]
+    velocities: dict[str, float] = {}  # joint name -> rad/s (m/s for prismatic joints)
     sim_time: float | None = None
     moving: dict[str, bool] = {}
     head: Head | None = None

@@ -2,10 +2,13 @@
 
 Why this shape: SAPIEN must be driven from one thread, so the main thread
 owns the world and runs a loop that (1) applies commands queued by the
-request handlers, (2) steps physics, (3) publishes state and ground truth,
-and (4) renders the head camera at the cloud rate. Turning a frame into a
-cloud and encoding the multi-megabyte message happen on a separate thread,
-so publishing never stalls physics. Pacing holds simulated time to wall
+request handlers, (2) steps physics, (3) publishes state and ground truth
+(and at once when stopped joints come to rest), and (4) renders the head
+camera at the cloud rate. The renderer draws on its own threads while the
+loop goes on; the loop reads the frame when it should be done
+(:mod:`services.sim.render_time`), so a stop never waits behind a frame.
+Turning a frame into a cloud and encoding the multi-megabyte message happen
+on a separate thread, so publishing never stalls physics. Pacing holds simulated time to wall
 time (times ``--speed``); when rendering falls behind, physics catches up
 in a burst and the published ``rtf`` says how well it keeps up.
 """
@@ -28,6 +31,7 @@ import numpy as np
 from services.sim import control
 from services.sim.cloud import cloud_message
 from services.sim.motion import Motion
+from services.sim.render_time import RenderWait
 from services.sim.scene_file import (
     DEFAULT_SCENE,
     SceneError,
@@ -37,7 +41,7 @@ from services.sim.scene_file import (
     randomized,
     with_positions,
 )
-from services.sim.world import ARMS, Capture, SimWorld
+from services.sim.world import ARMS, Capture, PictureInFlight, SimWorld
 from shared.bus import Bus
 
 log = logging.getLogger("hfpbd.sim")
@@ -97,6 +101,7 @@ class SimRunner:
         self.paused = paused
         self._inbox: queue.Queue[tuple[Callable[[], Any], Future]] = queue.Queue()
         self._frames: queue.Queue[Capture | None] = queue.Queue(maxsize=1)
+        self._render_wait = RenderWait()
         self._state_pub = bus.publisher(bus.keys.sim_state)
         self._truth_pub = bus.publisher(bus.keys.truth)
         self._cloud_pub = bus.publisher(bus.keys.cloud, large=True)
@@ -118,6 +123,8 @@ class SimRunner:
         world = self.world
         wall0, sim0 = time.monotonic(), world.sim_time
         next_state = next_truth = next_cloud = time.monotonic()
+        picture: PictureInFlight | None = None  # a frame the renderer is drawing, taken at ``taken_at``
+        taken_at = 0.0
         try:
             while not stop.is_set():
                 self._apply_commands()
@@ -141,12 +148,22 @@ class SimRunner:
                 if now >= next_truth:
                     next_truth = max(next_truth + 1.0 / TRUTH_RATE, now)
                     self.publish_truth()
-                if self.cloud_rate > 0 and now >= next_cloud:
+                if picture is not None and self._render_wait.ready(taken_at, now):
+                    self._read_frame(picture)
+                    picture = None
+                if self.cloud_rate > 0 and now >= next_cloud and picture is None:
                     next_cloud = max(next_cloud + 1.0 / self.cloud_rate, now)
-                    self._offer_frame(world.capture())
+                    picture, taken_at = world.take_picture(), now
         finally:
             self._offer_frame(None)
             self._cloud_thread.join(timeout=5.0)
+
+    def _read_frame(self, picture: PictureInFlight) -> None:
+        started = time.monotonic()
+        frame = self.world.read_picture(picture)
+        self._render_wait.learn(time.monotonic() - started)
+        if frame is not None:
+            self._offer_frame(frame)
 
     def _apply_commands(self) -> None:
         while True:
@@ -163,6 +180,8 @@ class SimRunner:
     def _step(self) -> None:
         for motion, status, message in self.world.step():
             self.publish_event(motion.motion_id, status, message)
+        if self.world.came_to_rest:
+            self.publish_state()
 
     def step_paused(self, steps: int) -> float:
         for _ in range(steps):

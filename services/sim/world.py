@@ -21,6 +21,7 @@ from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
 from services.sim import objects as object_builder
+from services.sim.halt import Halting
 from services.sim.motion import MinimumJerk, Motion, Waypoints
 from services.sim.scene_file import ObjectSpec, SceneSpec
 from shared.robot import ROBOT
@@ -72,6 +73,17 @@ class Capture:
     segmentation: np.ndarray | None = None  # (H, W) entity ids (tests only)
 
 
+@dataclass(frozen=True, eq=False)
+class PictureInFlight:
+    """A head-camera frame being rendered: what :class:`Capture` will say besides its pixels."""
+
+    model_matrix: np.ndarray
+    camera_pose: list[float]
+    sim_time: float
+    scene: str
+    scene_generation: int
+
+
 def pose_list(pose: sapien.Pose) -> list[float]:
     return [float(v) for v in (*pose.p, *pose.q)]
 
@@ -106,6 +118,7 @@ class SimWorld:
         self.links = {link.name: link for link in self.robot.get_links()}
         self.camera = self._mount_camera(width, height)
         self.overview = None
+        self._in_flight: PictureInFlight | None = None
         self.objects: dict[str, sapien.Entity] = {}
         self.specs: dict[str, ObjectSpec] = {}
         self.scene_name = ""
@@ -113,6 +126,8 @@ class SimWorld:
         self.motions: dict[str, Motion] = {}
         self.grip_force = {arm: ROBOT.gripper.default_effort for arm in ARMS}
         self.sim_time = 0.0
+        self.halting = Halting()
+        self.came_to_rest = False  # this step, the joints last told to stop came to rest
         self._ids = count(1)
         self.home()
 
@@ -287,6 +302,7 @@ class SimWorld:
             for name, value in zip(motion.joints, self.qpos(motion.joints)):
                 active[self.joints[name].index].set_drive_target(float(value))
                 active[self.joints[name].index].set_drive_velocity_target(0.0)
+            self.halting.stopped([self.joints[name].index for name in motion.joints], self.sim_time)
         return stopped
 
     # -- stepping ----------------------------------------------------------------
@@ -301,6 +317,7 @@ class SimWorld:
                 joint.set_drive_velocity_target(float(v))
         self.scene.step()
         self.sim_time += self.timestep
+        self.came_to_rest = self.halting.watching and self.halting.came_to_rest(self.robot.get_qvel(), self.sim_time)
         finished = []
         for part, motion in list(self.motions.items()):
             if isinstance(motion, GripperMotion):
@@ -317,6 +334,7 @@ class SimWorld:
     # -- scene -------------------------------------------------------------------
     def load(self, scene: SceneSpec) -> None:
         """Replace the objects by those of ``scene`` and put the robot in its start posture."""
+        self._wait_for_picture()
         for entity in self.objects.values():
             self.scene.remove_entity(entity)
         self.objects.clear()
@@ -408,7 +426,7 @@ class SimWorld:
 
     def state(self) -> dict:
         """Everything ``sim/state`` carries except the stamp and the real-time factor."""
-        qpos = self.robot.get_qpos()
+        qpos, qvel = self.robot.get_qpos(), self.robot.get_qvel()
         joints = {name: float(qpos[info.index]) for name, info in self.joints.items()}
         pads = {name for arm in ARMS for name in self.pad_links(arm)}
         contacts = self.scene.get_contacts()
@@ -432,6 +450,7 @@ class SimWorld:
         return {
             "sim_time": self.sim_time,
             "joints": joints,
+            "velocities": {name: float(qvel[info.index]) for name, info in self.joints.items()},
             "ee": {arm: pose_list(self.links[ROBOT.tool_frame(arm)].entity_pose) for arm in ARMS},
             "grippers": grippers,
             "moving": {arm: arm in self.motions for arm in ARMS},
@@ -463,20 +482,53 @@ class SimWorld:
             )
         return out
 
-    def capture(self, segmentation: bool = False) -> Capture:
-        """Render the head camera (the caller turns it into a cloud off this thread)."""
+    def take_picture(self) -> PictureInFlight:
+        """Start rendering the head camera and return at once: the renderer works on its own threads.
+
+        Why split from reading: reading the pixels waits for the renderer, and
+        the service's loop must keep stepping physics and taking requests (a
+        stop above all) meanwhile; it reads once :class:`RenderWait` says the
+        frame is done. The frame shows the world as it is now.
+        """
+        self._wait_for_picture()
         self.scene.update_render()
         self.camera.take_picture()
-        return Capture(
-            position=self.camera.get_picture("Position"),
-            color=self.camera.get_picture("Color"),
+        self._in_flight = PictureInFlight(
             model_matrix=np.asarray(self.camera.get_model_matrix(), dtype=np.float64),
             camera_pose=pose_list(self.links[ROBOT.camera.link].entity_pose),
             sim_time=self.sim_time,
             scene=self.scene_name,
             scene_generation=self.scene_generation,
+        )
+        return self._in_flight
+
+    def read_picture(self, picture: PictureInFlight, segmentation: bool = False) -> Capture | None:
+        """The pixels of ``picture`` (waiting for the renderer if it is not done), or None when it was dropped."""
+        if picture is not self._in_flight:
+            return None  # a reload or another render came first and dropped it
+        self._in_flight = None
+        return Capture(
+            position=self.camera.get_picture("Position"),
+            color=self.camera.get_picture("Color"),
+            model_matrix=picture.model_matrix,
+            camera_pose=picture.camera_pose,
+            sim_time=picture.sim_time,
+            scene=picture.scene,
+            scene_generation=picture.scene_generation,
             segmentation=self.camera.get_picture("Segmentation")[..., 1].copy() if segmentation else None,
         )
+
+    def capture(self, segmentation: bool = False) -> Capture:
+        """Render the head camera and wait for it (the caller turns it into a cloud off this thread)."""
+        capture = self.read_picture(self.take_picture(), segmentation)
+        assert capture is not None  # nothing can come between taking and reading it here
+        return capture
+
+    def _wait_for_picture(self) -> None:
+        """Let a render in flight finish, and drop it, before anything else touches what it draws."""
+        if self._in_flight is not None:
+            self.camera.get_picture("Position")
+            self._in_flight = None
 
     def overview_rgb(self, width: int = 800, height: int = 600) -> np.ndarray:
         """An RGB picture (uint8) of the robot and table from the front-left, for people."""
@@ -484,6 +536,7 @@ class SimWorld:
             eye, target = np.array([1.9, 1.1, 1.75]), np.array([0.45, 0.0, 0.75])
             self.overview = self.scene.add_camera("overview", width, height, math.radians(45.0), 0.05, 10.0)
             self.overview.entity.set_pose(sapien.Pose(eye, look_rotation(eye, target)))
+        self._wait_for_picture()
         self.scene.update_render()
         self.overview.take_picture()
         rgba = self.overview.get_picture("Color")

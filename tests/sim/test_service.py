@@ -63,6 +63,7 @@ def test_state_carries_every_documented_field(client: Bus) -> None:
         "stamp",
         "sim_time",
         "joints",
+        "velocities",
         "ee",
         "grippers",
         "moving",
@@ -117,6 +118,27 @@ def test_arm_trajectory_is_followed(client: Bus, events: Inbox) -> None:
     )
     done = events.wait(lambda e: e.motion_id == reply["motion_id"])
     assert done.status == "done", done.message
+
+
+def test_a_stopped_arm_is_reported_at_rest_on_the_step_it_halts(client: Bus, events: Inbox) -> None:
+    """The state showing the arm at rest goes out within a few physics steps of the stop, not at the next tick."""
+    states = Inbox()
+    client.subscribe(client.keys.sim_state, states, schema="sim_state")
+    names = ROBOT.arm_joint_names("left")
+    start = [states.wait().joints[n] for n in names]
+    goal = list(start)
+    goal[0] -= 0.6  # the shoulder swings inwards, clear of the table
+    reply = client.request(
+        client.keys.sim_control("arm"), {"arm": "left", "points": [start, goal], "times": [0.0, 2.0]}
+    )
+    moving = states.wait(lambda s: max(abs(s.velocities[n]) for n in names) > 0.2)
+    stop = client.request(client.keys.sim_control("stop"), {"arm": "left"})
+    assert stop["stopped"] == [reply["motion_id"]]
+    halted = states.wait(lambda s: s.sim_time > moving.sim_time and max(abs(s.velocities[n]) for n in names) < 0.05)
+    stopped_at = events.wait(lambda e: e.motion_id == reply["motion_id"]).sim_time
+    assert halted.sim_time - stopped_at < 0.03  # the steady ticks are 0.04 s apart
+    later = states.wait(lambda s: s.sim_time > halted.sim_time + 0.3)
+    assert max(abs(later.joints[n] - halted.joints[n]) for n in names) < 0.005  # and it stays where it halted
 
 
 def test_one_request_starts_both_arms_in_the_same_step(client: Bus, events: Inbox) -> None:
