@@ -37,6 +37,7 @@ from shared.denials import unfiltered_stdout
 from shared.logs import setup_logging
 from shared.security import SecurityError, endpoint_host, is_loopback
 from shared.service import ALREADY_RUNNING, LOOK_S
+from shared.signals import stop_on
 
 log = logging.getLogger("hfpbd.up")
 
@@ -249,12 +250,7 @@ def main(argv: list[str] | None = None) -> int:
     setup_logging("up")
     supervisor = Supervisor(args)
 
-    def on_signal(signum: int, _frame: object) -> None:
-        log.info("received %s, stopping every service", signal.Signals(signum).name)
-        supervisor.stop.set()
-
-    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
-        signal.signal(sig, on_signal)
+    stop_on((signal.SIGINT, signal.SIGTERM, signal.SIGHUP), supervisor.stop, log, "received %s, stopping every service")
     try:
         bus = Bus(args.hub)
     except zenoh.ZError as exc:

@@ -17,6 +17,7 @@ from collections.abc import Callable, Sequence
 from shared.bus import Bus
 from shared.config import add_session_arguments, options_from_args
 from shared.logs import setup_logging
+from shared.signals import stop_on
 
 ServiceBody = Callable[[Bus, argparse.Namespace, threading.Event], None]
 
@@ -74,12 +75,7 @@ def run_service(
         parser.error(str(exc))
     stop = threading.Event()
 
-    def on_signal(signum: int, _frame: object) -> None:
-        log.info("received %s, stopping", signal.Signals(signum).name)
-        stop.set()
-
-    signal.signal(signal.SIGINT, on_signal)
-    signal.signal(signal.SIGTERM, on_signal)
+    stop_on((signal.SIGINT, signal.SIGTERM), stop, log, "received %s, stopping")
     try:
         with Bus(options) as bus:
             if already_alive(bus, name):

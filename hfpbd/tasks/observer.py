@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TypeVar
 
@@ -25,6 +25,39 @@ T = TypeVar("T")
 STILL_DISTANCE = 0.001  # m an object may move and still be at rest
 STILL_FOR = 0.3  # s of truth samples that must show every object at rest
 STILL_TIMEOUT = 3.0  # s after which objects are judged wherever they are
+
+
+class Stillness:
+    """Ground-truth samples over time, and whether every object has lately stayed where it is.
+
+    At rest means no object moved more than ``STILL_DISTANCE`` over
+    ``STILL_FOR`` seconds of samples: a cup just released may still tilt or
+    slide, and judging it then would judge it in motion.
+    """
+
+    def __init__(self) -> None:
+        self._history: list[tuple[float, dict[str, np.ndarray]]] = []
+
+    def add(self, at: float, positions: dict[str, Sequence[float]]) -> None:
+        """One truth sample taken at ``at`` (seconds); a sample no newer than the last is ignored."""
+        if not self._history or at > self._history[-1][0]:
+            self._history.append((at, {oid: np.asarray(p, dtype=float) for oid, p in positions.items()}))
+
+    def still(self) -> bool:
+        """Whether every object stayed put from the last sample at least ``STILL_FOR`` old until now."""
+        if not self._history:
+            return False
+        now, latest = self._history[-1]
+        older = [at for at, _ in self._history if at <= now - STILL_FOR]
+        if not older:
+            return False
+        return all(
+            float(np.linalg.norm(sample[oid] - latest[oid])) <= STILL_DISTANCE
+            for at, sample in self._history
+            if at >= older[-1]
+            for oid in latest
+            if oid in sample
+        )
 
 
 class WaitTimeout(TimeoutError):
@@ -117,30 +150,15 @@ class Observer:
             return [line for line in self.lines if line.at >= since]
 
     def settled(self, timeout: float = STILL_TIMEOUT) -> dict[str, TruthObject]:
-        """The ground truth once every object has come to rest (or ``timeout`` s have passed, for a rolling one).
-
-        At rest means no object moved more than ``STILL_DISTANCE`` over
-        ``STILL_FOR`` seconds of truth samples: a cup just released may still
-        tilt or slide, and judging it then would judge it in motion.
-        """
+        """The ground truth once every object has come to rest (or ``timeout`` s have passed, for a rolling one)."""
         deadline = time.monotonic() + timeout
-        history: list[tuple[float, dict[str, np.ndarray]]] = []
+        stillness = Stillness()
         while True:
             with self._changed:
                 self._changed.wait(0.1)
                 now, truth = self.truth_at, dict(self.truth)
-            positions = {oid: np.asarray(o.position, dtype=float) for oid, o in truth.items()}
-            if not history or now > history[-1][0]:
-                history.append((now, positions))
-            recent = [p for at, p in history if at >= now - STILL_FOR]
-            span = history[-1][0] - history[0][0]
-            still = all(
-                float(np.linalg.norm(p[oid] - positions[oid])) <= STILL_DISTANCE
-                for p in recent
-                for oid in positions
-                if oid in p
-            )
-            if (span >= STILL_FOR and still) or time.monotonic() >= deadline:
+            stillness.add(now, {oid: o.position for oid, o in truth.items()})
+            if stillness.still() or time.monotonic() >= deadline:
                 return truth
 
     def wait_for(self, condition: Callable[[], T | None], timeout: float, what: str) -> T:

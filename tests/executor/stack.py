@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from hfpbd.tasks.observer import Stillness
 from tests.processes import Launcher, new_network
 
 
@@ -38,9 +39,8 @@ class Stack:
         self.hub.subscribe(keys.say, self._on_say)
         self.runs = 0  # states seen with a command running, counted so no start or end is missed
         self.hub.subscribe(keys.executor_state, self._on_state, history=True)
-        self.hub.subscribe(
-            keys.truth, lambda m: self._store("truth", {o["id"]: o for o in m["objects"]}), latest_only=True
-        )
+        self.truth_at = 0.0  # when the newest truth arrived (monotonic seconds)
+        self.hub.subscribe(keys.truth, self._on_truth, latest_only=True)
         self.hub.subscribe(keys.sim_state, lambda m: self._store("robot", m), latest_only=True)
         self.hub.subscribe(
             keys.objects,
@@ -69,6 +69,11 @@ class Stack:
             setattr(self, name, value)
             self._changed.notify_all()
 
+    def _on_truth(self, message: dict[str, Any]) -> None:
+        with self._changed:
+            self.truth, self.truth_at = {o["id"]: o for o in message["objects"]}, time.monotonic()
+            self._changed.notify_all()
+
     def _on_state(self, message: dict[str, Any]) -> None:
         with self._changed:
             self.state = message
@@ -89,6 +94,14 @@ class Stack:
                     raise AssertionError(f"timed out waiting for {what}; said: {self.lines[-8:]}")
                 self._changed.wait(min(left, 0.5))
         return result
+
+    def settled(self, timeout: float = 3.0) -> None:
+        """Wait until every object's ground truth is at rest (or ``timeout`` s), before judging it."""
+        deadline, stillness = time.monotonic() + timeout, Stillness()
+        while not stillness.still() and time.monotonic() < deadline:
+            with self._changed:
+                self._changed.wait(0.1)
+                stillness.add(self.truth_at, {oid: o["position"] for oid, o in self.truth.items()})
 
     def ee(self, arm: str) -> np.ndarray:
         return np.asarray(self.robot["ee"][arm], float)

@@ -91,6 +91,17 @@ def test_sigterm_exits_promptly_and_cleanly(launcher: Launcher, echo) -> None:
     assert "stopped" in echo.log()
 
 
+def test_a_burst_of_signals_ends_the_service_cleanly(echo) -> None:
+    """Signals arriving while the last one is handled (a parent dying as the launcher stops it) end it once."""
+    for index in range(200):
+        echo.kill(signal.SIGTERM if index % 2 else signal.SIGINT)
+    deadline = time.monotonic() + 15
+    while echo.exited() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert echo.exited() == 0, echo.log_tail()
+    assert echo.log().count("echo stopped") == 1
+
+
 def test_point_cloud_sized_message_crosses_intact(network: Network, echo) -> None:
     rng = np.random.default_rng(7)
     xyz = rng.normal(size=(480, 640, 3)).astype(np.float32)

@@ -11,6 +11,7 @@ import pytest
 
 from hfpbd.tasks import figures
 from hfpbd.tasks.judge import judge
+from hfpbd.tasks.observer import Stillness
 from hfpbd.tasks.rehearse import rehearse
 from hfpbd.tasks.scripts import STYLES, ScriptError, load_tasks, word_count
 from services.sim.layout import TABLE_TOP_Z
@@ -230,3 +231,18 @@ def test_outputs_are_written_and_compared_with_the_paper(tmp_path: Path) -> None
     assert "target <= 20 words (met; paper's minimal: 27)" in lines[2] and lines[2].endswith("replay yes")
     assert lines[-1].endswith("4/5 within the 200 ms target")
     assert "| task1 t | minimal | 3 | 10 | yes | 30.0 | yes | 250 |" in figures.markdown_table(rows)
+
+
+def test_objects_are_still_only_after_a_stretch_of_samples_without_motion() -> None:
+    stillness = Stillness()
+    assert not stillness.still()
+    for step in range(4):  # a cup sliding 5 mm per sample
+        stillness.add(0.1 * step, {"cup": [0.5 + 0.005 * step, 0.0, 0.76]})
+    assert not stillness.still()
+    for step in range(4, 7):  # at rest, but for only 0.2 s
+        stillness.add(0.1 * step, {"cup": [0.52, 0.0, 0.76]})
+    assert not stillness.still()
+    stillness.add(0.75, {"cup": [0.5205, 0.0, 0.76]})  # half a millimetre: at rest since 0.4 s
+    assert stillness.still()
+    stillness.add(0.75, {"cup": [0.6, 0.0, 0.76]})  # a sample no newer than the last is ignored
+    assert stillness.still()
