@@ -21,6 +21,7 @@ STACK_GAP = 0.03  # m between a cluster's bottom and the top of the object it st
 HOLD_RADIUS = 0.15  # m from a holding gripper's tool frame to the object it holds
 FOOTPRINT_SHARE = 0.3  # share of a cluster's footprint that must lie over its support
 MIN_FOOTPRINT = 0.005  # m: the narrowest a cluster's top-down box counts as
+TOP_FACE = 0.012  # m: a cluster flatter than this on an object seen before is its top face
 
 
 def supported(
@@ -46,7 +47,8 @@ def supported(
         if o.bottom_on_table
         or o.raised
         or _near_a_gripper(o, holding)
-        or _stands_on_another(o, [*objects, *known])
+        or _stands_on_another(o, objects)
+        or _stands_on_another(o, known, own_top_face=True)
         or _bottom_hidden(o, objects, camera)
     ]
 
@@ -55,10 +57,17 @@ def _near_a_gripper(obj: Descriptor, holding: Mapping[str, np.ndarray]) -> bool:
     return any(float(np.linalg.norm(obj.position - tool)) <= HOLD_RADIUS for tool in holding.values())
 
 
-def _stands_on_another(obj: Descriptor, objects: Sequence[Descriptor]) -> bool:
+def _stands_on_another(obj: Descriptor, objects: Sequence[Descriptor], own_top_face: bool = False) -> bool:
+    """Whether ``obj`` stands on one of ``objects``.
+
+    ``own_top_face``: a flat cluster lying on an object seen before is that
+    object's top face (its sides hidden by an arm), not something on it.
+    """
     bottom = obj.position[2] - obj.size[2] / 2
     for other in objects:
         if other is obj or not other.bottom_on_table:
+            continue
+        if own_top_face and obj.size[2] < TOP_FACE and footprint_share(other, obj) >= FOOTPRINT_SHARE:
             continue
         top = other.position[2] + other.size[2] / 2
         if abs(bottom - top) <= STACK_GAP and footprint_share(obj, other) >= FOOTPRINT_SHARE:

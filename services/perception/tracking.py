@@ -44,6 +44,9 @@ class TrackSettings:
     confirm_frames: int = 2  # consecutive sightings before a new object gets an id
     hold_radius: float = HOLD_RADIUS  # m from a holding gripper's tool frame to its object
     colour_penalty: float = 0.03  # m-equivalent cost of a colour-word change
+    # m-equivalent cost of a sighting with none of the object's points: of a cup and a sliver the finger's
+    # mask cut off it, both near where the hand let go, the cup is the object and the sliver a piece of it
+    piece_penalty: float = 0.06
     partial_share: float = 0.5  # a sighting with fewer points than this share is partial
     gone_frames: int = 3  # unseen frames in clear view, while new objects appear, before removal
     overlap_share: float = 0.5  # share of a cluster's footprint on a track's that makes it that object
@@ -159,7 +162,9 @@ class Tracker:
             free = [t for t in self.tracks if t.confirmed and t.held_by is None]
             if not free:
                 continue
-            distances = [float(np.linalg.norm(t.descriptor.position - tool)) for t in free]
+            # where each object was last published, not its latest raw sighting: a cup lifted off a box may have
+            # left the box's last sighting as one tall cluster of both, nearer the hand than the cup's
+            distances = [float(np.linalg.norm((t.shown or t.descriptor).position - tool)) for t in free]
             nearest = int(np.argmin(distances))
             if distances[nearest] <= self.settings.hold_radius:
                 free[nearest].held_by = arm
@@ -179,7 +184,7 @@ class Tracker:
         current, known = track.descriptor, track.identity
         if known is None or known is current:
             return current
-        partial = current.clipped or current.points < self.settings.partial_share * known.points
+        partial = self._partial(current, known, known)
         if (
             track.held_by is None
             and not track.near_hand
@@ -225,10 +230,12 @@ class Tracker:
                 )
                 if distance > gate and not on_footprint:
                     continue
+                whole = track.identity or track.descriptor
                 cost[i, j] = (
                     distance
                     + 0.5 * float(np.linalg.norm(track.descriptor.size - det.size))
                     + (s.colour_penalty if track.descriptor.color != det.color else 0.0)
+                    + s.piece_penalty * max(0.0, 1.0 - det.points / max(whole.points, 1))
                 )
         rows, cols = linear_sum_assignment(cost)
         pairs = [(self.tracks[r], detections[c]) for r, c in zip(rows, cols) if cost[r, c] < NO_MATCH]
@@ -241,15 +248,16 @@ class Tracker:
         track.hits += 1
         if track.held_by is not None:
             return
-        partial = detection.clipped or detection.points < self.settings.partial_share * track.descriptor.points
+        known = track.identity
+        partial = self._partial(detection, track.descriptor, known or track.descriptor)
         moved = float(np.linalg.norm(track.descriptor.position - detection.position))
         if partial and moved < 0.02:
             return
         track.descriptor = detection
-        known = track.identity
         if (
             not track.near_hand
             and not detection.clipped
+            and detection.size[2] >= self.settings.partial_share * (known or detection).size[2]
             and detection.confidence >= self.settings.confident
             and (
                 known is None
@@ -258,6 +266,12 @@ class Tracker:
             )
         ):
             track.identity = detection
+
+    def _partial(self, sighting: Descriptor, last: Descriptor, whole: Descriptor) -> bool:
+        """Only part of the object shows: cut by the picture's edge, with under half of ``last``'s points, or
+        under half of ``whole``'s height (a box whose sides an arm hides shows only its top face)."""
+        share = self.settings.partial_share
+        return sighting.clipped or sighting.points < share * last.points or sighting.size[2] < share * whole.size[2]
 
     def _piece_of_known(self, detection: Descriptor) -> bool:
         """A cluster lying on a known object's footprint is part of it (cut by an arm), not a new object.
