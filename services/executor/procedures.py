@@ -585,7 +585,9 @@ class Procedures:
                     continue
                 self._go(arm, down)
                 kin, snap = self._ready(arm)
-            approach = kin.straight_line(grasp.grasp, ignore=(object,))
+            # what it stands on may look different with the hand right above (its outline merges with the
+            # object's), and the fingers close around the object, above that support's top: not in the way
+            approach = kin.straight_line(grasp.grasp, ignore=(object, *self._standing_on(object, Box.of(obj), snap)))
             if approach is None:
                 # checked clear from the planned pre-grasp, but not from where the arm stopped or with what the
                 # camera sees now (a hand beside an object changes its outline): on to the next grasp
@@ -785,19 +787,45 @@ class Procedures:
         """Whether the held object released at ``release`` would stand clear of every other object's footprint.
 
         ``on``: the objects it is put on (their footprints are where it goes).
+        """
+        return not self._spot_taken_by(held, release, snap, on)
+
+    def _spot_taken_by(
+        self, held: Held, release: np.ndarray, snap: SceneSnapshot, on: Collection[str] = ()
+    ) -> list[str]:
+        """The objects whose footprints the held object released at ``release`` would stand on.
+
         Perception's own sighting of what a hand holds is no footprint on the table.
         """
         center = held.center_at(release)
         arm = next((a for a, h in self.held().items() if h is not None and h.object_id == held.object_id), "")
-        return all(
-            oid == held.object_id
-            or oid in on
-            or reach.is_held_sighting(obj, arm, held)
-            or np.any(
-                np.abs(Box.of(obj).center[:2] - center[:2])
-                >= Box.of(obj).half[:2] + held.box.half[:2] + geo.PLACE_SHIFT / 2
-            )
+        return [
+            oid
             for oid, obj in snap.objects.items()
+            if oid != held.object_id
+            and oid not in on
+            and not reach.is_held_sighting(obj, arm, held)
+            and np.all(
+                np.abs(Box.of(obj).center[:2] - center[:2])
+                < Box.of(obj).half[:2] + held.box.half[:2] + geo.PLACE_SHIFT / 2
+            )
+        ]
+
+    def _crowded(
+        self,
+        held: Held,
+        candidates: list[tuple[np.ndarray, np.ndarray]],
+        snap: SceneSnapshot,
+        on: Collection[str],
+        relation: str,
+        words: str,
+    ) -> str:
+        """Why no spot ``relation`` the landmark is free: the objects standing where the held one would go."""
+        taken = sorted({oid for _, release in candidates for oid in self._spot_taken_by(held, release, snap, on)})
+        names = sorted(refer(snap.objects, oid) for oid in taken)
+        verb = "is" if len(names) == 1 else "are"
+        return wording.sentence(
+            f"There is no free spot {wording.RELATION_WORDS[relation]} {words}: {' and '.join(names)} {verb} in the way"
         )
 
     @staticmethod
@@ -815,17 +843,21 @@ class Procedures:
         ]
 
     @staticmethod
-    def _support_below(object_id: str, above: Box, snap: SceneSnapshot) -> float:
+    def _standing_on(object_id: str, above: Box, snap: SceneSnapshot) -> list[str]:
+        """The objects the box ``above`` of ``object_id`` stands on: under its footprint, tops under its bottom + 1 cm."""
+        return [
+            oid
+            for oid, obj in snap.objects.items()
+            if oid != object_id
+            and np.all(np.abs(Box.of(obj).center[:2] - above.center[:2]) < Box.of(obj).half[:2] + above.half[:2])
+            and Box.of(obj).top < above.bottom + 0.01
+        ]
+
+    def _support_below(self, object_id: str, above: Box, snap: SceneSnapshot) -> float:
         """Top of whatever is under the box of object ``object_id``: another object's top, else the table."""
-        top = snap.table_z
-        for oid, obj in snap.objects.items():
-            if oid == object_id:
-                continue
-            box = Box.of(obj)
-            overlap = np.all(np.abs(box.center[:2] - above.center[:2]) < (box.half[:2] + above.half[:2]))
-            if overlap and box.top < above.bottom + 0.01:
-                top = max(top, box.top)
-        return top
+        return max(
+            [snap.table_z, *(Box.of(snap.objects[oid]).top for oid in self._standing_on(object_id, above, snap))]
+        )
 
     def place_rel(self, arm: str, relation: str, object: str) -> Done:
         kin, snap = self._ready(arm)
@@ -836,11 +868,9 @@ class Procedures:
             raise StepFailed(wording.sentence(f"I can't place {words} relative to itself"))
         box = Box.of(obj)
         # only where it stands clear of everything else (next to a cup, not half on the plate beside it)
-        pairs = [
-            (hover, release)
-            for hover, release in targets.place_relation(relation, box, kin.fk(), held, snap.table_z)
-            if self._free_spot(held, release, snap, on=(object,) if relation in ("above", "on_top_of") else ())
-        ]
+        on = (object,) if relation in ("above", "on_top_of") else ()
+        candidates = targets.place_relation(relation, box, kin.fk(), held, snap.table_z)
+        pairs = [(hover, release) for hover, release in candidates if self._free_spot(held, release, snap, on)]
         done = self._place(
             arm,
             kin,
@@ -851,8 +881,17 @@ class Procedures:
             (object, box),
         )
         if done is None:
+            log.info(
+                "no placement %s %s: %d candidates, %d on a free spot; objects seen: %s",
+                relation,
+                object,
+                len(candidates),
+                len(pairs),
+                {k: (np.round(o.position, 3).tolist(), np.round(o.size, 3).tolist()) for k, o in snap.objects.items()},
+            )
             raise StepFailed(
                 self._beyond(kin, held, relation, box, words, snap.table_z, arm)
+                or (self._crowded(held, candidates, snap, on, relation, words) if candidates and not pairs else None)
                 or wording.cannot_reach(arm, relation, words)
             )
         done.landmark = self._landmark(obj)

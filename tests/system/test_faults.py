@@ -1,0 +1,296 @@
+"""Each service killed with SIGKILL in the middle of its work, under ``hfpbd up``, with the TUI watching.
+
+The whole robot runs as ``hfpbd up --headless`` (real simulator, perception,
+NLU and executor processes); the terminal UI runs in this process on the
+same router and commands are typed into it. In turn: the executor dies
+during a pick-up, the simulator during a move, the NLU between two
+utterances and perception during a record. Each time the launcher restarts
+the service, the UI says it stopped and that it is back, the user hears
+that the command was interrupted (a sentence, no traceback, no object id),
+the taught action keeps its steps, and the next command works.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+import uuid
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import psutil
+import pytest
+from textual.pilot import Pilot
+
+from shared.bus import Bus
+from shared.config import free_port, loopback_options
+from shared.messages import Say
+from tests.processes import ROOT
+from tests.tui.helpers import until
+from tui.app import PbdApp
+from tui.conversation import Conversation
+
+pytestmark = [pytest.mark.asyncio, pytest.mark.slow]
+
+SERVICES = ("sim", "perception", "nlu", "executor")
+INTERNAL = re.compile(r"\bobj\d+\b|Traceback|motion_id|\bm\d+\b")
+LIMIT = 600.0  # s: the longest any one wait of a command may take, progress or not
+
+
+class Robot:
+    """What the router carries, seen from a session of the test's own."""
+
+    def __init__(self, bus: Bus) -> None:
+        self.bus = bus
+        self.said: list[Say] = []
+        self.state: dict[str, Any] = {}
+        self.sim: dict[str, Any] = {}
+        self._lock = threading.Lock()
+        bus.subscribe(bus.keys.say, self._on_say, schema="say")
+        bus.subscribe(bus.keys.executor_state, lambda m: self._set("state", m), history=True)
+        bus.subscribe(bus.keys.sim_state, lambda m: self._set("sim", m), latest_only=True)
+
+    def _on_say(self, message: Say) -> None:
+        with self._lock:
+            self.said.append(message)
+
+    def _set(self, name: str, value: dict[str, Any]) -> None:
+        with self._lock:
+            setattr(self, name, value)
+
+    @property
+    def robot(self) -> dict[str, Any]:
+        return self.state.get("robot") or {}
+
+    def lines(self, since: int, kind: str | None = None) -> list[str]:
+        with self._lock:
+            return [m.text for m in self.said[since:] if kind is None or m.kind == kind]
+
+    def moving(self) -> bool:
+        return any((self.sim.get("moving") or {}).values())
+
+
+def _start_up(namespace: str, port: int, tmp_path: Path) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "hfpbd.launcher",
+            "--headless",
+            "--namespace",
+            namespace,
+            "--listen",
+            f"tcp/127.0.0.1:{port}",
+            "--log-dir",
+            str(tmp_path / "logs"),
+        ],
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env={**os.environ, "HFPBD_DATA_DIR": str(tmp_path / "data")},
+    )
+
+
+def _wait_listening(port: int, timeout: float = 60) -> None:
+    """Until the router accepts connections (a session opened before that would not find it)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=1).close()
+            return
+        except OSError:
+            if time.monotonic() > deadline:
+                raise
+            time.sleep(0.2)
+
+
+def _child(up: subprocess.Popen[str], name: str) -> psutil.Process:
+    return next(c for c in psutil.Process(up.pid).children() if f"services.{name}" in c.cmdline())
+
+
+async def _type(pilot: Pilot, text: str) -> None:
+    await pilot.press(*text, "enter")
+
+
+async def _until_progress(
+    pilot: Pilot, condition: Callable[[], bool], progressing: Callable[[], bool], what: str, quiet: float = 60.0
+) -> None:
+    """Until ``condition()``, for as long as ``progressing()`` keeps saying the robot is at it.
+
+    Why not a fixed timeout: on a loaded two-core machine, planning a move can
+    take over a minute before the arm stirs. The wait fails only when the
+    robot has done nothing towards it (``progressing()`` false) for ``quiet``
+    seconds, or after ``LIMIT`` seconds in all.
+    """
+    started = last_progress = time.monotonic()
+    while not condition():
+        now = time.monotonic()
+        if progressing():
+            last_progress = now
+        if now - last_progress > quiet or now - started > LIMIT:
+            raise AssertionError(f"timed out waiting for {what} (no progress for {now - last_progress:.0f} s)")
+        await pilot.pause(0.05)
+
+
+async def _restarted(
+    pilot: Pilot, app: PbdApp, robot: Robot, up: subprocess.Popen[str], name: str, since: int, old_pid: int
+) -> None:
+    """The launcher said it restarts ``name``, the UI said it stopped and that it is back."""
+    conversation = app.query_one(Conversation)
+    await until(
+        pilot,
+        lambda: any(f"The {name} service stopped" in t and "restarting it" in t for t in robot.lines(since, "error")),
+        timeout=30,
+        what=f"the launcher to restart {name}",
+    )
+    await until(
+        pilot,
+        lambda: any(t.startswith(f"{name} stopped:") for t in conversation.texts("warning")),
+        timeout=30,
+        what=f"the UI to show {name} stopped",
+    )
+    await until(pilot, lambda: f"{name} is back" in conversation.texts("ui"), timeout=150, what=f"{name} back")
+    assert _child(up, name).pid != old_pid
+
+
+async def test_each_service_killed_mid_work_is_restarted_and_the_robot_carries_on(tmp_path: Path) -> None:
+    namespace, port = "fault" + uuid.uuid4().hex[:8], free_port()
+    up = _start_up(namespace, port, tmp_path)
+    _wait_listening(port)
+    bus = Bus(loopback_options(namespace, port, listen=False))
+    robot = Robot(bus)
+    app = PbdApp(loopback_options(namespace, port, listen=False), probe_seconds=None)
+    try:
+        async with app.run_test(size=(140, 45)) as pilot:
+            conversation = app.query_one(Conversation)
+
+            def busy() -> bool:
+                return bool(robot.robot.get("busy")) or robot.moving()
+
+            async def idle(what: str) -> None:
+                await _until_progress(pilot, lambda: not busy(), busy, what)
+
+            async def command(text: str, done: Callable[[], bool], what: str) -> None:
+                since = len(robot.said)
+                await _type(pilot, text)
+                await until(pilot, lambda: busy() or done(), 30, f"{text!r} taken up")
+                await _until_progress(pilot, done, busy, what)
+                await idle(f"idle after {text!r}")
+                assert robot.lines(since, "error") == [], (text, robot.lines(since))
+
+            await until(
+                pilot,
+                lambda: sum(o.type == "cup" for o in app.world.objects.values()) >= 2 and bool(app.world.reach),
+                timeout=240,
+                what="every service up, the cups seen and reach known",
+            )
+            await until(pilot, lambda: set(SERVICES) <= bus.alive_services(timeout=0.5), 60, "every service seen")
+            await until(pilot, lambda: bool(robot.robot) and bool(robot.sim), 30, "the robot's state")
+            await command("create a new action", lambda: robot.robot.get("action") == 1, "action 1 created")
+            await command(
+                "move your right hand up", lambda: robot.robot.get("actions") == [1], "the first step recorded"
+            )
+            taught = list(robot.robot["steps"])
+
+            # 1. the executor, during a pick-up
+            since = len(robot.said)
+            await _type(pilot, "pick up the red cup")
+            await _until_progress(
+                pilot,
+                lambda: robot.robot.get("busy") == "pick_up" and robot.moving(),
+                lambda: robot.robot.get("busy") == "pick_up",
+                "the pick-up moving an arm",
+            )
+            executor = _child(up, "executor")
+            executor.send_signal(signal.SIGKILL)
+            await _restarted(pilot, app, robot, up, "executor", since, executor.pid)
+            interrupted = re.compile(r"I was interrupted while picking up the \w+ cup with your right hand: .*")
+
+            def said_interrupted(lines: list[str]) -> bool:
+                return any(interrupted.fullmatch(t) and "Action 1 still has 1 step." in t for t in lines)
+
+            await until(
+                pilot,
+                lambda: said_interrupted(robot.lines(since, "error")),
+                timeout=60,
+                what="the restarted executor to say the pick-up was interrupted",
+            )
+            await until(
+                pilot,
+                lambda: said_interrupted(conversation.texts("error")),
+                timeout=10,
+                what="the UI to show the interruption",
+            )
+            await until(pilot, lambda: robot.robot.get("steps") == taught, timeout=30, what="the steps back")
+            await idle("the restarted executor idle")
+            await command("close your right hand", lambda: robot.robot.get("actions") == [2], "the next command done")
+
+            # 2. the simulator, during a move
+            since = len(robot.said)
+            await _type(pilot, "move your left hand up")
+            await _until_progress(
+                pilot, lambda: bool((robot.sim.get("moving") or {}).get("left")), busy, "the left arm moving"
+            )
+            sim = _child(up, "sim")
+            sim.send_signal(signal.SIGKILL)
+            lost = "My left arm could not move: the simulator stopped during the motion, so it was interrupted."
+            await until(pilot, lambda: lost in robot.lines(since, "error"), 30, "the executor to report the move cut")
+            await _restarted(pilot, app, robot, up, "sim", since, sim.pid)
+            await until(pilot, lambda: lost in conversation.texts("error"), 10, "the UI to show the cut move")
+            assert robot.robot.get("actions") == [2]
+            await until(pilot, lambda: bool(app.world.reach), 120, "reach known again")
+            await command("move your left hand up", lambda: robot.robot.get("actions") == [3], "a move after it")
+
+            # 3. the language service, between two utterances
+            since = len(robot.said)
+            nlu = _child(up, "nlu")
+            nlu.send_signal(signal.SIGKILL)
+            await _restarted(pilot, app, robot, up, "nlu", since, nlu.pid)
+            await command("close your left hand", lambda: robot.robot.get("actions") == [4], "a command understood")
+
+            # 4. perception, during a record: held still (SIGSTOP) so the executor's request is surely in flight
+            since = len(robot.said)
+            perception = _child(up, "perception")
+            perception.send_signal(signal.SIGSTOP)
+            reply = bus.request(bus.keys.executor_control("command"), {"procedure": "record", "args": {}})
+            assert reply["ok"], reply
+            await until(pilot, lambda: robot.robot.get("busy") == "record", 30, "the record taken up")
+            await _until_progress(pilot, robot.moving, busy, "the arms going out of the view")
+            still = time.monotonic()
+            while time.monotonic() - still < 3.0:  # the arms to the side and the head on the table, then the query
+                await pilot.pause(0.1)
+                if robot.moving():
+                    still = time.monotonic()
+            perception.send_signal(signal.SIGKILL)
+            cut = "I couldn't finish looking at the table: the perception service stopped, so it was interrupted."
+            await until(pilot, lambda: cut in robot.lines(since, "error"), 30, "the executor to report the record cut")
+            await _restarted(pilot, app, robot, up, "perception", since, perception.pid)
+            since = len(robot.said)
+            reply = bus.request(bus.keys.executor_control("command"), {"procedure": "record", "args": {}})
+            assert reply["ok"], reply
+            await until(
+                pilot, lambda: any(t.startswith("Found ") for t in robot.lines(since, "info")), 60, "a record after it"
+            )
+            await idle("idle after the record")
+            assert robot.lines(since, "error") == []
+
+            assert robot.robot["action"] == 1 and robot.robot["actions"] == [4]
+            assert robot.robot["steps"][0] == taught[0]
+            said = [m.text for m in robot.said]
+            assert not [t for t in said if INTERNAL.search(t)], [t for t in said if INTERNAL.search(t)]
+    finally:
+        bus.close()
+        up.send_signal(signal.SIGINT)
+        try:
+            up.wait(60)
+        except subprocess.TimeoutExpired:
+            up.kill()
+            up.wait(10)
