@@ -572,6 +572,8 @@ class Procedures:
                 self._out_of_reach(arm, kin, obj, words)
                 or wording.cannot_pick(arm, words, self._in_the_way(kin, snap, obj) or "I can't reach around it")
             )
+        # what it stands on, as seen before the hand came over it (from above, its outline merges with the object's)
+        supports = self._standing_on(object, Box.of(obj), snap)
         reason = "it slipped out of my fingers"
         for attempt, (grasp, pre_q) in enumerate(itertools.islice(itertools.chain([first], plans), PICK_ATTEMPTS)):
             self._open_on_the_way(
@@ -585,9 +587,8 @@ class Procedures:
                     continue
                 self._go(arm, down)
                 kin, snap = self._ready(arm)
-            # what it stands on may look different with the hand right above (its outline merges with the
-            # object's), and the fingers close around the object, above that support's top: not in the way
-            approach = kin.straight_line(grasp.grasp, ignore=(object, *self._standing_on(object, Box.of(obj), snap)))
+            # the fingers close around the object, above the top of what it stands on: that is not in the way
+            approach = kin.straight_line(grasp.grasp, ignore=(object, *supports))
             if approach is None:
                 # checked clear from the planned pre-grasp, but not from where the arm stopped or with what the
                 # camera sees now (a hand beside an object changes its outline): on to the next grasp
