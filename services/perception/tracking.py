@@ -273,6 +273,27 @@ class Tracker:
         share = self.settings.partial_share
         return sighting.clipped or sighting.points < share * last.points or sighting.size[2] < share * whole.size[2]
 
+    def _seen_elsewhere(self, track: Track) -> bool:
+        """Whether a visible track of the same colour and type covers most of this unseen track's footprint.
+
+        Two tracks of one object arise when a piece of it, cut off by an
+        arm, was taken for an object of its own; while that piece is hidden
+        it would be kept for ever, a phantom plate beside the real one that
+        leaves no free spot on the table near it.
+        """
+        whole = track.shown or track.descriptor
+        return any(
+            other is not track
+            and other.visible
+            and other.confirmed
+            and other.held_by is None
+            and (other.shown or other.descriptor).color == whole.color
+            and (other.shown or other.descriptor).type == whole.type
+            and footprint_share(whole, other.shown or other.descriptor) >= self.settings.overlap_share
+            and _level_with(whole, other.shown or other.descriptor)  # not one of two alike boxes stacked
+            for other in self.tracks
+        )
+
     def _piece_of_known(self, detection: Descriptor) -> bool:
         """A cluster lying on a known object's footprint is part of it (cut by an arm), not a new object.
 
@@ -318,9 +339,16 @@ class Tracker:
             return True
         if not track.confirmed:
             return False  # a candidate must be seen in consecutive frames
+        if self._seen_elsewhere(track):
+            return False  # an object seen now in full is this one: the unseen track was a second sighting of it
         if track.missed >= self.settings.gone_frames and newest > track.last_seen:
             return False  # plainly absent while new objects appeared: it moved, or the scene changed
         return now - track.last_seen <= self.settings.forget_after
+
+
+def _level_with(a: Descriptor, b: Descriptor) -> bool:
+    """Whether two objects' centres are less than half the taller one's height apart in height."""
+    return abs(float(a.position[2] - b.position[2])) < max(float(a.size[2]), float(b.size[2])) / 2
 
 
 def _covered(track: Track, detections: list[Descriptor]) -> bool:

@@ -227,3 +227,27 @@ def test_a_plate_an_arm_sweeps_across_keeps_its_id_piece_after_piece():
         items = tracker.update(detections, 0.4 + 0.2 * k)
         assert [(o["id"], o["visible"]) for o in items] == [(plate_id, True)], f"frame {k}"
     assert items[0]["position"][0] == pytest.approx(0.397, abs=0.01)
+
+
+def test_a_hidden_second_sighting_of_a_plate_seen_in_full_is_dropped():
+    """A piece of the plate, taken for a plate of its own, and then hidden behind the arm is not kept for ever."""
+    tracker = Tracker()
+    plate = _sighting((0.63, 0.0, 0.728), (0.158, 0.159, 0.015), 9000, color="white", kind="plate", confidence=0.95)
+    ghost = _sighting((0.60, -0.05, 0.728), (0.158, 0.138, 0.015), 7000, color="white", kind="plate", confidence=0.9)
+    tracker.update([plate, ghost], 0.0)
+    ids = {o["id"] for o in tracker.update([plate, ghost], 0.2)}
+    assert len(ids) == 2  # two sightings far enough apart to be tracked as two
+    always_hidden = lambda position: bool(position[1] < -0.03)  # noqa: E731 — the arm hides the ghost's place
+    items = tracker.update([plate], 0.4, hidden=always_hidden)
+    assert [o["position"][:2] for o in items] == [pytest.approx([0.63, 0.0])]
+
+
+def test_a_box_hidden_under_an_alike_box_standing_on_it_is_kept():
+    """Two green boxes stacked: the lower one, hidden, is not a second sighting of the upper."""
+    tracker = Tracker()
+    lower = _sighting((0.5, 0.0, 0.75), (0.06, 0.06, 0.06), 3000, color="green", kind="box", confidence=0.9)
+    upper = _sighting((0.5, 0.0, 0.81), (0.06, 0.06, 0.06), 3000, color="green", kind="box", confidence=0.9)
+    tracker.update([lower, upper], 0.0)
+    tracker.update([lower, upper], 0.2)
+    items = tracker.update([upper], 0.4, hidden=lambda position: bool(position[2] < 0.78))
+    assert len(items) == 2
