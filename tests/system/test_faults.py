@@ -52,6 +52,7 @@ class Robot:
         self.said: list[Say] = []
         self.state: dict[str, Any] = {}
         self.sim: dict[str, Any] = {}
+        self.changes: list[tuple[float, str]] = []  # (monotonic s, what changed): busy and moving, as they change
         self._lock = threading.Lock()
         bus.subscribe(bus.keys.say, self._on_say, schema="say")
         bus.subscribe(bus.keys.executor_state, lambda m: self._set("state", m), history=True)
@@ -64,6 +65,15 @@ class Robot:
     def _set(self, name: str, value: dict[str, Any]) -> None:
         with self._lock:
             setattr(self, name, value)
+            change = f"{name}: {value.get('moving') if name == 'sim' else (value.get('robot') or {}).get('busy')}"
+            if not self.changes or self.changes[-1][1] != change:
+                self.changes.append((time.monotonic(), change))
+
+    def recent_changes(self) -> str:
+        """The last busy and moving changes, for a failed wait to show what the robot did."""
+        with self._lock:
+            start = self.changes[-1][0] if self.changes else 0.0
+            return "; ".join(f"{at - start:+.1f} s {change}" for at, change in self.changes[-12:])
 
     @property
     def robot(self) -> dict[str, Any]:
@@ -121,7 +131,12 @@ async def _type(pilot: Pilot, text: str) -> None:
 
 
 async def _until_progress(
-    pilot: Pilot, condition: Callable[[], bool], progressing: Callable[[], bool], what: str, quiet: float = 60.0
+    pilot: Pilot,
+    condition: Callable[[], bool],
+    progressing: Callable[[], bool],
+    what: str,
+    explain: Callable[[], str],
+    quiet: float = 60.0,
 ) -> None:
     """Until ``condition()``, for as long as ``progressing()`` keeps saying the robot is at it.
 
@@ -136,7 +151,9 @@ async def _until_progress(
         if progressing():
             last_progress = now
         if now - last_progress > quiet or now - started > LIMIT:
-            raise AssertionError(f"timed out waiting for {what} (no progress for {now - last_progress:.0f} s)")
+            raise AssertionError(
+                f"timed out waiting for {what} (no progress for {now - last_progress:.0f} s); lately: {explain()}"
+            )
         await pilot.pause(0.05)
 
 
@@ -176,13 +193,13 @@ async def test_each_service_killed_mid_work_is_restarted_and_the_robot_carries_o
                 return bool(robot.robot.get("busy")) or robot.moving()
 
             async def idle(what: str) -> None:
-                await _until_progress(pilot, lambda: not busy(), busy, what)
+                await _until_progress(pilot, lambda: not busy(), busy, what, robot.recent_changes)
 
             async def command(text: str, done: Callable[[], bool], what: str) -> None:
                 since = len(robot.said)
                 await _type(pilot, text)
                 await until(pilot, lambda: busy() or done(), 30, f"{text!r} taken up")
-                await _until_progress(pilot, done, busy, what)
+                await _until_progress(pilot, done, busy, what, robot.recent_changes)
                 await idle(f"idle after {text!r}")
                 assert robot.lines(since, "error") == [], (text, robot.lines(since))
 
@@ -208,6 +225,7 @@ async def test_each_service_killed_mid_work_is_restarted_and_the_robot_carries_o
                 lambda: robot.robot.get("busy") == "pick_up" and robot.moving(),
                 lambda: robot.robot.get("busy") == "pick_up",
                 "the pick-up moving an arm",
+                robot.recent_changes,
             )
             executor = _child(up, "executor")
             executor.send_signal(signal.SIGKILL)
@@ -237,7 +255,11 @@ async def test_each_service_killed_mid_work_is_restarted_and_the_robot_carries_o
             since = len(robot.said)
             await _type(pilot, "move your left hand up")
             await _until_progress(
-                pilot, lambda: bool((robot.sim.get("moving") or {}).get("left")), busy, "the left arm moving"
+                pilot,
+                lambda: bool((robot.sim.get("moving") or {}).get("left")),
+                busy,
+                "the left arm moving",
+                robot.recent_changes,
             )
             sim = _child(up, "sim")
             sim.send_signal(signal.SIGKILL)
@@ -263,7 +285,7 @@ async def test_each_service_killed_mid_work_is_restarted_and_the_robot_carries_o
             reply = bus.request(bus.keys.executor_control("command"), {"procedure": "record", "args": {}})
             assert reply["ok"], reply
             await until(pilot, lambda: robot.robot.get("busy") == "record", 30, "the record taken up")
-            await _until_progress(pilot, robot.moving, busy, "the arms going out of the view")
+            await _until_progress(pilot, robot.moving, busy, "the arms going out of the view", robot.recent_changes)
             still = time.monotonic()
             while time.monotonic() - still < 3.0:  # the arms to the side and the head on the table, then the query
                 await pilot.pause(0.1)
