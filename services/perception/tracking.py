@@ -35,6 +35,7 @@ from shared.robot import ROBOT
 ARMS = ROBOT.arms
 NO_MATCH = 1e6
 COVERED_SHARE = 0.5  # of an unseen object's footprint under something seen standing on it: covered by it
+GRASP_REACH = 0.03  # m from an object's box to a tool frame whose fingers hold it
 
 
 @dataclass(frozen=True)
@@ -159,11 +160,16 @@ class Tracker:
         for arm, tool in tools.items():
             if any(t.held_by == arm for t in self.tracks):
                 continue
-            free = [t for t in self.tracks if t.confirmed and t.held_by is None]
+            # where each object was last published, not its latest raw sighting: a cup lifted off a box may have
+            # left the box's last sighting as one tall cluster of both, nearer the hand than the cup's; and only
+            # an object the fingers are at: the box under a cup is near the hand, but the fingers close above it
+            free = [
+                t
+                for t in self.tracks
+                if t.confirmed and t.held_by is None and _fingers_at(t.shown or t.descriptor, tool)
+            ]
             if not free:
                 continue
-            # where each object was last published, not its latest raw sighting: a cup lifted off a box may have
-            # left the box's last sighting as one tall cluster of both, nearer the hand than the cup's
             distances = [float(np.linalg.norm((t.shown or t.descriptor).position - tool)) for t in free]
             nearest = int(np.argmin(distances))
             if distances[nearest] <= self.settings.hold_radius:
@@ -344,6 +350,12 @@ class Tracker:
         if track.missed >= self.settings.gone_frames and newest > track.last_seen:
             return False  # plainly absent while new objects appeared: it moved, or the scene changed
         return now - track.last_seen <= self.settings.forget_after
+
+
+def _fingers_at(obj: Descriptor, tool: np.ndarray) -> bool:
+    """Whether a closed gripper's tool frame lies within ``GRASP_REACH`` of the object's box."""
+    outside = np.maximum(np.abs(tool - obj.position) - obj.size / 2, 0.0)
+    return float(np.linalg.norm(outside)) <= GRASP_REACH
 
 
 def _level_with(a: Descriptor, b: Descriptor) -> bool:

@@ -35,17 +35,19 @@ def seen(stack: Stack, truth_id: str) -> str:
     under a cup, so the nearest object alone could be the wrong one; and a
     cup put next to the other cup has the other within a few centimetres.
     """
-    kind = stack.truth[truth_id]["type"]
+    kind, colour = stack.truth[truth_id]["type"], stack.truth[truth_id]["color"]
 
     def found() -> str | None:
         where = stack.position(truth_id)
-        distances = {
-            k: float(np.linalg.norm(np.asarray(o["position"]) - where))
+        near = {
+            k: (o.get("color") != colour, float(np.linalg.norm(np.asarray(o["position"]) - where)))
             for k, o in stack.objects.items()
             if o.get("type") == kind  # hidden under the hand: still kept
+            and float(np.linalg.norm(np.asarray(o["position"]) - where)) < SEEN_WITHIN
         }
-        nearest = min(distances, key=distances.__getitem__, default=None)
-        return nearest if nearest is not None and distances[nearest] < SEEN_WITHIN else None
+        # its own colour first: the other cup may stand within a few centimetres; then the nearest (a cup on the
+        # box can take on a little of the box's colour)
+        return min(near, key=near.__getitem__, default=None)
 
     sightings = [(k, o["position"], o.get("held_by")) for k, o in stack.objects.items() if o.get("type") == kind]
     return stack.wait_for(

@@ -251,3 +251,14 @@ def test_a_box_hidden_under_an_alike_box_standing_on_it_is_kept():
     tracker.update([lower, upper], 0.2)
     items = tracker.update([upper], 0.4, hidden=lambda position: bool(position[2] < 0.78))
     assert len(items) == 2
+
+
+def test_a_hand_closing_on_a_cup_above_a_box_never_takes_the_box():
+    """The cup on the box is not confirmed yet when the gripper reports holding: the box stays where it stands."""
+    tracker = Tracker()
+    box = _sighting((0.5, 0.0, 0.75), (0.06, 0.06, 0.06), 3000, color="green", kind="box", confidence=0.9)
+    tracker.update([box], 0.0)
+    box_id = tracker.update([box], 0.2)[0]["id"]
+    _, state = reaching_arm((0.5, 0.0, 0.854), holding=True)  # fingers round the cup's rim, 7 cm above the lid
+    items = tracker.update([box], 0.4, state)
+    assert {o["id"]: o["held_by"] for o in items} == {box_id: None}
