@@ -575,7 +575,11 @@ class Procedures:
         # what it stands on, as seen before the hand came over it (from above, its outline merges with the object's)
         supports = self._standing_on(object, Box.of(obj), snap)
         reason = "it slipped out of my fingers"
-        for attempt, (grasp, pre_q) in enumerate(itertools.islice(itertools.chain([first], plans), PICK_ATTEMPTS)):
+        candidates, looked_again = itertools.chain([first], plans), False
+        for attempt in range(PICK_ATTEMPTS):
+            if (candidate := next(candidates, None)) is None:
+                break
+            grasp, pre_q = candidate
             self._open_on_the_way(
                 arm, kin, snap, pre_q, wording.cannot_pick(arm, words, "I can't find a clear path to it")
             )
@@ -601,6 +605,10 @@ class Procedures:
             if snap.gripper_state(arm) != "holding":
                 reason = "my fingers closed on nothing"
                 self._release_and_back_off(arm)
+                if not looked_again:  # it is not where it was seen (a cup on a box is seen a few cm off): look again
+                    looked_again = True
+                    kin, obj, candidates = self._look_again(arm, object)
+                    supports = self._standing_on(object, Box.of(obj), self._snapshot())
                 continue
             kin.set_joints(snap.joints())
             tool = kin.fk()
@@ -777,6 +785,20 @@ class Procedures:
         # it was lifted from, the object would stand on the box again.
         below = destination == "here" or self._free_spot(held, first[1], snap, self._flat_below(held, first[1], snap))
         pairs = ([first] if below else []) + [pair for pair in around if self._free_spot(held, pair[1], snap)]
+        log.info(
+            "down %s from %s: right below %s, %d of %d spots around free; holding %s in %s; objects seen: %s",
+            where,
+            np.round(first[1][:3], 3).tolist(),
+            "free" if below else "taken",
+            len(pairs) - below,
+            len(around),
+            held.object_id,
+            np.round(held.box.center, 3).tolist(),
+            {
+                k: (np.round(o.position, 3).tolist(), np.round(o.size, 3).tolist(), o.held_by)
+                for k, o in snap.objects.items()
+            },
+        )
         done = self._place(
             arm, kin, snap, held, pairs, wording.sentence(f"I can't find a clear path to put it down {where}")
         )
