@@ -263,7 +263,7 @@ class Tracker:
         if (
             not track.near_hand
             and not detection.clipped
-            and detection.size[2] >= self.settings.partial_share * (known or detection).size[2]
+            and not self._partial(detection, detection, known or detection)
             and detection.confidence >= self.settings.confident
             and (
                 known is None
@@ -274,10 +274,15 @@ class Tracker:
             track.identity = detection
 
     def _partial(self, sighting: Descriptor, last: Descriptor, whole: Descriptor) -> bool:
-        """Only part of the object shows: cut by the picture's edge, with under half of ``last``'s points, or
-        under half of ``whole``'s height (a box whose sides an arm hides shows only its top face)."""
+        """The sighting is not the object alone: cut by the picture's edge, with under half of ``last``'s points,
+        under half of ``whole``'s height (a box whose sides an arm hides shows only its top face), or half as tall
+        again (a box merged with the cup on it, when the hand above hides the cup's colour)."""
         share = self.settings.partial_share
-        return sighting.clipped or sighting.points < share * last.points or sighting.size[2] < share * whole.size[2]
+        return (
+            sighting.clipped
+            or sighting.points < share * last.points
+            or not share * whole.size[2] <= sighting.size[2] <= (1 + share) * whole.size[2]
+        )
 
     def _seen_elsewhere(self, track: Track) -> bool:
         """Whether a visible track of the same colour and type covers most of this unseen track's footprint.

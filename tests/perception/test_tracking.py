@@ -262,3 +262,15 @@ def test_a_hand_closing_on_a_cup_above_a_box_never_takes_the_box():
     _, state = reaching_arm((0.5, 0.0, 0.854), holding=True)  # fingers round the cup's rim, 7 cm above the lid
     items = tracker.update([box], 0.4, state)
     assert {o["id"]: o["held_by"] for o in items} == {box_id: None}
+
+
+def test_a_box_seen_merged_with_the_cup_on_it_keeps_its_size():
+    """With the hand above, the cup's colour hides and box and cup are one tall green cluster: the box stays a box."""
+    tracker = Tracker()
+    box = _sighting((0.5, 0.0, 0.75), (0.06, 0.06, 0.06), 3000, color="green", kind="box", confidence=0.9)
+    tracker.update([box], 0.0)
+    tracker.update([box], 0.2)
+    merged = _sighting((0.5, 0.0, 0.80), (0.07, 0.065, 0.16), 5000, color="green", kind="box", confidence=0.9)
+    for step in range(3):
+        (item,) = tracker.update([merged], 0.4 + 0.2 * step)
+    assert item["size"][2] == pytest.approx(0.06) and item["position"][2] == pytest.approx(0.75)
