@@ -214,7 +214,7 @@ class Procedures:
         """The held object's box from the offset measured at grasp time and the tool pose now."""
         kin.set_joints(snap.joints())
         tool = kin.fk()
-        return Held(held.object_id, Box(held.center_at(tool), held.box.size), tool)
+        return Held(held.object_id, Box(held.center_at(tool), held.box.size), tool, held.lifted_off)
 
     def _object(self, snap: SceneSnapshot, object_id: str) -> PerceivedObject:
         if object_id not in snap.objects:
@@ -613,7 +613,9 @@ class Procedures:
             kin.set_joints(snap.joints())
             tool = kin.fk()
             box = Box.of(obj)
-            self._set_held(arm, targets.held_in_hand(object, box, tool, self._support_below(object, box, snap)))
+            support_top = self._support_below(object, box, snap)
+            lifted_off = box if support_top > snap.table_z + FLAT_MARGIN else None
+            self._set_held(arm, targets.held_in_hand(object, box, tool, support_top, lifted_off))
             kin, snap = self._ready(arm)
             trajectory = self._lift(kin, grasp.lift[2] - grasp.grasp[2])
             if trajectory is None:
@@ -783,8 +785,16 @@ class Procedures:
         # right below first, landing on a plate's rim allowed; then only free spots of the table around it.
         # Down on the table, right below counts only where nothing but flat things lie there: lowered onto the box
         # it was lifted from, the object would stand on the box again.
-        below = destination == "here" or self._free_spot(held, first[1], snap, self._flat_below(held, first[1], snap))
-        pairs = ([first] if below else []) + [pair for pair in around if self._free_spot(held, pair[1], snap)]
+        below = destination == "here" or (
+            self._free_spot(held, first[1], snap, self._flat_below(held, first[1], snap))
+            and not self._back_where_lifted(held, first[1])
+        )
+        pairs = ([first] if below else []) + [
+            pair
+            for pair in around
+            if self._free_spot(held, pair[1], snap)
+            and (destination == "here" or not self._back_where_lifted(held, pair[1]))
+        ]
         log.info(
             "down %s from %s: right below %s, %d of %d spots around free; holding %s in %s; objects seen: %s",
             where,
@@ -805,6 +815,20 @@ class Procedures:
         if done is None:
             raise StepFailed(wording.sentence(f"I can't lower my {arm} hand to put it down {where}"))
         return done
+
+    @staticmethod
+    def _back_where_lifted(held: Held, release: np.ndarray) -> bool:
+        """Whether the held object, released at ``release``, would stand where it stood on what it was lifted off.
+
+        Perception may lose a box under the hand that just lifted a cup off
+        it; lowered "onto the table" there, the cup would stand on the box again.
+        """
+        if held.lifted_off is None:
+            return False
+        center = held.center_at(release)
+        return bool(
+            np.all(np.abs(center[:2] - held.lifted_off.center[:2]) < held.lifted_off.half[:2] + held.box.half[:2])
+        )
 
     def _free_spot(self, held: Held, release: np.ndarray, snap: SceneSnapshot, on: Collection[str] = ()) -> bool:
         """Whether the held object released at ``release`` would stand clear of every other object's footprint.

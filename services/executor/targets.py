@@ -44,6 +44,9 @@ class Held:
     object_id: str
     box: Box
     tool_pose: np.ndarray
+    # the footprint it stood on when picked up, when that was another object (a box, a plate), not the table:
+    # the executor's own memory of it, for when perception loses that object under the hand
+    lifted_off: Box | None = None
 
     @property
     def offset(self) -> np.ndarray:
@@ -56,7 +59,9 @@ class Held:
         return np.asarray(tool_pose[:3], float) + turn.apply(self.offset)
 
 
-def held_in_hand(object_id: str, box: Box, tool_pose: np.ndarray, support_top: float) -> Held:
+def held_in_hand(
+    object_id: str, box: Box, tool_pose: np.ndarray, support_top: float, lifted_off: Box | None = None
+) -> Held:
     """The held object as the grasp achieved it: between the pads, standing no lower than it stood.
 
     The closed fingers centre the object on the line between the pads, so
@@ -70,7 +75,7 @@ def held_in_hand(object_id: str, box: Box, tool_pose: np.ndarray, support_top: f
     center = np.array(box.center, float)
     center -= float(np.dot(center - np.asarray(tool_pose[:3], float), fingers)) * fingers
     center[2] = max(center[2], support_top + box.size[2] / 2)
-    return Held(object_id, Box(center, np.array(box.size, float)), np.asarray(tool_pose, float))
+    return Held(object_id, Box(center, np.array(box.size, float)), np.asarray(tool_pose, float), lifted_off)
 
 
 def _carry(tool_pose: np.ndarray, held: Held, centers: list[np.ndarray], lift: float = 0.0) -> list[np.ndarray]:

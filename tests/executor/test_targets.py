@@ -9,6 +9,7 @@ from services.executor import geometry as geo
 from services.executor import targets
 from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics
+from services.executor.procedures import Procedures
 from services.executor.reach import sync
 from services.executor.scene import Scene, measured, perceived
 from services.executor.targets import Held
@@ -150,3 +151,17 @@ def test_what_a_cup_stands_on_is_modelled_below_it_even_when_seen_too_high() -> 
     assert boxes["cup"].bottom == pytest.approx(plate_top)
     np.testing.assert_allclose(boxes["saucer"].center, objects[2]["position"])  # nothing stands on it: as seen
     np.testing.assert_allclose(boxes["bowl"].center, objects[5]["position"])  # its walls stay around the egg
+
+
+def test_a_cup_lifted_off_a_box_is_never_put_down_on_the_table_where_it_stood() -> None:
+    """The executor remembers the footprint a cup was lifted off, for when perception loses the box under the hand."""
+    stood = Box(np.array([0.48, 0.0, 0.83]), CUP)
+    tool = geo.make_pose([0.48, 0.0, 0.95], geo.facing([1.0, 0.0, 0.0]))
+    held = targets.held_in_hand("cup", stood, tool, support_top=0.78, lifted_off=stood)
+    assert held.box.center[2] == pytest.approx(0.83)
+    straight_down = geo.shifted(tool, [0.0, 0.0, -0.12])
+    beside = geo.shifted(tool, [0.0, 0.12, -0.12])
+    assert Procedures._back_where_lifted(held, straight_down)
+    assert not Procedures._back_where_lifted(held, beside)
+    from_the_table = targets.held_in_hand("cup", stood, tool, support_top=TABLE_TOP_Z)
+    assert not Procedures._back_where_lifted(from_the_table, straight_down)
