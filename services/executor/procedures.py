@@ -574,6 +574,7 @@ class Procedures:
             )
         # what it stands on, as seen before the hand came over it (from above, its outline merges with the object's)
         supports = self._standing_on(object, Box.of(obj), snap)
+        stood_on = max([snap.table_z, *(Box.of(snap.objects[oid]).top for oid in supports)])
         reason = "it slipped out of my fingers"
         candidates, looked_again = itertools.chain([first], plans), False
         for attempt in range(PICK_ATTEMPTS):
@@ -608,12 +609,15 @@ class Procedures:
                 if not looked_again:  # it is not where it was seen (a cup on a box is seen a few cm off): look again
                     looked_again = True
                     kin, obj, candidates = self._look_again(arm, object)
-                    supports = self._standing_on(object, Box.of(obj), self._snapshot())
+                    fresh = self._snapshot()
+                    supports = self._standing_on(object, Box.of(obj), fresh)
+                    stood_on = max([stood_on, *(Box.of(fresh.objects[oid]).top for oid in supports)])
                 continue
             kin.set_joints(snap.joints())
             tool = kin.fk()
             box = Box.of(obj)
-            support_top = self._support_below(object, box, snap)
+            # what it stood on as seen before the hand came over it: under the hand, perception may lose it
+            support_top = max(self._support_below(object, box, snap), stood_on)
             lifted_off = box if support_top > snap.table_z + FLAT_MARGIN else None
             self._set_held(arm, targets.held_in_hand(object, box, tool, support_top, lifted_off))
             kin, snap = self._ready(arm)
