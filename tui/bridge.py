@@ -45,8 +45,13 @@ class Bridge:
         return self.bus is not None
 
     def open(self) -> None:
-        """Open the session and declare every subscription (blocking: call from a worker)."""
-        bus = Bus(self.options)
+        """Open the session and declare every subscription (blocking: call from a worker).
+
+        The bus is usable before the first subscription is declared: a
+        subscription's history arrives at once, and a handler of it (asking the
+        NLU to describe the objects just seen) must find the bus there.
+        """
+        bus = self.bus = Bus(self.options)
         keys = bus.keys
         bus.subscribe(keys.say, self._on_say, schema="say")
         bus.subscribe(keys.nlu_result, self._on_nlu_result, schema="nlu_result")
@@ -56,7 +61,6 @@ class Bridge:
         )
         bus.subscribe(keys.sim_state, self._on_sim_state, schema="sim_state", latest_only=True)
         bus.watch_alive(lambda service, alive: self._app.post_message(events.Presence(service, alive)))
-        self.bus = bus
         self._app.post_message(events.BusConnected())
 
     def watch_camera(self) -> None:

@@ -25,7 +25,7 @@ import itertools
 import logging
 import threading
 from collections.abc import Callable, Collection, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import partial
 from typing import Any
 
@@ -122,7 +122,7 @@ class Procedures:
         held = self.held().get(arm)
         if held is None:
             return None
-        return refer(snap.objects, held.object_id)
+        return refer(snap.objects, held.object_id, held.seen_as)
 
     # -- preconditions -----------------------------------------------------------------
     def precheck(self, procedure: str, args: dict[str, Any]) -> None:
@@ -146,7 +146,7 @@ class Procedures:
             self._holding(arm, snap)
         elif procedure == "pick_up":
             if held[arm] is not None or gripper == "holding":
-                what = refer(snap.objects, held[arm].object_id) if held[arm] else "something"
+                what = refer(snap.objects, held[arm].object_id, held[arm].seen_as) if held[arm] else "something"
                 raise StepFailed(wording.sentence(f"My {arm} hand is already holding {what}"))
             other = "left" if arm == "right" else "right"
             if (held[other] is not None and held[other].object_id == object_id) or snap.objects[
@@ -180,7 +180,7 @@ class Procedures:
         for hand in ARMS:
             if snap.gripper_state(hand) == "holding":
                 held = self.held().get(hand)
-                what = refer(snap.objects, held.object_id) if held else "something"
+                what = refer(snap.objects, held.object_id, held.seen_as) if held else "something"
                 raise StepFailed(
                     wording.sentence(
                         f"My {hand} hand is holding {what}, so I won't {verb} both hands; tell me which hand to {verb}"
@@ -214,7 +214,7 @@ class Procedures:
         """The held object's box from the offset measured at grasp time and the tool pose now."""
         kin.set_joints(snap.joints())
         tool = kin.fk()
-        return Held(held.object_id, Box(held.center_at(tool), held.box.size), tool, held.lifted_off)
+        return replace(held, box=Box(held.center_at(tool), held.box.size), tool_pose=tool)
 
     def _object(self, snap: SceneSnapshot, object_id: str) -> PerceivedObject:
         if object_id not in snap.objects:
@@ -619,7 +619,7 @@ class Procedures:
             # what it stood on as seen before the hand came over it: under the hand, perception may lose it
             support_top = max(self._support_below(object, box, snap), stood_on)
             lifted_off = box if support_top > snap.table_z + FLAT_MARGIN else None
-            self._set_held(arm, targets.held_in_hand(object, box, tool, support_top, lifted_off))
+            self._set_held(arm, targets.held_in_hand(object, box, tool, support_top, lifted_off, seen_as=obj))
             kin, snap = self._ready(arm)
             trajectory = self._lift(kin, grasp.lift[2] - grasp.grasp[2])
             if trajectory is None:
@@ -1048,7 +1048,7 @@ class Procedures:
                 raise StepFailed("I can't lower it back to where it stood: something is in the way now.")
             self._go(arm, descent)
             return self._release(arm, held)
-        raise StepFailed(f"I can't reach the place where {refer(snap.objects, held.object_id)} stood.")
+        raise StepFailed(f"I can't reach the place where {refer(snap.objects, held.object_id, held.seen_as)} stood.")
 
     def _lowerable(
         self, kin: ArmKinematics, snap: SceneSnapshot, held: Held, hover: np.ndarray, release: np.ndarray
@@ -1134,7 +1134,7 @@ class Procedures:
                     key=lambda o: float(np.linalg.norm(np.asarray(o.position) - tool[:3])),
                 )
                 if nearest is not None:
-                    self._set_held(hand, Held(nearest.id, Box.of(nearest), tool))
+                    self._set_held(hand, Held(nearest.id, Box.of(nearest), tool, seen_as=nearest))
         return Done()
 
     # -- p13 -------------------------------------------------------------------------------------------------

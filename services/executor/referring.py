@@ -41,4 +41,4 @@ def refer(objects: dict[str, PerceivedObject], object_id: str, remembered: Perce
         return describe_objects(objects).get(object_id) or f"the {kind_words(obj.color, obj.type)}"
     if remembered is not None:
         return f"the {kind_words(remembered.color, remembered.type)}"
-    return f"object {object_id}"
+    return "that object"  # never its id: the person was never told it

@@ -20,7 +20,7 @@ import numpy as np
 
 from services.executor import geometry as geo
 from services.executor.geometry import Box
-from shared.messages import WorldObject
+from shared.messages import PerceivedObject, WorldObject
 
 HOVER = 0.06  # a carried object is brought this far above its release point first
 # Headings (rad about the vertical) a carried object may be turned to: the hand keeps the grasp's
@@ -47,6 +47,8 @@ class Held:
     # the footprint it stood on when picked up, when that was another object (a box, a plate), not the table:
     # the executor's own memory of it, for when perception loses that object under the hand
     lifted_off: Box | None = None
+    # the object as seen when grasped, so it is still named by its kind ("the red cup") while the hand hides it
+    seen_as: PerceivedObject | None = None
 
     @property
     def offset(self) -> np.ndarray:
@@ -60,7 +62,12 @@ class Held:
 
 
 def held_in_hand(
-    object_id: str, box: Box, tool_pose: np.ndarray, support_top: float, lifted_off: Box | None = None
+    object_id: str,
+    box: Box,
+    tool_pose: np.ndarray,
+    support_top: float,
+    lifted_off: Box | None = None,
+    seen_as: PerceivedObject | None = None,
 ) -> Held:
     """The held object as the grasp achieved it: between the pads, standing no lower than it stood.
 
@@ -75,7 +82,7 @@ def held_in_hand(
     center = np.array(box.center, float)
     center -= float(np.dot(center - np.asarray(tool_pose[:3], float), fingers)) * fingers
     center[2] = max(center[2], support_top + box.size[2] / 2)
-    return Held(object_id, Box(center, np.array(box.size, float)), np.asarray(tool_pose, float), lifted_off)
+    return Held(object_id, Box(center, np.array(box.size, float)), np.asarray(tool_pose, float), lifted_off, seen_as)
 
 
 def _carry(tool_pose: np.ndarray, held: Held, centers: list[np.ndarray], lift: float = 0.0) -> list[np.ndarray]:

@@ -7,6 +7,7 @@ import pytest
 from services.executor import wording
 from services.executor.commands import CommandError, check
 from services.executor.referring import describe_objects
+from services.executor.referring import refer as name_object
 from shared.messages import PerceivedObject
 
 pytestmark = pytest.mark.unit
@@ -105,3 +106,10 @@ def test_referring_expressions_single_objects_out() -> None:
     words = describe_objects(objects)
     assert len(set(words.values())) == 3
     assert "box" in words["obj2"] and "cup" in words["obj0"]
+
+
+def test_an_object_perception_lost_is_named_by_its_kind_and_never_by_its_id() -> None:
+    """A cup hidden by the hand that holds it drops out of perception's objects; narration still names it."""
+    cup = PerceivedObject(id="obj5", color="red", type="cup", position=(0.6, 0.2, 0.9), size=(0.07, 0.07, 0.1))
+    assert name_object({}, "obj5", cup) == "the red cup"
+    assert "obj5" not in name_object({}, "obj5")
