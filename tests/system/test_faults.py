@@ -53,6 +53,7 @@ class Robot:
         self.state: dict[str, Any] = {}
         self.sim: dict[str, Any] = {}
         self.changes: list[tuple[float, str]] = []  # (monotonic s, what changed): busy and moving, as they change
+        self._when_moving: tuple[str, Callable[[], None]] | None = None
         self._lock = threading.Lock()
         bus.subscribe(bus.keys.say, self._on_say, schema="say")
         bus.subscribe(bus.keys.executor_state, lambda m: self._set("state", m), history=True)
@@ -68,6 +69,18 @@ class Robot:
             change = f"{name}: {value.get('moving') if name == 'sim' else (value.get('robot') or {}).get('busy')}"
             if not self.changes or self.changes[-1][1] != change:
                 self.changes.append((time.monotonic(), change))
+            if name == "sim" and self._when_moving and (value.get("moving") or {}).get(self._when_moving[0]):
+                action, self._when_moving = self._when_moving[1], None
+                action()
+
+    def when_moving(self, arm: str, action: Callable[[], None]) -> None:
+        """Run ``action`` on the first sim/state sample with ``arm`` moving, from the bus's own thread.
+
+        A poll from the UI's event loop, stalled by a loaded machine, can miss
+        a short move altogether; the sample's handler cannot.
+        """
+        with self._lock:
+            self._when_moving = (arm, action)
 
     def recent_changes(self) -> str:
         """The last busy and moving changes, for a failed wait to show what the robot did."""
@@ -251,18 +264,13 @@ async def test_each_service_killed_mid_work_is_restarted_and_the_robot_carries_o
             await idle("the restarted executor idle")
             await command("close your right hand", lambda: robot.robot.get("actions") == [2], "the next command done")
 
-            # 2. the simulator, during a move
+            # 2. the simulator, during a move: killed on the first sample that shows the arm moving
             since = len(robot.said)
-            await _type(pilot, "move your left hand up")
-            await _until_progress(
-                pilot,
-                lambda: bool((robot.sim.get("moving") or {}).get("left")),
-                busy,
-                "the left arm moving",
-                robot.recent_changes,
-            )
             sim = _child(up, "sim")
-            sim.send_signal(signal.SIGKILL)
+            killed = threading.Event()
+            robot.when_moving("left", lambda: (sim.send_signal(signal.SIGKILL), killed.set()))
+            await _type(pilot, "move your left hand up")
+            await _until_progress(pilot, killed.is_set, busy, "the left arm moving", robot.recent_changes)
             lost = "My left arm could not move: the simulator stopped during the motion, so it was interrupted."
             await until(pilot, lambda: lost in robot.lines(since, "error"), 30, "the executor to report the move cut")
             await _restarted(pilot, app, robot, up, "sim", since, sim.pid)
