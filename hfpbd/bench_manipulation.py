@@ -133,6 +133,30 @@ class Driver:
         seen = {k: o for k, o in self.watch.objects.items() if o.visible is not False}
         return min(seen, key=lambda k: float(np.linalg.norm(np.asarray(seen[k].position) - where)))
 
+    def hand_for(self, moved: str, kind: str, landmark: str | None, preferred: str) -> str:
+        """The hand a person would be told to use: one the executor's reach map says can pick ``moved`` up and
+        reach ``kind`` of ``landmark`` too, the object's own side first; ``preferred`` when neither can (the
+        task is then expected to be refused with a reason)."""
+        ids = [self.pid(moved), *([self.pid(landmark)] if landmark else [])]
+        try:
+            reach = self.watch.wait_for(
+                lambda: (
+                    self.watch.executor.reach
+                    if self.watch.executor is not None and all(i in self.watch.executor.reach for i in ids)
+                    else None
+                ),
+                30,
+                "the executor's reach map",
+            )
+        except WaitTimeout:
+            return preferred
+        for arm in (preferred, "left" if preferred == "right" else "right"):
+            picks = reach[ids[0]].get(arm, {}).get("pick_up", True)
+            places = landmark is None or reach[ids[1]].get(arm, {}).get(kind, True)
+            if picks and places:
+                return arm
+        return preferred
+
     def command(self, procedure: str, args: dict[str, Any] | None = None) -> tuple[list[str], list[str]]:
         """Send one command and wait for its end: (everything said, the error lines)."""
         since, busy = time.time(), self.watch.busy_states
@@ -181,8 +205,8 @@ def run_task(driver: Driver, seed: int) -> Outcome:
     scene = random_scene(rng)
     kind, landmark = _task(rng, scene)
     moved = scene["objects"][0]["id"]
-    arm = "right" if scene["objects"][0]["position"][1] <= 0 else "left"
     driver.load(scene)
+    arm = driver.hand_for(moved, kind, landmark, "right" if scene["objects"][0]["position"][1] <= 0 else "left")
     driver.command("create_action")
     steps: list[tuple[str, dict[str, Any]]] = [("pick_up", {"arm": arm, "object": moved})]
     if kind == "move_down":
