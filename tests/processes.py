@@ -8,6 +8,9 @@ teardown kills them and anything they spawned, even when the test failed.
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 import uuid
 from dataclasses import dataclass
 from pathlib import Path
@@ -16,7 +19,7 @@ from hfpbd.spawn import ROOT, AliveWatcher, ServiceProcess, spawn_service
 from shared.bus import Bus
 from shared.config import SessionOptions, free_port, loopback_options
 
-__all__ = ["ROOT", "Launcher", "Network", "ServiceProcess", "free_port", "new_network"]
+__all__ = ["ROOT", "Launcher", "Network", "ServiceProcess", "free_port", "new_network", "start_up"]
 
 
 @dataclass
@@ -80,3 +83,29 @@ def new_network() -> Network:
     port = free_port()
     hub = Bus(loopback_options(namespace, port, listen=True))
     return Network(namespace, port, hub)
+
+
+def start_up(
+    namespace: str,
+    port: int,
+    log_dir: Path,
+    *extra: str,
+    services: tuple[str, ...] = (),
+    data_dir: Path | None = None,
+    output: int | None = subprocess.PIPE,
+) -> subprocess.Popen[str]:
+    """``hfpbd up`` headless on a loopback port: ``services`` (all when empty), its text output to ``output``.
+
+    ``data_dir`` keeps the actions store out of the user's own data directory.
+    """
+    chosen = ["--services", ",".join(services)] if services else []
+    argv = ["--headless", *chosen, "--namespace", namespace, "--listen", f"tcp/127.0.0.1:{port}"]
+    env = {**os.environ, "HFPBD_DATA_DIR": str(data_dir)} if data_dir is not None else None
+    return subprocess.Popen(
+        [sys.executable, "-m", "hfpbd.launcher", *argv, "--log-dir", str(log_dir), *extra],
+        cwd=ROOT,
+        stdout=output,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=env,
+    )

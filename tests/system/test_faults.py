@@ -12,12 +12,10 @@ the taught action keeps its steps, and the next command works.
 
 from __future__ import annotations
 
-import os
 import re
 import signal
 import socket
 import subprocess
-import sys
 import threading
 import time
 import uuid
@@ -32,7 +30,7 @@ from textual.pilot import Pilot
 from shared.bus import Bus
 from shared.config import free_port, loopback_options
 from shared.messages import Say
-from tests.processes import ROOT
+from tests.processes import start_up
 from tests.tui.helpers import until
 from tui.app import PbdApp
 from tui.conversation import Conversation
@@ -98,28 +96,6 @@ class Robot:
 
     def moving(self) -> bool:
         return any((self.sim.get("moving") or {}).values())
-
-
-def _start_up(namespace: str, port: int, tmp_path: Path) -> subprocess.Popen[str]:
-    return subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "hfpbd.launcher",
-            "--headless",
-            "--namespace",
-            namespace,
-            "--listen",
-            f"tcp/127.0.0.1:{port}",
-            "--log-dir",
-            str(tmp_path / "logs"),
-        ],
-        cwd=ROOT,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.STDOUT,
-        text=True,
-        env={**os.environ, "HFPBD_DATA_DIR": str(tmp_path / "data")},
-    )
 
 
 def _wait_listening(port: int, timeout: float = 60) -> None:
@@ -193,7 +169,7 @@ async def _restarted(
 
 async def test_each_service_killed_mid_work_is_restarted_and_the_robot_carries_on(tmp_path: Path) -> None:
     namespace, port = "fault" + uuid.uuid4().hex[:8], free_port()
-    up = _start_up(namespace, port, tmp_path)
+    up = start_up(namespace, port, tmp_path / "logs", data_dir=tmp_path / "data", output=subprocess.DEVNULL)
     _wait_listening(port)
     bus = Bus(loopback_options(namespace, port, listen=False))
     robot = Robot(bus)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import queue
 import signal
 import socket
@@ -20,7 +19,7 @@ from hfpbd.launcher import hub_listen, local_endpoint
 from hfpbd.secure import init
 from shared.bus import Bus, BusTimeout
 from shared.config import SessionOptions, free_port, loopback_options
-from tests.processes import ROOT
+from tests.processes import ROOT, start_up
 
 
 def _wait(predicate, timeout: float) -> bool:
@@ -36,7 +35,7 @@ def _wait(predicate, timeout: float) -> bool:
 def robot(tmp_path: Path):
     """``hfpbd up --headless`` with the NLU only, on a private port and namespace."""
     namespace, port = "up" + uuid.uuid4().hex[:8], free_port()
-    popen = _start_up(namespace, port, tmp_path)
+    popen = start_up(namespace, port, tmp_path, services=("nlu",))
     bus = Bus(loopback_options(namespace, port, listen=False))
     try:
         yield popen, bus
@@ -81,30 +80,6 @@ def test_unknown_service_is_refused(tmp_path: Path) -> None:
     assert result.returncode != 0 and "unknown service(s) teleporter" in result.stderr
 
 
-def _start_up(namespace: str, port: int, log_dir: Path, *extra: str) -> subprocess.Popen:
-    return subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "hfpbd.launcher",
-            "--headless",
-            "--services",
-            "nlu",
-            "--namespace",
-            namespace,
-            "--listen",
-            f"tcp/127.0.0.1:{port}",
-            "--log-dir",
-            str(log_dir),
-            *extra,
-        ],
-        cwd=ROOT,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-    )
-
-
 def _listeners(root: psutil.Process) -> list[tuple[str, int]]:
     """Every TCP listening and UDP bound address of ``root`` and its descendants (multicast scouting included)."""
     found = []
@@ -135,7 +110,7 @@ def test_a_second_robot_on_the_namespace_refuses_to_start(robot, tmp_path: Path)
     namespace = bus.keys.namespace
     port = int(bus.options.connect[0].rsplit(":", 1)[1])
     children = psutil.Process(popen.pid).children()
-    second = _start_up(namespace, port, tmp_path / "second")
+    second = start_up(namespace, port, tmp_path / "second", services=("nlu",))
     out, _ = second.communicate(timeout=60)
     assert second.returncode == 1
     assert f"a robot is already up on namespace {namespace!r}" in out and "Traceback" not in out
@@ -289,27 +264,7 @@ def test_insecure_listener_warns_and_the_services_stay_on_loopback(tmp_path: Pat
 def test_each_service_killed_mid_run_is_restarted_and_keeps_the_current_action(tmp_path: Path) -> None:
     namespace, port = "kill" + uuid.uuid4().hex[:8], free_port()
     services = ("nlu", "perception", "executor")
-    popen = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "hfpbd.launcher",
-            "--headless",
-            "--services",
-            ",".join(services),
-            "--namespace",
-            namespace,
-            "--listen",
-            f"tcp/127.0.0.1:{port}",
-            "--log-dir",
-            str(tmp_path / "logs"),
-        ],
-        cwd=ROOT,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-        env={**os.environ, "HFPBD_DATA_DIR": str(tmp_path / "data")},
-    )
+    popen = start_up(namespace, port, tmp_path / "logs", services=services, data_dir=tmp_path / "data")
     bus = Bus(loopback_options(namespace, port, listen=False))
     said: queue.Queue = queue.Queue()
     bus.subscribe(bus.keys.say, said.put, schema="say")
