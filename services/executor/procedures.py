@@ -789,7 +789,7 @@ class Procedures:
         # right below first, landing on a plate's rim allowed; then only free spots of the table around it.
         # Down on the table, right below counts only where nothing but flat things lie there: lowered onto the box
         # it was lifted from, the object would stand on the box again.
-        below = destination == "here" or (
+        below = (destination == "here" and self._on_the_table(held, first[1], snap)) or (
             self._free_spot(held, first[1], snap, self._flat_below(held, first[1], snap))
             and not self._back_where_lifted(held, first[1])
         )
@@ -834,12 +834,22 @@ class Procedures:
             np.all(np.abs(center[:2] - held.lifted_off.center[:2]) < held.lifted_off.half[:2] + held.box.half[:2])
         )
 
-    def _free_spot(self, held: Held, release: np.ndarray, snap: SceneSnapshot, on: Collection[str] = ()) -> bool:
-        """Whether the held object released at ``release`` would stand clear of every other object's footprint.
+    def _free_spot(
+        self, held: Held, release: np.ndarray, snap: SceneSnapshot, on: Collection[str] = (), on_table: bool = True
+    ) -> bool:
+        """Whether the held object released at ``release`` would stand clear of every other object's footprint,
+        and (``on_table``: it is put down on the table) wholly on the table.
 
-        ``on``: the objects it is put on (their footprints are where it goes).
+        ``on``: the objects it is put on or may land on (their footprints are where it goes).
         """
-        return not self._spot_taken_by(held, release, snap, on)
+        return not self._spot_taken_by(held, release, snap, on) and (
+            not on_table or self._on_the_table(held, release, snap)
+        )
+
+    @staticmethod
+    def _on_the_table(held: Held, release: np.ndarray, snap: SceneSnapshot) -> bool:
+        """Whether the held object released at ``release`` stands wholly on the table (unknown table: assumed)."""
+        return snap.table is None or snap.table.holds(held.center_at(release), held.box.half)
 
     def _spot_taken_by(
         self, held: Held, release: np.ndarray, snap: SceneSnapshot, on: Collection[str] = ()
@@ -873,6 +883,10 @@ class Procedures:
     ) -> str:
         """Why no spot ``relation`` the landmark is free: the objects standing where the held one would go."""
         taken = sorted({oid for _, release in candidates for oid in self._spot_taken_by(held, release, snap, on)})
+        if not taken:
+            return wording.sentence(
+                f"There is no room on the table {wording.RELATION_WORDS[relation]} {words}: it would be past the edge"
+            )
         names = sorted(refer(snap.objects, oid) for oid in taken)
         verb = "is" if len(names) == 1 else "are"
         return wording.sentence(
@@ -921,7 +935,7 @@ class Procedures:
         # only where it stands clear of everything else (next to a cup, not half on the plate beside it)
         on = (object,) if relation in ("above", "on_top_of") else ()
         candidates = targets.place_relation(relation, box, kin.fk(), held, snap.table_z)
-        pairs = [(hover, release) for hover, release in candidates if self._free_spot(held, release, snap, on)]
+        pairs = [(h, r) for h, r in candidates if self._free_spot(held, r, snap, on, on_table=not on)]
         done = self._place(
             arm,
             kin,

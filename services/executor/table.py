@@ -21,6 +21,7 @@ from shared import messages
 
 SLAB = 0.04  # m: thickness planned under the top (the camera sees only the top)
 UNSEEN_REACH = 0.5  # m the table is assumed to go on past the last point seen, on a side whose edge was not seen
+EDGE_MARGIN = 0.02  # m: an object is put down at least this far inside the table's edge
 SIDES = {"near": (0, 0), "far": (0, 1), "right": (1, 0), "left": (1, 1)}  # side -> (axis, lower/upper end)
 
 
@@ -36,6 +37,20 @@ class Table:
     def near_edge(self) -> float | None:
         """x of the edge facing the robot, or None when the camera did not see it."""
         return self.edges.get("near")
+
+    def holds(self, center: np.ndarray, half: np.ndarray) -> bool:
+        """Whether a footprint (centre and half extents in x, y) lies wholly on the top, ``EDGE_MARGIN`` in.
+
+        Only the top as seen counts: up to an edge where one was seen, else
+        up to the last point seen. An object released past it would fall off.
+        """
+        bounds = self.extent.astype(float).copy()
+        for side, (axis, end) in SIDES.items():
+            if side in self.edges:
+                bounds[axis, end] = self.edges[side]
+        low = np.asarray(center[:2], float) - np.asarray(half[:2], float)
+        high = np.asarray(center[:2], float) + np.asarray(half[:2], float)
+        return bool(np.all(low >= bounds[:, 0] + EDGE_MARGIN) and np.all(high <= bounds[:, 1] - EDGE_MARGIN))
 
     def box(self) -> Box:
         """The slab the planner keeps the arms out of."""

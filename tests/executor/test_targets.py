@@ -165,3 +165,17 @@ def test_a_cup_lifted_off_a_box_is_never_put_down_on_the_table_where_it_stood() 
     assert not Procedures._back_where_lifted(held, beside)
     from_the_table = targets.held_in_hand("cup", stood, tool, support_top=TABLE_TOP_Z)
     assert not Procedures._back_where_lifted(from_the_table, straight_down)
+
+
+def test_a_placement_past_the_tables_edge_is_never_a_free_spot() -> None:
+    """In front of a cup by the edge facing the robot, the released cup would stand half off the table and fall."""
+    scene = Scene()
+    scene.update_objects(perceived([]), table_truth())
+    snap = scene.snapshot()
+    held = held_cup()
+    near_edge = TABLE_X[0]
+    for x, inside in ((near_edge + 0.10, True), (near_edge + CUP[0] / 2 + 0.01, False), (near_edge, False)):
+        release = geo.shifted(held.tool_pose, [x - held.box.center[0], 0.0, 0.0])
+        assert Procedures._on_the_table(held, release, snap) is inside, x
+    assert snap.table is not None
+    assert not snap.table.holds(np.array([TABLE_X[1], 0.0]), CUP[:2] / 2)  # the far edge alike
