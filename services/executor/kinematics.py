@@ -181,6 +181,8 @@ class ArmKinematics:
         self._robot_links = list(self.planner.user_link_names)
         self._shoulder_link = self.planner.link_name_2_idx[f"{PREFIX[arm]}_shoulder_pan_link"]
         self._obstacles: set[str] = set()
+        # the objects straight lines were found to run into, since last cleared: what a failure can be blamed on
+        self.lines_blocked_by: set[str] = set()
         self.held: str | None = None
         self._build_seeds(seeds, rng_seed)
         mplib.set_global_seed(rng_seed + 1)  # (OMPL refuses 0) OMPL's sampling: the same request plans the same path
@@ -715,6 +717,7 @@ class ArmKinematics:
                     for q in path[1:]:
                         if hit := self.collisions(q):
                             log.info("%s arm: the straight line collides: %s", self.arm, hit)
+                            self.lines_blocked_by |= {name for pair in hit for name in pair} & self._obstacles
                             return None
             finally:
                 for name in ignore:

@@ -936,6 +936,7 @@ class Procedures:
         on = (object,) if relation in ("above", "on_top_of") else ()
         candidates = targets.place_relation(relation, box, kin.fk(), held, snap.table_z)
         pairs = [(h, r) for h, r in candidates if self._free_spot(held, r, snap, on, on_table=not on)]
+        kin.lines_blocked_by.clear()
         done = self._place(
             arm,
             kin,
@@ -957,10 +958,19 @@ class Procedures:
             raise StepFailed(
                 self._beyond(kin, held, relation, box, words, snap.table_z, arm)
                 or (self._crowded(held, candidates, snap, on, relation, words) if candidates and not pairs else None)
+                or (self._arm_over(arm, relation, words) if object in kin.lines_blocked_by else None)
                 or wording.cannot_reach(arm, relation, words)
             )
         done.landmark = self._landmark(obj)
         return done
+
+    @staticmethod
+    def _arm_over(arm: str, relation: str, words: str) -> str:
+        """Why every way down failed when it ran into the landmark itself: the arm reaches over it to get there."""
+        return wording.sentence(
+            f"I can't put it {wording.RELATION_WORDS[relation]} {words} with my {arm} hand:"
+            f" my arm would hit {words} on the way down"
+        )
 
     @staticmethod
     def _beyond(

@@ -278,3 +278,14 @@ def test_a_cup_out_of_one_hands_reach_is_refused_with_how_far_and_the_other_hand
     assert re.fullmatch(r"The cup is \d+ cm beyond my right hand; my left hand can reach it\.", words), words
     far = int(re.search(r"(\d+) cm", words).group(1))
     assert 5 <= far <= 30
+
+
+def test_a_straight_line_remembers_what_it_ran_into(arms: dict[str, ArmKinematics]) -> None:
+    """What a failed placement can be blamed on: a tall cup right under the hand blocks a move down, by name."""
+    kin = arms["left"]
+    sync(kin, scene_with().snapshot(), None)
+    below = kin.fk()[:3]
+    sync(kin, scene_with(cup("mug", float(below[0]), float(below[1]), size=(0.08, 0.08, 0.20))).snapshot(), None)
+    kin.lines_blocked_by.clear()
+    assert kin.line_path(geo.direction_target(kin.fk(), "down", 0.20)) is None
+    assert kin.lines_blocked_by == {"mug"}
