@@ -157,9 +157,10 @@ class Driver:
                 return arm
         return preferred
 
-    def command(self, procedure: str, args: dict[str, Any] | None = None) -> tuple[list[str], list[str]]:
-        """Send one command and wait for its end: (everything said, the error lines)."""
+    def command(self, procedure: str, args: dict[str, Any] | None = None) -> tuple[list[str], list[str], bool]:
+        """Send one command and wait for its end: (everything said, the error lines, whether an arm moved)."""
         since, busy = time.time(), self.watch.busy_states
+        self.watch.watch_motion(since)
         self.bus.publish(
             self.bus.keys.nlu_result,
             {
@@ -181,7 +182,8 @@ class Driver:
         self.watch.wait_for(lambda: not self.watch.busy(), STEP_TIMEOUT, f"{procedure} to end")
         time.sleep(0.5)
         lines = self.watch.lines_since(since)
-        return [line.text for line in lines], [line.text for line in lines if line.kind == "error"]
+        moved = self.watch.motion_at is not None
+        return [line.text for line in lines], [line.text for line in lines if line.kind == "error"], moved
 
 
 def _task(rng: np.random.Generator, scene: dict[str, Any]) -> tuple[str, str | None]:
@@ -218,22 +220,22 @@ def run_task(driver: Driver, seed: int) -> Outcome:
         steps.append(("place_abs", {"arm": arm, "destination": "table"}))
     elif kind != "pick_up":
         steps.append(("place_rel", {"arm": arm, "relation": kind, "object": landmark}))
-    for index, (procedure, args) in enumerate(steps):
+    for procedure, args in steps:
         sent = {k: driver.pid(v) if k == "object" else v for k, v in args.items()}
-        said, errors = driver.command(procedure, sent)
+        said, errors, moved = driver.command(procedure, sent)
         leaked = [text for text in said if INTERNAL_ID.search(text)]
         if leaked:
             return Outcome(kind, "failed", f"an internal name in what the robot said: {leaked[0]!r}")
         if errors:
-            result = "refused" if index == 0 else "failed"
-            return Outcome(kind, result, f"{procedure}: {errors[0]}")
+            # refused: the robot said why before that step moved an arm (judged from the simulator's motion)
+            return Outcome(kind, "failed" if moved else "refused", f"{procedure}: {errors[0]}")
     time.sleep(1.0)
     verdict = _judge(driver, kind, moved, landmark, arm)
     outcome = Outcome(kind, "achieved" if verdict.success else "failed", verdict.reason)
     if not verdict.success:
         return outcome
     driver.load(scene, jittered(scene, rng))
-    _, errors = driver.command("execute")
+    _, errors, _ = driver.command("execute")
     time.sleep(1.0)
     replay = Verdict(False, f"execute: {errors[0]}") if errors else _judge(driver, kind, moved, landmark, arm)
     outcome.replay, outcome.replay_reason = ("achieved" if replay.success else "failed"), replay.reason

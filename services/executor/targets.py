@@ -26,6 +26,10 @@ HOVER = 0.06  # a carried object is brought this far above its release point fir
 # Headings (rad about the vertical) a carried object may be turned to: the hand keeps the grasp's
 # orientation, which suits the place it was picked from but rarely one across the table.
 CARRY_YAWS = (0.0, 0.35, -0.35, 0.7, -0.7)
+# Wider headings, tried only for a placement whose every way down at CARRY_YAWS ran into the landmark: an object
+# held from the side has the forearm behind it at its own height, and only a swing of the forearm past the
+# landmark's side lets the hand come down behind it (the reach map does not try them: each heading costs time).
+SWING_YAWS = (1.0, -1.0, 1.3, -1.3)
 ROUND_TYPES = ("cup", "bowl", "plate")
 # Gripping a flat object by the part that sticks out over the table's near edge:
 MAX_EDGE_THICKNESS = 0.03  # metres: thicker than this, the fingers cannot pass over and under it
@@ -85,9 +89,15 @@ def held_in_hand(
     return Held(object_id, Box(center, np.array(box.size, float)), np.asarray(tool_pose, float), lifted_off, seen_as)
 
 
-def _carry(tool_pose: np.ndarray, held: Held, centers: list[np.ndarray], lift: float = 0.0) -> list[np.ndarray]:
-    """Tool poses putting the held object at each centre, at each heading of ``CARRY_YAWS`` in turn."""
-    return geo.carry_poses(tool_pose, held.center_at(tool_pose), [c + [0.0, 0.0, lift] for c in centers], CARRY_YAWS)
+def _carry(
+    tool_pose: np.ndarray,
+    held: Held,
+    centers: list[np.ndarray],
+    lift: float = 0.0,
+    yaws: tuple[float, ...] = CARRY_YAWS,
+) -> list[np.ndarray]:
+    """Tool poses putting the held object at each centre, at each heading of ``yaws`` in turn."""
+    return geo.carry_poses(tool_pose, held.center_at(tool_pose), [c + [0.0, 0.0, lift] for c in centers], yaws)
 
 
 def move_relation(
@@ -101,11 +111,16 @@ def move_relation(
 
 
 def place_relation(
-    relation: str, landmark: Box, tool_pose: np.ndarray, held: Held, table_z: float
+    relation: str,
+    landmark: Box,
+    tool_pose: np.ndarray,
+    held: Held,
+    table_z: float,
+    yaws: tuple[float, ...] = CARRY_YAWS,
 ) -> list[tuple[np.ndarray, np.ndarray]]:
-    """(hover pose, release pose) pairs for placing the held object ``relation`` the landmark."""
+    """(hover pose, release pose) pairs for placing the held object ``relation`` the landmark, at ``yaws``."""
     centers = geo.placement_centers(relation, landmark, held.box.size, table_z)
-    releases = _carry(tool_pose, held, centers)
+    releases = _carry(tool_pose, held, centers, yaws=yaws)
     return [(geo.shifted(r, [0.0, 0.0, HOVER]), r) for r in releases]
 
 

@@ -289,3 +289,52 @@ def test_a_straight_line_remembers_what_it_ran_into(arms: dict[str, ArmKinematic
     kin.lines_blocked_by.clear()
     assert kin.line_path(geo.direction_target(kin.fk(), "down", 0.20)) is None
     assert kin.lines_blocked_by == {"mug"}
+
+
+def test_a_box_held_from_the_side_is_put_behind_a_cup_only_with_the_forearm_swung_past_it(
+    arms: dict[str, ArmKinematics],
+) -> None:
+    """Left hand, a 6 cm box side-grasped at (0.655, 0.30), to go behind a 6.5 cm cup at (0.59, -0.07).
+
+    At the usual headings the forearm behind the box comes down onto the cup;
+    a wider swing takes it past the cup's side.
+    """
+    kin = arms["left"]
+    box = {"id": "box", "color": "red", "type": "box", "position": [0.655, 0.297, TABLE_TOP_Z + 0.0295]}
+    box["size"] = [0.066, 0.066, 0.059]
+    scene = scene_with(box, cup("mug", 0.589, -0.071, size=(0.056, 0.056, 0.065)), pose="side")
+    snap = scene.snapshot()
+    sync(kin, snap, None)
+    grasp_q = lifted_q = None
+    for grasp in targets.grasps(snap.objects["box"], snap.near_edge):
+        pre_q = kin.ik(grasp.pregrasp)
+        if pre_q is None:
+            continue
+        kin.allow_touching("box", True)
+        grasp_q = kin.ik(grasp.grasp, seeds=[pre_q])
+        kin.allow_touching("box", False)
+        if grasp_q is not None:
+            lifted_q = kin.ik(grasp.lift, seeds=[grasp_q], check_collisions=False)
+            break
+    assert grasp_q is not None and lifted_q is not None
+    kin.set_arm(grasp_q)
+    at_grasp = targets.held_in_hand("box", snap.box("box"), kin.fk(), snap.table_z)
+    scene.update_robot(measured({**snap.joints(), **dict(zip([kin.names[i] for i in kin.arm_idx], lifted_q))}))
+    snap = scene.snapshot()
+    kin.set_joints(snap.joints())
+    held = Held("box", Box(at_grasp.center_at(kin.fk()), at_grasp.box.size), kin.fk())
+    sync(kin, snap, held)
+
+    def lowerable(yaws: tuple[float, ...]) -> int:
+        count = 0
+        for hover, release in targets.place_relation("behind", snap.box("mug"), kin.fk(), held, snap.table_z, yaws):
+            hover_q = kin.ik(hover, seeds=[kin.arm_q])
+            if hover_q is not None:
+                with kin.posed(hover_q), kin.tolerating(kin.held_body or "box", []):
+                    count += kin.line_path(release) is not None
+        return count
+
+    kin.lines_blocked_by.clear()
+    assert lowerable(targets.CARRY_YAWS) == 0
+    assert "mug" in kin.lines_blocked_by
+    assert lowerable(targets.SWING_YAWS) > 0
