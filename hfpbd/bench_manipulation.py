@@ -282,12 +282,28 @@ def report(outcomes: list[Outcome]) -> None:
             print(f"  replay failed ({o.kind}): {o.replay_reason}")
 
 
+def _seed_list(text: str) -> list[int]:
+    try:
+        return [int(seed) for seed in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: seeds are whole numbers separated by commas, e.g. 5,6,22"
+        ) from None
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="hfpbd bench manipulation", description=__doc__.splitlines()[0])
     parser.add_argument("--tasks", type=int, default=100, help="how many seeded tasks (default: %(default)s)")
     parser.add_argument("--seed", type=int, default=0, help="first seed (default: %(default)s)")
+    parser.add_argument(
+        "--seeds",
+        type=_seed_list,
+        default=None,
+        help="these seeds only, comma-separated (e.g. a run's failures again), instead of --tasks from --seed",
+    )
     parser.add_argument("--logs", type=Path, default=None, help="where the services' logs go (default: a temp dir)")
     args = parser.parse_args(argv)
+    seeds = args.seeds or list(range(args.seed, args.seed + args.tasks))
     namespace, port = "manip" + uuid.uuid4().hex[:8], free_port()
     with Bus(loopback_options(namespace, port, listen=True)) as bus, tempfile.TemporaryDirectory() as data:
         session = loopback_options(namespace, port, listen=False).to_argv()
@@ -298,7 +314,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 stack.start(name, session)
             stack.start("executor", session, "--data-dir", data)
             driver = Driver(bus)
-            for seed in range(args.seed, args.seed + args.tasks):
+            for seed in seeds:
                 try:
                     outcome = run_task(driver, seed)
                 except WaitTimeout as exc:
