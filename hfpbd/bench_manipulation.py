@@ -39,6 +39,7 @@ from shared.config import free_port, loopback_options
 TABLE_AREA = ((0.42, 0.78), (-0.42, 0.42))  # metres: x, y where the random objects stand
 GAP = 0.04  # metres between two objects' outlines
 JITTER = 0.04  # metres each object moves (at most, per axis) before the replay
+JITTER_GAP = 0.01  # metres the moved objects' outlines stay apart
 STEP_TIMEOUT = 180.0
 KINDS = ("pick_up", "on_top_of", "next_to", "left_of", "right_of", "in_front_of", "behind", "down", "move_down")
 MOVES = ("up", "left", "right", "forward", "backward")
@@ -91,14 +92,25 @@ def random_scene(rng: np.random.Generator) -> dict[str, Any]:
 
 
 def jittered(scene: dict[str, Any], rng: np.random.Generator) -> dict[str, list[float]]:
-    """New positions for the replay: every object moved up to ``JITTER`` per axis (overlaps left to the sim)."""
-    return {
-        o["id"]: [
-            round(o["position"][0] + float(rng.uniform(-JITTER, JITTER)), 3),
-            round(o["position"][1] + float(rng.uniform(-JITTER, JITTER)), 3),
-        ]
-        for o in scene["objects"]
-    }
+    """New positions for the replay: every object moved up to ``JITTER`` per axis, never onto another.
+
+    Objects dropped overlapping are pushed apart by the physics, tip over or
+    merge into one in the camera's view: the replay would then be judged on a
+    table nobody set. An object that finds no free draw stays where it was.
+    """
+    placed: dict[str, list[float]] = {}
+    for o in scene["objects"]:
+        others = [(placed.get(p["id"], p["position"]), p["size"][0]) for p in scene["objects"] if p["id"] != o["id"]]
+        placed[o["id"]] = o["position"]
+        for _ in range(50):
+            x = round(o["position"][0] + float(rng.uniform(-JITTER, JITTER)), 3)
+            y = round(o["position"][1] + float(rng.uniform(-JITTER, JITTER)), 3)
+            if all(
+                max(abs(x - at[0]), abs(y - at[1])) > (o["size"][0] + width) / 2 + JITTER_GAP for at, width in others
+            ):
+                placed[o["id"]] = [x, y]
+                break
+    return placed
 
 
 class Driver:
