@@ -234,13 +234,13 @@ def run_task(driver: Driver, seed: int) -> Outcome:
         steps.append(("place_rel", {"arm": arm, "relation": kind, "object": landmark}))
     for procedure, args in steps:
         sent = {k: driver.pid(v) if k == "object" else v for k, v in args.items()}
-        said, errors, moved = driver.command(procedure, sent)
+        said, errors, arm_moved = driver.command(procedure, sent)
         leaked = [text for text in said if INTERNAL_ID.search(text)]
         if leaked:
             return Outcome(kind, "failed", f"an internal name in what the robot said: {leaked[0]!r}")
         if errors:
             # refused: the robot said why before that step moved an arm (judged from the simulator's motion)
-            return Outcome(kind, "failed" if moved else "refused", f"{procedure}: {errors[0]}")
+            return Outcome(kind, "failed" if arm_moved else "refused", f"{procedure}: {errors[0]}")
     time.sleep(1.0)
     verdict = _judge(driver, kind, moved, landmark, arm)
     outcome = Outcome(kind, "achieved" if verdict.success else "failed", verdict.reason)
