@@ -215,9 +215,19 @@ def _task(rng: np.random.Generator, scene: dict[str, Any]) -> tuple[str, str | N
 
 
 def run_task(driver: Driver, seed: int) -> Outcome:
+    """The seed's table and task, programmed, judged and replayed; a wait that runs out fails the task."""
     rng = np.random.default_rng(seed)
     scene = random_scene(rng)
     kind, landmark = _task(rng, scene)
+    try:
+        return _program_and_replay(driver, rng, scene, kind, landmark)
+    except WaitTimeout as exc:
+        return Outcome(kind, "failed", f"seed {seed}: {exc}")
+
+
+def _program_and_replay(
+    driver: Driver, rng: np.random.Generator, scene: dict[str, Any], kind: str, landmark: str | None
+) -> Outcome:
     moved = scene["objects"][0]["id"]
     driver.load(scene)
     arm = driver.hand_for(moved, kind, landmark, "right" if scene["objects"][0]["position"][1] <= 0 else "left")
@@ -327,10 +337,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             stack.start("executor", session, "--data-dir", data)
             driver = Driver(bus)
             for seed in seeds:
-                try:
-                    outcome = run_task(driver, seed)
-                except WaitTimeout as exc:
-                    outcome = Outcome("?", "failed", f"seed {seed}: {exc}")
+                outcome = run_task(driver, seed)
                 print(
                     f"seed {seed}: {outcome.kind} {outcome.result} / replay {outcome.replay or '-'}: {outcome.reason}",
                     flush=True,
