@@ -140,10 +140,15 @@ class Driver:
         )
 
     def pid(self, truth_id: str) -> str:
-        """Perception's id of the simulator's object ``truth_id`` (nearest seen object)."""
+        """Perception's id of the simulator's object ``truth_id``: the nearest object it tracks.
+
+        Hidden ones count: the arm lifting a cup can hide the bowl behind it,
+        which perception remembers, and the nearest object in view is then
+        another one (the cup was put next to the plate when told the bowl).
+        """
         where = np.asarray(self.watch.truth[truth_id].position, float)
-        seen = {k: o for k, o in self.watch.objects.items() if o.visible is not False}
-        return min(seen, key=lambda k: float(np.linalg.norm(np.asarray(seen[k].position) - where)))
+        tracked = self.watch.objects
+        return min(tracked, key=lambda k: float(np.linalg.norm(np.asarray(tracked[k].position) - where)))
 
     def hand_for(self, moved: str, kind: str, landmark: str | None, preferred: str) -> str:
         """The hand a person would be told to use: one the executor's reach map says can pick ``moved`` up and
