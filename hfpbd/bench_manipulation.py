@@ -73,6 +73,11 @@ def random_object(rng: np.random.Generator, index: int) -> dict[str, Any]:
     }
 
 
+def _apart(at: Sequence[float], width: float, other_at: Sequence[float], other_width: float, gap: float) -> bool:
+    """Two square footprints (centre, width) at least ``gap`` apart along x or y."""
+    return max(abs(at[0] - other_at[0]), abs(at[1] - other_at[1])) > (width + other_width) / 2 + gap
+
+
 def random_scene(rng: np.random.Generator) -> dict[str, Any]:
     """2–6 objects placed without overlap anywhere in ``TABLE_AREA``; the first one is small enough to grasp."""
     count = int(rng.integers(2, 7))
@@ -81,10 +86,7 @@ def random_scene(rng: np.random.Generator) -> dict[str, Any]:
         obj = random_object(rng, index)
         for _ in range(200):
             x, y = rng.uniform(*TABLE_AREA[0]), rng.uniform(*TABLE_AREA[1])
-            if all(
-                max(abs(x - o["position"][0]), abs(y - o["position"][1])) > (obj["size"][0] + o["size"][0]) / 2 + GAP
-                for o in objects
-            ):
+            if all(_apart((x, y), obj["size"][0], o["position"], o["size"][0], GAP) for o in objects):
                 obj["position"] = [round(float(x), 3), round(float(y), 3)]
                 objects.append(obj)
                 break
@@ -105,9 +107,7 @@ def jittered(scene: dict[str, Any], rng: np.random.Generator) -> dict[str, list[
         for _ in range(50):
             x = round(o["position"][0] + float(rng.uniform(-JITTER, JITTER)), 3)
             y = round(o["position"][1] + float(rng.uniform(-JITTER, JITTER)), 3)
-            if all(
-                max(abs(x - at[0]), abs(y - at[1])) > (o["size"][0] + width) / 2 + JITTER_GAP for at, width in others
-            ):
+            if all(_apart((x, y), o["size"][0], at, width, JITTER_GAP) for at, width in others):
                 placed[o["id"]] = [x, y]
                 break
     return placed

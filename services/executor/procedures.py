@@ -935,15 +935,18 @@ class Procedures:
         # only where it stands clear of everything else (next to a cup, not half on the plate beside it)
         on = (object,) if relation in ("above", "on_top_of") else ()
         no_path = wording.sentence(f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}")
+
+        def on_free_spots(pairs: list[tuple[np.ndarray, np.ndarray]]) -> list[tuple[np.ndarray, np.ndarray]]:
+            return [(h, r) for h, r in pairs if self._free_spot(held, r, snap, on, on_table=not on)]
+
         candidates = targets.place_relation(relation, box, kin.fk(), held, snap.table_z)
-        pairs = [(h, r) for h, r in candidates if self._free_spot(held, r, snap, on, on_table=not on)]
+        pairs = on_free_spots(candidates)
         kin.lines_blocked_by.clear()
         done = self._place(arm, kin, snap, held, pairs, no_path, (object, box))
         if done is None and object in kin.lines_blocked_by and not on:
             # every way down ran into the landmark: swing the forearm wider, past its side
             swung = targets.place_relation(relation, box, kin.fk(), held, snap.table_z, targets.SWING_YAWS)
-            swung_pairs = [(h, r) for h, r in swung if self._free_spot(held, r, snap, on, on_table=True)]
-            done = self._place(arm, kin, snap, held, swung_pairs, no_path, (object, box))
+            done = self._place(arm, kin, snap, held, on_free_spots(swung), no_path, (object, box))
         if done is None:
             log.info(
                 "no placement %s %s: %d candidates, %d on a free spot; objects seen: %s",

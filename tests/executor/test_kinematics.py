@@ -321,18 +321,13 @@ def test_a_box_held_from_the_side_is_put_behind_a_cup_only_with_the_forearm_swun
     at_grasp = targets.held_in_hand("box", snap.box("box"), kin.fk(), snap.table_z)
     scene.update_robot(measured({**snap.joints(), **dict(zip([kin.names[i] for i in kin.arm_idx], lifted_q))}))
     snap = scene.snapshot()
-    kin.set_joints(snap.joints())
-    held = Held("box", Box(at_grasp.center_at(kin.fk()), at_grasp.box.size), kin.fk())
+    procedures = Procedures(scene, None, arms, list)  # type: ignore[arg-type]
+    held = procedures._refresh_held(at_grasp, snap, kin)
     sync(kin, snap, held)
 
     def lowerable(yaws: tuple[float, ...]) -> int:
-        count = 0
-        for hover, release in targets.place_relation("behind", snap.box("mug"), kin.fk(), held, snap.table_z, yaws):
-            hover_q = kin.ik(hover, seeds=[kin.arm_q])
-            if hover_q is not None:
-                with kin.posed(hover_q), kin.tolerating(kin.held_body or "box", []):
-                    count += kin.line_path(release) is not None
-        return count
+        pairs = targets.place_relation("behind", snap.box("mug"), kin.fk(), held, snap.table_z, yaws)
+        return sum(procedures._lowerable(kin, snap, held, hover, release) is not None for hover, release in pairs)
 
     kin.lines_blocked_by.clear()
     assert lowerable(targets.CARRY_YAWS) == 0
