@@ -181,6 +181,7 @@ class ArmKinematics:
         self._robot_links = list(self.planner.user_link_names)
         self._shoulder_link = self.planner.link_name_2_idx[f"{PREFIX[arm]}_shoulder_pan_link"]
         self._obstacles: set[str] = set()
+        self._obstacle_boxes: dict[str, Box] = {}
         # the objects straight lines were found to run into, since last cleared: what a failure can be blamed on
         self.lines_blocked_by: set[str] = set()
         self.held: str | None = None
@@ -268,6 +269,17 @@ class ArmKinematics:
             shape = fcl.CollisionObject(fcl.Box(np.maximum(box.size + 2 * padding, 1e-3)))
             world.add_object(fcl.FCLObject(name, Pose(box.center, [1, 0, 0, 0]), [shape], [Pose()]))
         self._obstacles = set(boxes) - ({self.held} if self.held else set())
+        self._obstacle_boxes = dict(boxes)
+
+    def _described(self, hit: list[tuple[str, str]]) -> str:
+        """The colliding pairs with each obstacle's box (centre, size): what a log reader needs to judge the model."""
+        boxes = {name: self._obstacle_boxes.get(name) for pair in hit for name in pair if name in self._obstacles}
+        shown = {
+            name: f"at {np.round(b.center, 3).tolist()} size {np.round(b.size, 3).tolist()}"
+            for name, b in boxes.items()
+            if b is not None
+        }
+        return f"{hit} {shown}" if shown else str(hit)
 
     def allow_touching(self, name: str, allowed: bool = True) -> None:
         """Let the gripper touch obstacle ``name`` (the object being grasped or released)."""
@@ -716,7 +728,7 @@ class ArmKinematics:
                 with self._tolerating_start_contacts():
                     for q in path[1:]:
                         if hit := self.collisions(q):
-                            log.info("%s arm: the straight line collides: %s", self.arm, hit)
+                            log.info("%s arm: the straight line collides: %s", self.arm, self._described(hit))
                             self.lines_blocked_by |= {name for pair in hit for name in pair} & self._obstacles
                             return None
             finally:

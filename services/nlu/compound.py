@@ -29,6 +29,10 @@ _ALWAYS = re.compile(
     r"|(?<=[a-z])\.(?=\s|$))\s*"
 )
 _AND = re.compile(r"\s*(?:,\s*and\b|\band\b|,)\s*")
+# words that open a turn ("ok then, put it down", "good, now lift it"): before the first step, not a step
+OPENING_WORDS = frozenset(
+    "ok okay alright all right so well now good great fine cool perfect nice yes yeah and".split()
+)
 _JOINS = re.compile(r"\b(?:and|then|after|afterwards|next)\b|[,;.]")
 SPOKEN_JOINS = ("and then",)  # how steps are joined aloud, for a speech grammar (a bare "then" is heard in "the")
 MAX_STEPS = 6  # more than this in one breath is almost surely pasted text
@@ -50,7 +54,10 @@ def split(text: str) -> list[str]:
             else:
                 merged[-1] = f"{merged[-1]} and {piece}"  # "between the cup and the box"
         parts.extend(merged)
-    return [p.strip() for p in parts if p.strip()] or [text]
+    parts = [p.strip() for p in parts if p.strip()] or [text]
+    while len(parts) > 1 and set(re.findall(r"[a-z]+", parts[0].lower())) <= OPENING_WORDS:
+        parts.pop(0)
+    return parts
 
 
 def _has_verb(text: str) -> bool:

@@ -35,6 +35,7 @@ from shared.robot import ROBOT
 ARMS = ROBOT.arms
 NO_MATCH = 1e6
 COVERED_SHARE = 0.5  # of an unseen object's footprint under something seen standing on it: covered by it
+PIECE_SLACK = 0.01  # m two pieces of one object may span beyond its size (each sighting's extent is rounded out)
 GRASP_REACH = 0.03  # m from an object's box to a tool frame whose fingers hold it
 
 
@@ -121,7 +122,8 @@ class Tracker:
                 track.last_seen, track.missed = now, 0  # behind an arm or under a cup: not gone, just out of sight
             else:
                 track.missed += 1
-        fresh = [d for d in unmatched if not self._inside_held(d, tools) and not self._piece_of_known(d)]
+        sightings = {id(track): detection for track, detection in matches}
+        fresh = [d for d in unmatched if not self._inside_held(d, tools) and not self._piece_of_known(d, sightings)]
         newest = max([now] * bool(fresh) + [t.first_seen for t in self.tracks], default=-np.inf)
         self.tracks = [t for t in self.tracks if self._keep(t, now, newest)]
         confident = self.settings.confident
@@ -305,19 +307,26 @@ class Tracker:
             for other in self.tracks
         )
 
-    def _piece_of_known(self, detection: Descriptor) -> bool:
+    def _piece_of_known(self, detection: Descriptor, sightings: dict[int, Descriptor]) -> bool:
         """A cluster lying on a known object's footprint is part of it (cut by an arm), not a new object.
 
         The footprint of its last whole sighting counts too: once an arm has
         cut a big box in two, the track follows one piece, and the other
-        piece lies on the box but not on that piece.
+        piece lies on the box but not on that piece. So does a cluster that,
+        beside the piece the track was matched to in this frame (``sightings``,
+        by id of track), spans no more than the whole
+        object: a cup just let go is cut in two by the finger between them,
+        and where the hand held it is a centimetre or two from where it stands.
         """
         share = self.settings.overlap_share
         return any(
             t.confirmed
             and t.held_by is None
             and self._could_be_part_of(detection, t)
-            and any(footprint_share(detection, view) >= share for view in (*_views(t), t.identity) if view is not None)
+            and (
+                any(footprint_share(detection, view) >= share for view in (*_views(t), t.identity) if view is not None)
+                or (id(t) in sightings and _completes(detection, sightings[id(t)], t.identity or t.descriptor))
+            )
             for t in self.tracks
         )
 
@@ -361,6 +370,15 @@ def _fingers_at(obj: Descriptor, tool: np.ndarray) -> bool:
     """Whether a closed gripper's tool frame lies within ``GRASP_REACH`` of the object's box."""
     outside = np.maximum(np.abs(tool - obj.position) - obj.size / 2, 0.0)
     return float(np.linalg.norm(outside)) <= GRASP_REACH
+
+
+def _completes(piece: Descriptor, sighting: Descriptor, whole: Descriptor) -> bool:
+    """Whether ``piece`` and ``sighting`` side by side, level, span no more than ``whole`` (plus ``PIECE_SLACK``)."""
+    if piece.points >= whole.points or not _level_with(piece, sighting):
+        return False
+    lo = np.minimum(piece.position[:2] - piece.size[:2] / 2, sighting.position[:2] - sighting.size[:2] / 2)
+    hi = np.maximum(piece.position[:2] + piece.size[:2] / 2, sighting.position[:2] + sighting.size[:2] / 2)
+    return bool(np.all(np.sort(hi - lo) <= np.sort(whole.size[:2]) + PIECE_SLACK))
 
 
 def _level_with(a: Descriptor, b: Descriptor) -> bool:

@@ -114,6 +114,18 @@ def test_compounds_run_in_the_world_each_step_leaves(text: str, expected: list[t
     assert steps(text) == expected
 
 
+@pytest.mark.parametrize(
+    "opening",
+    [
+        *("ok then", "okay, then", "alright then", "so then", "well then", "right, then", "and then", "then"),
+        *("now then", "good, now", "great.", "alright", "yes, and"),
+    ],
+)
+def test_a_conversational_opening_before_then_is_not_a_step(opening: str) -> None:
+    expected = [("place_rel", {"arm": "right", "relation": "left_of", "object": "obj3"})]
+    assert steps(f"{opening} put it to the left of the plate", holding()) == expected
+
+
 def test_a_compound_step_not_understood_is_asked_about_by_name() -> None:
     result = understood("pick up the red cup and then xyzzy the box")
     assert result["kind"] == "clarify" and result["question"].startswith('About "xyzzy the box"')

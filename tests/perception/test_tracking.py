@@ -274,3 +274,37 @@ def test_a_box_seen_merged_with_the_cup_on_it_keeps_its_size():
     for step in range(3):
         (item,) = tracker.update([merged], 0.4 + 0.2 * step)
     assert item["size"][2] == pytest.approx(0.06) and item["position"][2] == pytest.approx(0.75)
+
+
+def test_a_cup_the_finger_cuts_in_two_as_the_hand_lets_go_stays_one_cup():
+    """Just let go, a cup shows a piece on each side of the finger, 2 cm off where the hand held it (a live run).
+
+    The sliver beside the larger piece lies on neither the cup as last
+    published nor on that piece, but the two together span no more than the
+    cup: it is part of it. Taken for a new object, it took the cup's id once
+    the hand had gone, and "pick it up" then named a cup no longer there.
+    """
+    tracker = Tracker()
+    cup = _sighting((0.569, 0.237, 0.77), (0.072, 0.072, 0.1), 2100, confidence=0.95)
+    tracker.update([cup], 0.0)
+    cup_id = tracker.update([cup], 0.2)[0]["id"]
+    piece = _sighting((0.564, 0.244, 0.77), (0.044, 0.053, 0.1), 721)
+    sliver = _sighting((0.520, 0.244, 0.77), (0.011, 0.039, 0.1), 265)
+    for k in range(4):
+        items = tracker.update([piece, sliver], 0.4 + 0.2 * k)
+        assert [o["id"] for o in items] == [cup_id], f"frame {k}"
+    whole = _sighting((0.55, 0.241, 0.77), (0.071, 0.071, 0.1), 1578, confidence=0.96)
+    for k in range(3):
+        (item,) = tracker.update([whole], 1.2 + 0.2 * k)
+    assert item["id"] == cup_id and item["position"][:2] == pytest.approx([0.55, 0.241], abs=0.005)
+
+
+def test_a_second_cup_of_one_colour_beside_a_cup_is_an_object_of_its_own():
+    """Two red cups 3 cm apart together span more than one cup: the second is not a piece of the first."""
+    tracker = Tracker()
+    first = _sighting((0.55, 0.0, 0.77), (0.072, 0.072, 0.1), 2100, confidence=0.95)
+    second = _sighting((0.55, 0.10, 0.77), (0.072, 0.072, 0.1), 2100, confidence=0.95)
+    tracker.update([first], 0.0)
+    tracker.update([first], 0.2)
+    tracker.update([first, second], 0.4)
+    assert len(tracker.update([first, second], 0.6)) == 2
