@@ -35,6 +35,7 @@ from hfpbd.tasks.stack import LocalStack
 from services.sim.scene_file import COLOURS
 from shared.bus import Bus
 from shared.config import free_port, loopback_options
+from shared.contract import other_arm
 
 TABLE_AREA = ((0.42, 0.78), (-0.42, 0.42))  # metres: x, y where the random objects stand
 GAP = 0.04  # metres between two objects' outlines
@@ -167,7 +168,7 @@ class Driver:
             )
         except WaitTimeout:
             return preferred
-        for arm in (preferred, "left" if preferred == "right" else "right"):
+        for arm in (preferred, other_arm(preferred)):
             picks = reach[ids[0]].get(arm, {}).get("pick_up", True)
             places = landmark is None or reach[ids[1]].get(arm, {}).get(kind, True)
             if picks and places:

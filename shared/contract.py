@@ -13,9 +13,16 @@ from dataclasses import dataclass
 # -- arms and grippers ------------------------------------------------------
 ARMS = ("right", "left")
 BOTH = "both"
+
 # procedures that may run on both arms at once (``args.arm == "both"``); elsewhere ``both`` is refused
 BOTH_ARM_PROCEDURES = frozenset({"open", "close", "move_abs_dir", "move_abs_dest"})
 GRIPPER_STATES = ("open", "closed", "holding")
+
+
+def other_arm(arm: str) -> str:
+    """The arm that is not ``arm`` (of the two in ``ARMS``)."""
+    return ARMS[1 - ARMS.index(arm)]
+
 
 # -- argument domains ---------------------------------------------------------
 RELATIONS = ("above", "next_to", "left_of", "right_of", "in_front_of", "behind", "on_top_of", "near")

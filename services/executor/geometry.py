@@ -28,6 +28,7 @@ from shared.messages import WorldObject
 
 STEP = DISTANCE.default_m  # a directional move without a distance
 GAP = 0.05
+CLOSE_GAP = 0.02  # metres: the last resort beside a landmark, where GAP would leave the table or the arm's reach
 ABOVE = 0.10
 ON_TOP = 0.05
 POINT_DISTANCE = 0.14
@@ -201,7 +202,8 @@ def placement_centers(relation: str, landmark: Box, held_size: np.ndarray, table
     first; then the same relation a little off it — ``PLACE_SHIFT`` along the
     landmark's side or further out from it, or across a top wide enough that
     the held object still stands wholly on it (an open box's floor) — since
-    an arm that cannot reach one point often reaches the next.
+    an arm that cannot reach one point often reaches the next; last, beside
+    it at ``CLOSE_GAP`` (in front of a cup near the table's edge).
     """
     if relation in COMPOSITE:
         return [p for part in COMPOSITE[relation] for p in placement_centers(part, landmark, held_size, table_z)]
@@ -229,7 +231,8 @@ def placement_centers(relation: str, landmark: Box, held_size: np.ndarray, table
         raise ValueError(f"unknown relation {relation!r}")
     offset, outward, along = (np.asarray(v, float) for v in sides[relation])
     base = c + offset
-    points = [base, base + PLACE_SHIFT * outward, base - PLACE_SHIFT * along, base + PLACE_SHIFT * along]
+    close = base - (GAP - CLOSE_GAP) * outward
+    points = [base, base + PLACE_SHIFT * outward, base - PLACE_SHIFT * along, base + PLACE_SHIFT * along, close]
     return [np.array([p[0], p[1], z]) for p in points]
 
 

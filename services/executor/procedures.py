@@ -43,6 +43,7 @@ from services.executor.referring import refer
 from services.executor.robot import MotionError, SimRobot, Started, Stopped
 from services.executor.scene import ARMS, Scene, SceneSnapshot
 from services.executor.targets import EdgeGrasp, Held, overhang, thin_and_wide
+from shared.contract import other_arm
 from shared.messages import PerceivedObject
 from shared.robot import ROBOT
 
@@ -148,7 +149,7 @@ class Procedures:
             if held[arm] is not None or gripper == "holding":
                 what = refer(snap.objects, held[arm].object_id, held[arm].seen_as) if held[arm] else "something"
                 raise StepFailed(wording.sentence(f"My {arm} hand is already holding {what}"))
-            other = "left" if arm == "right" else "right"
+            other = other_arm(arm)
             if (held[other] is not None and held[other].object_id == object_id) or snap.objects[
                 object_id
             ].held_by == other:
@@ -651,7 +652,7 @@ class Procedures:
             if short is not None
             else f"out of my {arm} hand's reach"
         )
-        other = "left" if arm == "right" else "right"
+        other = other_arm(arm)
         other_kin = self.arms.get(other)
         if other_kin is not None and self.held()[other] is None:
             snap = self._snapshot()
@@ -960,7 +961,7 @@ class Procedures:
                 self._beyond(kin, held, relation, box, words, snap.table_z, arm)
                 or (self._crowded(held, candidates, snap, on, relation, words) if candidates and not pairs else None)
                 or (self._arm_over(arm, relation, words) if object in kin.lines_blocked_by else None)
-                or wording.cannot_reach(arm, relation, words)
+                or self._blocked_place(arm, kin, snap, held, relation, object, words)
             )
         done.landmark = self._landmark(obj)
         return done
@@ -973,9 +974,8 @@ class Procedures:
             f" my arm would hit {words} on the way down"
         )
 
-    @staticmethod
     def _beyond(
-        kin: ArmKinematics, held: Held, relation: str, box: Box, words: str, table_z: float, arm: str
+        self, kin: ArmKinematics, held: Held, relation: str, box: Box, words: str, table_z: float, arm: str
     ) -> str | None:
         """When no release ``relation`` the landmark is within the arm's length at all: how far out it is."""
 
@@ -994,7 +994,42 @@ class Procedures:
             if short is not None
             else f"out of my {arm} hand's reach"
         )
-        return wording.sentence(f"I can't put it {wording.RELATION_WORDS[relation]} {words}: {words} is {where}")
+        helps = (
+            f"; my {other_arm(arm)} hand can reach it"
+            if self._other_hand_places(arm, held, relation, box, table_z)
+            else ""
+        )
+        return wording.sentence(f"I can't put it {wording.RELATION_WORDS[relation]} {words}: {words} is {where}{helps}")
+
+    def _blocked_place(
+        self, arm: str, kin: ArmKinematics, snap: SceneSnapshot, held: Held, relation: str, object: str, words: str
+    ) -> str:
+        """Why a placement within the arm's length failed: what the arm ran into, and whether the other hand can."""
+        blockers = sorted(
+            refer(snap.objects, b) for b in kin.lines_blocked_by - {object, held.object_id} if b in snap.objects
+        )
+        why = f": {' and '.join(blockers)} {'is' if len(blockers) == 1 else 'are'} in the way" if blockers else ""
+        if self._other_hand_places(arm, held, relation, Box.of(snap.objects[object]), snap.table_z):
+            why += f"{';' if why else ':'} my {other_arm(arm)} hand can reach there"
+        return wording.sentence(f"I can't reach {wording.RELATION_WORDS[relation]} {words} with my {arm} hand{why}")
+
+    def _other_hand_places(self, arm: str, held: Held, relation: str, box: Box, table_z: float) -> bool:
+        """Whether the other hand, free and holding the object as this one does, reaches a release ``relation`` box.
+
+        Only the arm's length is asked (IK without collisions): the user learns
+        which hand to pick the object up with, not that the way is clear.
+        """
+        other = other_arm(arm)
+        other_kin = self.arms.get(other)
+        if other_kin is None or self.held()[other] is not None:
+            return False
+        other_kin.set_joints(self._snapshot().joints())
+        tool = other_kin.fk()
+        in_other = replace(held, box=Box(held.center_at(tool), held.box.size), tool_pose=tool)
+        return any(
+            other_kin.ik(hover, check_collisions=False) is not None
+            for hover, _ in targets.place_relation(relation, box, tool, in_other, table_z)
+        )
 
     def _place(
         self,

@@ -333,3 +333,28 @@ def test_a_box_held_from_the_side_is_put_behind_a_cup_only_with_the_forearm_swun
     assert lowerable(targets.CARRY_YAWS) == 0
     assert "mug" in kin.lines_blocked_by
     assert lowerable(targets.SWING_YAWS) > 0
+
+
+def test_a_place_out_of_one_hands_reach_says_how_far_and_that_the_other_hand_can(
+    arms: dict[str, ArmKinematics],
+) -> None:
+    """A cup in the right hand, a plate far on the left: how far beyond the right hand it is, and the left hand."""
+    kin = arms["right"]
+    plate = {"id": "plate", "color": "white", "type": "plate", "position": [0.65, 0.35, TABLE_TOP_Z + 0.0075]}
+    plate["size"] = [0.16, 0.16, 0.015]
+    scene = scene_with(plate, pose="side")
+    snap = scene.snapshot()
+    sync(kin, snap, None)
+    tool = kin.fk()
+    held = Held("c", Box(tool[:3] + [0.0, 0.0, -0.01], np.array([0.07, 0.07, 0.10])), tool)
+    sync(kin, snap, held)
+    procedures = Procedures(scene, None, arms, list)  # type: ignore[arg-type]
+    words = procedures._beyond(kin, held, "on_top_of", snap.box("plate"), "the plate", snap.table_z, "right")
+    assert words is not None
+    assert re.fullmatch(
+        r"I can't put it on top of the plate: the plate is \d+ cm beyond my right hand; my left hand can reach it\.",
+        words,
+    ), words
+    procedures._set_held("left", held)  # the left hand busy: it is not offered
+    words = procedures._beyond(kin, held, "on_top_of", snap.box("plate"), "the plate", snap.table_z, "right")
+    assert words is not None and "left hand" not in words

@@ -43,7 +43,7 @@ def test_side_placements_stand_the_object_beside_the_landmark_upright(relation: 
     for hover, release in pairs:
         center = held.center_at(release)
         gap = float(np.dot(center[:2] - landmark.center[:2], outward)) - landmark.half[0] - CUP[0] / 2
-        assert geo.GAP - 1e-6 <= gap <= geo.GAP + geo.PLACE_SHIFT + 1e-6
+        assert geo.CLOSE_GAP - 1e-6 <= gap <= geo.GAP + geo.PLACE_SHIFT + 1e-6
         assert center[2] - CUP[2] / 2 == pytest.approx(TABLE_TOP_Z + geo.RELEASE_CLEARANCE)
         # only turned about the vertical: the approach axis keeps its tilt, so the cup is never tipped
         assert geo.approach_axis(release)[2] == pytest.approx(geo.approach_axis(held.tool_pose)[2], abs=1e-9)
@@ -179,3 +179,17 @@ def test_a_placement_past_the_tables_edge_is_never_a_free_spot() -> None:
         assert Procedures._on_the_table(held, release, snap) is inside, x
     assert snap.table is not None
     assert not snap.table.holds(np.array([TABLE_X[1], 0.0]), CUP[:2] / 2)  # the far edge alike
+
+
+def test_in_front_of_a_cup_near_the_tables_edge_the_cup_goes_closer_to_it() -> None:
+    """15 cm from the edge facing the robot, a cup 5 cm in front of the landmark would stand off the table."""
+    scene = Scene()
+    scene.update_objects(perceived([]), table_truth())
+    snap = scene.snapshot()
+    held, landmark = held_cup(), standing(TABLE_X[0] + 0.15, 0.0)
+    pairs = targets.place_relation("in_front_of", landmark, held.tool_pose, held, TABLE_TOP_Z)
+    on_table = [release for _, release in pairs if Procedures._on_the_table(held, release, snap)]
+    assert on_table, "no spot in front of the cup on the table"
+    for release in on_table:
+        gap = landmark.center[0] - landmark.half[0] - (held.center_at(release)[0] + CUP[0] / 2)
+        assert gap == pytest.approx(geo.CLOSE_GAP, abs=1e-6)

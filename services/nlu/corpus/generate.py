@@ -16,7 +16,7 @@ from collections.abc import Iterator
 from typing import Any
 
 from services.nlu.corpus import HERE
-from shared.contract import DISTANCE
+from shared.contract import DISTANCE, other_arm
 
 SEED = 19
 SIZES = {"cup": (0.07, 0.07, 0.10), "box": (0.10, 0.10, 0.12), "plate": (0.18, 0.18, 0.02), "bowl": (0.13, 0.13, 0.06)}
@@ -182,7 +182,7 @@ def held(b: Builder, rounds: int) -> None:
     for _ in range(rounds):
         objects = _scene(b.rng, b.rng.randint(3, 8))
         arm = b.rng.choice(("right", "left"))
-        other = "left" if arm == "right" else "right"
+        other = other_arm(arm)
         holder = objects[0]
         holder["held_by"] = arm
         name = b.scene(
