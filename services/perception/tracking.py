@@ -66,7 +66,7 @@ class Track:
     hold_offset: np.ndarray | None = None
     visible: bool = True
     missed: int = 0  # consecutive frames unseen in clear view
-    identity: Descriptor | None = None  # last confident full sighting
+    identity: Descriptor | None = None  # last confident full sighting (the first one, until one is confident)
     near_hand: bool = False  # a gripper is at it: partly hidden by the fingers
     shown: Descriptor | None = None  # the whole object as last published
 
@@ -126,8 +126,10 @@ class Tracker:
         fresh = [d for d in unmatched if not self._inside_held(d, tools) and not self._piece_of_known(d, sightings)]
         newest = max([now] * bool(fresh) + [t.first_seen for t in self.tracks], default=-np.inf)
         self.tracks = [t for t in self.tracks if self._keep(t, now, newest)]
-        confident = self.settings.confident
-        self.tracks += [Track(d, now, now, identity=d if d.confidence >= confident else None) for d in fresh]
+        # the first sighting is what the object is until a fuller or surer one: an open box, half box and half
+        # bowl to the classifier, is never a confident sighting, and without one each piece an arm leaves in
+        # view would be published as the whole object
+        self.tracks += [Track(d, now, now, identity=d) for d in fresh]
         for track in self.tracks:
             if not track.confirmed and track.hits >= self.settings.confirm_frames:
                 track.id = f"obj{self._next_id}"
@@ -266,14 +268,28 @@ class Tracker:
             not track.near_hand
             and not detection.clipped
             and not self._partial(detection, detection, known or detection)
-            and detection.confidence >= self.settings.confident
+            and (self._sure(detection) or known is None or not self._sure(known))
             and (
                 known is None
                 or detection.points >= self.settings.partial_share * known.points
-                or moved >= self.settings.max_jump
+                or (moved >= self.settings.max_jump and not self._on_known_footprint(detection, track, known))
             )
         ):
             track.identity = detection
+
+    def _sure(self, sighting: Descriptor) -> bool:
+        """Whether a sighting is confident enough to set an object's words and size for good."""
+        return sighting.confidence >= self.settings.confident
+
+    def _on_known_footprint(self, detection: Descriptor, track: Track, known: Descriptor) -> bool:
+        """Whether a small sighting lies on the whole object as last published: a piece of it, not the object moved.
+
+        An arm reaching across an open box leaves a corner in view, its
+        centroid a hand's width from the box's centre: taken for the box
+        itself, it would make the box a 4 cm "cup" in that corner.
+        """
+        whole = replace(known, position=(track.shown or known).position)
+        return footprint_share(detection, whole) >= self.settings.overlap_share
 
     def _partial(self, sighting: Descriptor, last: Descriptor, whole: Descriptor) -> bool:
         """The sighting is not the object alone: cut by the picture's edge, with under half of ``last``'s points,
