@@ -344,9 +344,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             driver = Driver(bus)
             for seed in seeds:
                 outcome = run_task(driver, seed)
+                why = outcome.replay_reason if outcome.replay == "failed" else outcome.reason
                 print(
-                    f"seed {seed}: {outcome.kind} {outcome.result} / replay {outcome.replay or '-'}: {outcome.reason}",
-                    flush=True,
+                    f"seed {seed}: {outcome.kind} {outcome.result} / replay {outcome.replay or '-'}: {why}", flush=True
                 )
                 outcomes.append(outcome)
         finally:

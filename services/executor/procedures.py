@@ -945,9 +945,9 @@ class Procedures:
         kin.lines_blocked_by.clear()
         done = self._place(arm, kin, snap, held, pairs, no_path, (object, box))
         if done is None and object in kin.lines_blocked_by and not on:
-            # every way down ran into the landmark: swing the forearm wider, past its side
-            swung = targets.place_relation(relation, box, kin.fk(), held, snap.table_z, targets.SWING_YAWS)
-            done = self._place(arm, kin, snap, held, on_free_spots(swung), no_path, (object, box))
+            # every way down ran into the landmark: swing the forearm past its side, or release further out
+            wider = targets.place_relation_wider(relation, box, kin.fk(), held, snap.table_z)
+            done = self._place(arm, kin, snap, held, on_free_spots(wider), no_path, (object, box))
         if done is None:
             log.info(
                 "no placement %s %s: %d candidates, %d on a free spot; objects seen: %s",

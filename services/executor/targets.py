@@ -30,6 +30,8 @@ CARRY_YAWS = (0.0, 0.35, -0.35, 0.7, -0.7)
 # held from the side has the forearm behind it at its own height, and only a swing of the forearm past the
 # landmark's side lets the hand come down behind it (the reach map does not try them: each heading costs time).
 SWING_YAWS = (1.0, -1.0, 1.3, -1.3)
+# metres further out from a landmark's side when the forearm ran into it: 8-10 cm off is still beside it
+WIDER = 0.03
 ROUND_TYPES = ("cup", "bowl", "plate")
 # Gripping a flat object by the part that sticks out over the table's near edge:
 MAX_EDGE_THICKNESS = 0.03  # metres: thicker than this, the fingers cannot pass over and under it
@@ -122,6 +124,21 @@ def place_relation(
     centers = geo.placement_centers(relation, landmark, held.box.size, table_z)
     releases = _carry(tool_pose, held, centers, yaws=yaws)
     return [(geo.shifted(r, [0.0, 0.0, HOVER]), r) for r in releases]
+
+
+def place_relation_wider(
+    relation: str, landmark: Box, tool_pose: np.ndarray, held: Held, table_z: float
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """:func:`place_relation` when every way down ran into the landmark: swung headings, then ``WIDER`` out.
+
+    Both keep the forearm off the landmark: a heading turned past its side,
+    or the held object released further from it.
+    """
+    wider = Box(landmark.center, landmark.size + np.array([2 * WIDER, 2 * WIDER, 0.0]))
+    return [
+        *place_relation(relation, landmark, tool_pose, held, table_z, SWING_YAWS),
+        *place_relation(relation, wider, tool_pose, held, table_z, CARRY_YAWS + SWING_YAWS),
+    ]
 
 
 def place_table(tool_pose: np.ndarray, held: Held, table_z: float) -> list[tuple[np.ndarray, np.ndarray]]:
