@@ -31,8 +31,10 @@ _ALWAYS = re.compile(
 _AND = re.compile(r"\s*(?:,\s*and\b|\band\b|,)\s*")
 # words that open a turn ("ok then, put it down", "good, now lift it"): before the first step, not a step
 OPENING_WORDS = frozenset(
-    "ok okay alright all right so well now good great fine cool perfect nice yes yeah and".split()
+    "ok okay alright all right so well now good great fine cool perfect nice yes yeah and"
+    " thanks thank you very done job excellent awesome".split()
 )
+_HAND_WORDS = frozenset({"all", "right"})  # "right move up" names a hand; only "all right" alone opens a turn
 _JOINS = re.compile(r"\b(?:and|then|after|afterwards|next)\b|[,;.]")
 SPOKEN_JOINS = ("and then",)  # how steps are joined aloud, for a speech grammar (a bare "then" is heard in "the")
 MAX_STEPS = 6  # more than this in one breath is almost surely pasted text
@@ -41,7 +43,7 @@ MAX_STEPS = 6  # more than this in one breath is almost surely pasted text
 def split(text: str) -> list[str]:
     """The parts of ``text`` that are commands of their own (one part when it is a single command)."""
     if not _JOINS.search(text):
-        return [text]
+        return [_without_opening(text)]
     parts: list[str] = []
     for chunk in _ALWAYS.split(text):
         pieces = [p for p in _AND.split(chunk) if p.strip()]
@@ -57,7 +59,18 @@ def split(text: str) -> list[str]:
     parts = [p.strip() for p in parts if p.strip()] or [text]
     while len(parts) > 1 and set(re.findall(r"[a-z]+", parts[0].lower())) <= OPENING_WORDS:
         parts.pop(0)
+    parts[0] = _without_opening(parts[0])
     return parts
+
+
+def _without_opening(text: str) -> str:
+    """``text`` without the opening words it starts with ("good now put it down"), when a command follows them."""
+    words = text.split()
+    start = 0
+    while start < len(words) - 1 and words[start].lower().strip(",.;!") in OPENING_WORDS - _HAND_WORDS:
+        start += 1
+    rest = " ".join(words[start:])
+    return rest if start and _has_verb(rest) else text
 
 
 def _has_verb(text: str) -> bool:

@@ -70,6 +70,7 @@ class Model:
             parts = compound.split(text)
             if len(parts) > 1:
                 return compound.run(self, parts, history)
+            text = parts[0]
         return self.parse_step(text, history, among, focus)
 
     def parse_step(

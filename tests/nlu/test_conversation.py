@@ -118,7 +118,7 @@ def test_compounds_run_in_the_world_each_step_leaves(text: str, expected: list[t
     "opening",
     [
         *("ok then", "okay, then", "alright then", "so then", "well then", "right, then", "and then", "then"),
-        *("now then", "good, now", "great.", "alright", "yes, and"),
+        *("now then", "good, now", "great.", "alright", "yes, and", "good now", "well done, now", "thank you,"),
     ],
 )
 def test_a_conversational_opening_before_then_is_not_a_step(opening: str) -> None:
