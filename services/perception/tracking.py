@@ -389,8 +389,12 @@ def _fingers_at(obj: Descriptor, tool: np.ndarray) -> bool:
 
 
 def _completes(piece: Descriptor, sighting: Descriptor, whole: Descriptor) -> bool:
-    """Whether ``piece`` and ``sighting`` side by side, level, span no more than ``whole`` (plus ``PIECE_SLACK``)."""
-    if piece.points >= whole.points or not _level_with(piece, sighting):
+    """Whether ``piece`` and ``sighting`` side by side, level, span no more than ``whole`` (plus ``PIECE_SLACK``).
+
+    Only a piece of the whole's colour: a cup just lifted off a box is
+    another object beside the box's sighting, not a piece of the box.
+    """
+    if piece.points >= whole.points or piece.color != whole.color or not _level_with(piece, sighting):
         return False
     lo = np.minimum(piece.position[:2] - piece.size[:2] / 2, sighting.position[:2] - sighting.size[:2] / 2)
     hi = np.maximum(piece.position[:2] + piece.size[:2] / 2, sighting.position[:2] + sighting.size[:2] / 2)

@@ -28,6 +28,15 @@ def where_now(stack: Stack, truth_id: str) -> list[float]:
     return np.round(stack.position(truth_id), 3).tolist()
 
 
+def scene(stack: Stack) -> str:
+    """Where the objects are and where perception sees them: what a failed placement is judged against."""
+    truth = {k: where_now(stack, k) for k in stack.truth}
+    perceived = {
+        k: (np.round(o["position"], 3).tolist(), np.round(o["size"], 3).tolist()) for k, o in stack.objects.items()
+    }
+    return f"truth {truth}; perceived (position, size) {perceived}"
+
+
 def seen(stack: Stack, truth_id: str) -> str:
     """Perception's id for ``truth_id``: the nearest object of its type, seen within a few centimetres of it.
 
@@ -68,7 +77,9 @@ def test_either_cup_on_the_plate_next_to_the_other_on_the_box_and_down(stack: St
             said = stack.command("place_abs", {"arm": arm, "destination": "table"})
         else:
             said = stack.command("place_rel", {"arm": arm, "relation": relation, "object": seen(stack, landmark)})
-        assert texts(said, "error") == [], f"placing the {colour} cup {relation or 'down'}: {texts(said)}"
+        assert texts(said, "error") == [], (
+            f"placing the {colour} cup {relation or 'down'}: {texts(said)}; {scene(stack)}"
+        )
         stack.settled()
         truth = {oid: msgspec.convert(obj, TruthObject) for oid, obj in stack.truth.items()}
         verdict = placed(truth, cup, relation or "down", landmark)

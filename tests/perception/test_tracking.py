@@ -310,6 +310,23 @@ def test_a_second_cup_of_one_colour_beside_a_cup_is_an_object_of_its_own():
     assert len(tracker.update([first, second], 0.6)) == 2
 
 
+def test_a_cluster_of_another_colour_beside_a_piece_of_a_box_is_not_a_piece_of_the_box():
+    """A red cup's foot seen beside what the hand leaves of a green box spans no more than the box, yet is not of it.
+
+    Taken for a piece of the box, the cup lost its own track as it was lifted
+    off the box, and the box followed the cup's sightings towards the hand.
+    """
+    tracker = Tracker()
+    box = _sighting((0.48, 0.0, 0.78), (0.06, 0.06, 0.06), 1500, color="green", kind="box", confidence=0.95)
+    tracker.update([box], 0.0)
+    tracker.update([box], 0.2)
+    box_part = _sighting((0.48, -0.015, 0.78), (0.06, 0.03, 0.06), 800, color="green", kind="box")
+    foot = _sighting((0.48, -0.041, 0.79), (0.05, 0.02, 0.04), 300)
+    for k in range(4):
+        items = tracker.update([box_part, foot], 0.4 + 0.2 * k)
+    assert sorted(o["color"] for o in items) == ["green", "red"]
+
+
 def test_an_open_box_an_arm_reaches_across_is_not_taken_for_the_corner_left_in_view():
     """The arm hides all of a 20 cm open box but one corner (a live run): the box stays a 20 cm box where it stands.
 
