@@ -15,8 +15,11 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from services.executor.kinematics import JOINT_ACCEL, JOINT_SPEED, PREFIX, ArmKinematics, Trajectory, joint_names
+from services.executor.kinematics import PREFIX, ArmKinematics, Trajectory, joint_names
 
+# Both hands move slower than one: a box held by the friction of two hands must not be jerked out of them.
+JOINT_SPEED = 1.0  # rad/s, any joint
+JOINT_ACCEL = 1.5  # rad/s²
 MIN_DURATION = 0.5  # seconds: the shortest joint motion of both arms
 CHECKS_PER_SECOND = 40  # instants at which the two moving arms are checked against each other
 PEAK_ACCELERATION = 10.0 / np.sqrt(3.0)  # a minimum-jerk motion's peak acceleration, in travel / duration²

@@ -52,10 +52,11 @@ NEIGHBOURS = 5
 APPROACH_WEIGHT, FINGER_WEIGHT = 0.2, 0.1  # metres per unit axis difference in the seed index
 IK_ITERATIONS = 25  # Newton steps per start: a start that converges does so in about ten
 ARM_REACH = 1.0  # metres from the shoulder pan axis to the farthest tool position (0.1 + 0.4 + 0.321 + 0.18)
-# Joint speed and acceleration limits for time parameterisation: moves take
-# time in proportion to how far the joints travel (about 0.5 m/s at the hand).
-JOINT_SPEED = 1.0
-JOINT_ACCEL = 1.5
+# Time parameterisation: each arm joint at up to this share of its rated speed, which it reaches in
+# half a second (acceleration = speed / ACCELERATION_TIME). Moves take time in proportion to how far
+# the joints travel: a reach across the table about 2-3 s, as the hardware's own controllers allow.
+SPEED_SHARE = 0.9
+ACCELERATION_TIME = 0.4
 OBJECT_PADDING = 0.01  # metres added around each object: a margin for perception's error and path sampling
 TABLE_PADDING = 0.005
 # RRTConnect runs in one-second tries (a fresh tree each) up to this many: a "stop" is noticed between
@@ -75,6 +76,14 @@ STEER_NUDGE = 0.1  # rad the elbow is swung to look for solutions with more room
 STEER_JUMP = 0.15  # rad: the most any joint may move between two poses of a contact move
 READY = "untucked"  # the ready posture: the arm bent in front of the body, above the table's near edge
 joint_names = ROBOT.arm_joint_names
+
+
+def planning_speeds(arm: str) -> np.ndarray:
+    """Speed limits of the planning group (torso, then the arm's joints from shoulder to wrist)."""
+    torso = ROBOT.rated_speeds([ROBOT.torso_joint])
+    return np.array([*torso, *(SPEED_SHARE * np.array(ROBOT.rated_speeds(joint_names(arm))))])
+
+
 tool_frame = ROBOT.tool_frame
 
 
@@ -161,13 +170,14 @@ class ArmKinematics:
             urdf=str(urdf),
             srdf=str(srdf),
             move_group=tool_frame(arm),
-            joint_vel_limits=np.full(8, JOINT_SPEED),
-            joint_acc_limits=np.full(8, JOINT_ACCEL),
+            joint_vel_limits=planning_speeds(arm),
+            joint_acc_limits=planning_speeds(arm) / ACCELERATION_TIME,
         )
         self.model = self.planner.pinocchio_model
         self.names = list(self.planner.user_joint_names)
         self.index = {name: i for i, name in enumerate(self.names)}
         self.arm_idx = np.array([self.index[n] for n in joint_names(arm)])
+        self.speeds = planning_speeds(arm)[1:]
         self.torso_idx = self.index[ROBOT.torso_joint]
         self.group_idx = np.asarray(self.planner.move_group_joint_indices)
         if list(self.group_idx) != [self.torso_idx, *self.arm_idx]:
@@ -518,33 +528,35 @@ class ArmKinematics:
         """Whether the user said stop (planning gives up at its next check)."""
         return self._cancel is not None and self._cancel.is_set()
 
-    def plan_to(self, arm_q: np.ndarray) -> Trajectory | None:
+    def plan_to(self, arm_q: np.ndarray, exact_turns: bool = False) -> Trajectory | None:
         """A collision-free joint trajectory from the current joints to ``arm_q``.
 
-        The straight joint path when it is clear (most moves); otherwise
-        OMPL's RRTConnect in repeated one-second tries, because a narrow
-        passage (over a tall box with a cup in hand) is sometimes missed in
-        one. None when no path was found or the user said stop meanwhile
-        (see :attr:`cancelled`).
+        The straight joint path when it is clear (most moves), then two lines
+        through the ready posture, then lines with the hand lifted first or
+        last; each is tried for ``arm_q`` and then for the same posture with
+        the roll joints a whole turn round (see :meth:`turn_variants`), unless
+        ``exact_turns`` (a wrist turned by a stated angle must turn that way):
+        a goal whose forearm roll lies a turn away from the ready posture's
+        swings the forearm through the table on the way. Last, OMPL's
+        RRTConnect in repeated one-second tries, because a narrow passage
+        (over a tall box with a cup in hand) is sometimes missed in one. None
+        when no path was found or the user said stop meanwhile (see
+        :attr:`cancelled`).
         """
         with self._tolerating_start_contacts():
             lift = self._out_of_contact() if self.collisions(self.arm_q) else None
         if lift is not None:  # planned from where the lift ends, the start's contacts no longer allowed
             with self.posed(lift[-1]):
-                rest = self.plan_to(arm_q)
+                rest = self.plan_to(arm_q, exact_turns)
             return None if rest is None else self.timed(np.vstack([lift, rest.points[1:]]))
+        goals = [arm_q] if exact_turns else [arm_q, *(q for q in self.turn_variants(arm_q) if q is not arm_q)]
         with self._tolerating_start_contacts():
-            if not self.collisions(self.arm_q):
-                straight = self._joint_line(self.arm_q, arm_q)
-                if straight is not None:
-                    return self.timed(straight)
+            for goal in goals:
+                lines = self._lines_to(goal)
+                if lines is not None:
+                    return self.timed(lines)
             start = self.full(self.arm_q)
             fixed = {FixedJoint(0, self.torso_idx, float(start[self.torso_idx]))}
-            via = self._via_ready(arm_q)
-            if via is None:
-                via = self._via_lifts(arm_q)
-            if via is not None:
-                return self.timed(via)
             for _ in range(PLANNING_TRIES):
                 if self.cancelled:
                     return None
@@ -570,25 +582,46 @@ class ArmKinematics:
                 return None if shortened is None else self.timed(shortened)
         return None
 
+    def _lines_to(self, arm_q: np.ndarray) -> np.ndarray | None:
+        """Clear joint-space lines to ``arm_q``: direct, through the ready posture, or with the hand lifted."""
+        if not self.collisions(self.arm_q):
+            straight = self._joint_line(self.arm_q, arm_q)
+            if straight is not None:
+                return straight
+        via = self._via_ready(arm_q)
+        return via if via is not None else self._via_lifts(arm_q)
+
     def _via_ready(self, arm_q: np.ndarray) -> np.ndarray | None:
         """Two clear joint-space lines through the ready posture (arm bent in front of the body).
 
         Most moves between awkward postures (reaching across the body, coming
         back from the side) are solved this way at once; the random planner
-        is left for the cluttered cases.
+        is left for the cluttered cases. The roll joints do not shape the
+        posture, so the way point is also tried with the start's or the
+        goal's rolls: the quickest clear one is taken, not a forearm turned
+        to zero and back.
         """
-        ready = np.clip(
+        posture = np.clip(
             np.asarray(ROBOT.arm_pose(READY, self.arm), float),
             self.limits[self.arm_idx, 0],
             self.limits[self.arm_idx, 1],
         )
-        if self.collisions(ready):
-            return None
-        first = self._joint_line(self.arm_q, ready)
-        second = self._joint_line(ready, arm_q) if first is not None else None
-        if second is None:
-            return None
-        return np.vstack([first, second[1:]])
+        rolls = list(ROLL_JOINTS)
+        ways = [posture]
+        for source in (self.arm_q, arm_q):
+            way = posture.copy()
+            way[rolls] = source[rolls]
+            ways.append(way)
+        travel = [np.max((np.abs(w - self.arm_q) + np.abs(arm_q - w)) / self.speeds) for w in ways]
+        for index in np.argsort(travel, kind="stable"):
+            way = ways[index]
+            if self.collisions(way):
+                continue
+            first = self._joint_line(self.arm_q, way)
+            second = self._joint_line(way, arm_q) if first is not None else None
+            if second is not None:
+                return np.vstack([first, second[1:]])
+        return None
 
     def _via_lifts(self, arm_q: np.ndarray) -> np.ndarray | None:
         """Clear joint-space lines (direct or through ready) with the hand lifted straight up first, last, or both.

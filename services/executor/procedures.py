@@ -308,8 +308,8 @@ class Procedures:
         # the state after the motion's report: one more fresh sample so contacts are current
         self.scene.wait_robot(self.scene.snapshot().robot_version, STATE_WAIT)
 
-    def _plan(self, kin: ArmKinematics, arm_q: np.ndarray, why: str) -> Trajectory:
-        trajectory = kin.plan_to(arm_q)
+    def _plan(self, kin: ArmKinematics, arm_q: np.ndarray, why: str, exact_turns: bool = False) -> Trajectory:
+        trajectory = kin.plan_to(arm_q, exact_turns)
         if trajectory is None:
             if kin.cancelled:
                 raise Stopped()
@@ -1169,7 +1169,13 @@ class Procedures:
         if not kin.within_limits(q):
             raise StepFailed(wording.sentence(f"My {arm} wrist can't turn {words} any further"))
         self._go(
-            arm, self._plan(kin, q, wording.sentence(f"My {arm} wrist can't turn {words} without hitting something"))
+            arm,
+            self._plan(
+                kin,
+                q,
+                wording.sentence(f"My {arm} wrist can't turn {words} without hitting something"),
+                exact_turns=True,
+            ),
         )
         return Done()
 

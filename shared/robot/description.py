@@ -9,7 +9,9 @@ them keeps its own copy of a joint name or a posture.
 
 from __future__ import annotations
 
+import xml.etree.ElementTree as ET
 from collections.abc import Callable
+from functools import cache
 from pathlib import Path
 from typing import ClassVar, TypeVar
 
@@ -51,6 +53,11 @@ class RobotDescription:
         joints = self.keyframe(name).joints
         return [joints[joint] for joint in self.arm_joint_names(arm)]
 
+    def rated_speeds(self, joints: list[str]) -> list[float]:
+        """The model's velocity limit of each joint (rad/s or m/s): what the hardware is rated for."""
+        limits = _velocity_limits(self.urdf_path)
+        return [limits[joint] for joint in joints]
+
     def arm_pose_map(self, name: str) -> dict[str, float]:
         """Joint name -> position of both arms in the named posture."""
         return {
@@ -58,6 +65,16 @@ class RobotDescription:
             for arm in self.arms
             for joint, value in zip(self.arm_joint_names(arm), self.arm_pose(name, arm), strict=True)
         }
+
+
+@cache
+def _velocity_limits(urdf: Path) -> dict[str, float]:
+    """Joint name -> the ``velocity`` of its ``<limit>`` in the URDF, for every limited joint."""
+    return {
+        joint.attrib["name"]: float(limit.attrib["velocity"])
+        for joint in ET.parse(urdf).getroot().iter("joint")
+        if (limit := joint.find("limit")) is not None and "velocity" in limit.attrib
+    }
 
 
 _REGISTRY: dict[str, type[RobotDescription]] = {}

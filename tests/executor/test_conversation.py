@@ -9,9 +9,16 @@ import numpy as np
 import pytest
 
 from services.executor import wording
-from services.executor.bimanual import MIN_DURATION, PEAK_ACCELERATION, first_clash, timed_together
+from services.executor.bimanual import (
+    JOINT_ACCEL,
+    JOINT_SPEED,
+    MIN_DURATION,
+    PEAK_ACCELERATION,
+    first_clash,
+    timed_together,
+)
 from services.executor.commands import CommandError, check, check_compound
-from services.executor.kinematics import JOINT_ACCEL, JOINT_SPEED, ArmKinematics, joint_names
+from services.executor.kinematics import ArmKinematics, joint_names
 from shared.codec import MessageError
 from shared.messages import NluResult, typed
 from shared.robot import ROBOT

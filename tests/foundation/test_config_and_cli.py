@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import subprocess
 import sys
 
@@ -111,3 +112,19 @@ def test_a_listener_in_a_config_file_is_refused_in_one_line(tmp_path) -> None:
     )
     assert result.returncode == 2
     assert "--secure DIR" in result.stderr and "Traceback" not in result.stderr
+
+
+def test_the_executor_benchmarks_planning_figures_print() -> None:
+    """``hfpbd bench executor --skip-physics``: the reach-map table and the IK comparison, from a real process."""
+    result = subprocess.run(
+        [sys.executable, "-m", "hfpbd.cli", "bench", "executor", "--skip-physics", "--repeats", "1"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert "Traceback" not in result.stderr
+    rows = [line for line in result.stdout.splitlines() if re.match(r"\| \d+ \| \d+ \| \d+ \|", line)]
+    assert [int(row.split("|")[1]) for row in rows] == [1, 2, 5, 10, 15]
+    assert re.search(r"IK per pose: seeded table [\d.]+ ms .* same answer on \d+% of 100 poses", result.stdout)
