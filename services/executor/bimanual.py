@@ -15,11 +15,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from services.executor.kinematics import PREFIX, ArmKinematics, Trajectory, joint_names
+from services.executor.kinematics import CAREFUL_ACCEL, CAREFUL_SPEED, PREFIX, ArmKinematics, Trajectory, joint_names
 
-# Both hands move slower than one: a box held by the friction of two hands must not be jerked out of them.
-JOINT_SPEED = 1.0  # rad/s, any joint
-JOINT_ACCEL = 1.5  # rad/s²
 MIN_DURATION = 0.5  # seconds: the shortest joint motion of both arms
 CHECKS_PER_SECOND = 40  # instants at which the two moving arms are checked against each other
 PEAK_ACCELERATION = 10.0 / np.sqrt(3.0)  # a minimum-jerk motion's peak acceleration, in travel / duration²
@@ -65,8 +62,8 @@ def timed_together(paths: Mapping[str, np.ndarray]) -> dict[str, Trajectory]:
         if len(points) < 2:
             continue
         steps = np.abs(np.diff(points, axis=0))
-        shortest_by_speed = np.max(steps.max(axis=1) / (JOINT_SPEED * np.maximum(np.diff(shares[arm]), 1e-9)))
-        shortest_by_acceleration = np.sqrt(PEAK_ACCELERATION * steps.sum(axis=0).max() / JOINT_ACCEL)
+        shortest_by_speed = np.max(steps.max(axis=1) / (CAREFUL_SPEED * np.maximum(np.diff(shares[arm]), 1e-9)))
+        shortest_by_acceleration = np.sqrt(PEAK_ACCELERATION * steps.sum(axis=0).max() / CAREFUL_ACCEL)
         duration = max(duration, float(shortest_by_speed), float(shortest_by_acceleration))
     out: dict[str, Trajectory] = {}
     for arm, points in paths.items():

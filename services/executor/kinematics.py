@@ -52,11 +52,16 @@ NEIGHBOURS = 5
 APPROACH_WEIGHT, FINGER_WEIGHT = 0.2, 0.1  # metres per unit axis difference in the seed index
 IK_ITERATIONS = 25  # Newton steps per start: a start that converges does so in about ten
 ARM_REACH = 1.0  # metres from the shoulder pan axis to the farthest tool position (0.1 + 0.4 + 0.321 + 0.18)
-# Time parameterisation: each arm joint at up to this share of its rated speed, which it reaches in
-# half a second (acceleration = speed / ACCELERATION_TIME). Moves take time in proportion to how far
-# the joints travel: a reach across the table about 2-3 s, as the hardware's own controllers allow.
+# Time parameterisation. A free move of an empty hand: each arm joint at up to this share of its rated
+# speed, reached in ACCELERATION_TIME, so a reach across the table takes 2-3 s. Carrying an object: a
+# smaller share, at the careful acceleration, so it is not shaken out of the fingers. Near and against
+# objects (straight approaches, descents, lifts, presses): every joint at CAREFUL_SPEED and CAREFUL_ACCEL,
+# so a cup is not knocked over or tipped by its landing.
 SPEED_SHARE = 0.9
+CARRYING_SPEED_SHARE = 0.6
 ACCELERATION_TIME = 0.4
+CAREFUL_SPEED = 1.0  # rad/s
+CAREFUL_ACCEL = 1.5  # rad/s²
 OBJECT_PADDING = 0.01  # metres added around each object: a margin for perception's error and path sampling
 TABLE_PADDING = 0.005
 # RRTConnect runs in one-second tries (a fresh tree each) up to this many: a "stop" is noticed between
@@ -78,10 +83,10 @@ READY = "untucked"  # the ready posture: the arm bent in front of the body, abov
 joint_names = ROBOT.arm_joint_names
 
 
-def planning_speeds(arm: str) -> np.ndarray:
+def planning_speeds(arm: str, share: float = SPEED_SHARE) -> np.ndarray:
     """Speed limits of the planning group (torso, then the arm's joints from shoulder to wrist)."""
     torso = ROBOT.rated_speeds([ROBOT.torso_joint])
-    return np.array([*torso, *(SPEED_SHARE * np.array(ROBOT.rated_speeds(joint_names(arm))))])
+    return np.array([*torso, *(share * np.array(ROBOT.rated_speeds(joint_names(arm))))])
 
 
 tool_frame = ROBOT.tool_frame
@@ -450,12 +455,26 @@ class ArmKinematics:
         return hits or None
 
     # -- motion ------------------------------------------------------------------------
-    def timed(self, arm_path: np.ndarray) -> Trajectory:
-        """Time a joint path by the speed/acceleration limits (time grows with distance)."""
+    def timed(self, arm_path: np.ndarray, careful: bool = False) -> Trajectory:
+        """Time a joint path by the speed/acceleration limits (time grows with distance).
+
+        ``careful`` (a move near or against objects): the careful limits; an
+        object in the hand: the carrying ones; else the free ones.
+        """
         if len(arm_path) < 2 or np.max(np.abs(arm_path[-1] - arm_path[0])) < 1e-4 and len(arm_path) == 2:
             return Trajectory(arm_path[-1:], np.array([0.0]))
         group = np.column_stack([np.full(len(arm_path), self.qpos[self.torso_idx]), arm_path])
-        times, positions, *_ = self.planner.TOPP(group, step=0.05)
+        free = self.planner.joint_vel_limits, self.planner.joint_acc_limits
+        if careful:
+            self.planner.joint_vel_limits = np.full(len(free[0]), CAREFUL_SPEED)
+            self.planner.joint_acc_limits = np.full(len(free[1]), CAREFUL_ACCEL)
+        elif self.held:
+            self.planner.joint_vel_limits = planning_speeds(self.arm, CARRYING_SPEED_SHARE)
+            self.planner.joint_acc_limits = np.full(len(free[1]), CAREFUL_ACCEL)
+        try:
+            times, positions, *_ = self.planner.TOPP(group, step=0.05)
+        finally:
+            self.planner.joint_vel_limits, self.planner.joint_acc_limits = free
         if len(times) < 2:
             times, positions = np.array([0.0, 0.1]), group[[0, -1]]
         return Trajectory(positions[:, 1:].copy(), np.asarray(times, float))
@@ -745,7 +764,7 @@ class ArmKinematics:
         are allowed along the way; ``steer`` as in :meth:`_cartesian_path`.
         """
         path = self.line_path(pose, check_collisions=check_collisions, ignore=ignore, steer=steer)
-        return None if path is None else self.timed(path)
+        return None if path is None else self.timed(path, careful=True)
 
     def line_path(
         self, pose: np.ndarray, *, check_collisions: bool = True, ignore: tuple[str, ...] = (), steer: bool = False

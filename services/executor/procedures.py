@@ -510,7 +510,7 @@ class Procedures:
         if move is None:
             raise StepFailed(why)
         log.info("%s hand presses against %s", arm, move.touched)
-        self._go(arm, kin.timed(move.path), contact=True)
+        self._go(arm, kin.timed(move.path, careful=True), contact=True)
         self._press[arm] = Press(move.touched, press.direction if press else unit, move.path[-1].copy())
 
     def _close_on_the_way(self, arm: str, kin: ArmKinematics, goal: np.ndarray, why: str) -> ArmKinematics:
@@ -530,7 +530,7 @@ class Procedures:
         lead = kin.free_lead(move)
         closing = self._start_grip(arm, CLOSE_WIDTH)
         if lead is not None:
-            self._go(arm, kin.timed(lead))
+            self._go(arm, kin.timed(lead, careful=True))
         self._end_grip(arm, closing)
         kin, _ = self._ready(arm)
         return kin

@@ -10,15 +10,13 @@ import pytest
 
 from services.executor import wording
 from services.executor.bimanual import (
-    JOINT_ACCEL,
-    JOINT_SPEED,
     MIN_DURATION,
     PEAK_ACCELERATION,
     first_clash,
     timed_together,
 )
 from services.executor.commands import CommandError, check, check_compound
-from services.executor.kinematics import ArmKinematics, joint_names
+from services.executor.kinematics import CAREFUL_ACCEL, CAREFUL_SPEED, ArmKinematics, joint_names
 from shared.codec import MessageError
 from shared.messages import NluResult, typed
 from shared.robot import ROBOT
@@ -147,12 +145,12 @@ def test_both_paths_share_start_end_and_time_law_within_the_speed_limit() -> Non
     for t in timed.values():
         assert np.all(np.diff(t.times) > 0)
         speed = np.max(np.abs(np.diff(t.points, axis=0)), axis=1) / np.diff(t.times)
-        assert np.max(speed) <= JOINT_SPEED + 1e-6
+        assert np.max(speed) <= CAREFUL_SPEED + 1e-6
     # no slower than it must be: the right arm's 0.4 rad at the minimum-jerk law's peak acceleration
-    assert timed["right"].duration == pytest.approx(np.sqrt(PEAK_ACCELERATION * 0.4 / JOINT_ACCEL), rel=1e-6)
+    assert timed["right"].duration == pytest.approx(np.sqrt(PEAK_ACCELERATION * 0.4 / CAREFUL_ACCEL), rel=1e-6)
     fast = timed_together({"right": np.linspace(np.zeros(7), np.full(7, 0.01), 30)})["right"]
     speed = np.max(np.abs(np.diff(fast.points, axis=0)) / np.diff(fast.times)[:, None])
-    assert fast.duration == MIN_DURATION and speed < JOINT_SPEED
+    assert fast.duration == MIN_DURATION and speed < CAREFUL_SPEED
 
 
 @pytest.fixture(scope="module")
