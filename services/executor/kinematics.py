@@ -568,9 +568,8 @@ class ArmKinematics:
             with self.posed(lift[-1]):
                 rest = self.plan_to(arm_q, exact_turns)
             return None if rest is None else self.timed(np.vstack([lift, rest.points[1:]]))
-        goals = [arm_q] if exact_turns else [arm_q, *(q for q in self.turn_variants(arm_q) if q is not arm_q)]
         with self._tolerating_start_contacts():
-            for goal in goals:
+            for goal in self._goals(arm_q, exact_turns):
                 lines = self._lines_to(goal)
                 if lines is not None:
                     return self.timed(lines)
@@ -600,6 +599,15 @@ class ArmKinematics:
                 shortened = self._shortcut(raw)
                 return None if shortened is None else self.timed(shortened)
         return None
+
+    def _goals(self, arm_q: np.ndarray, exact_turns: bool = False) -> list[np.ndarray]:
+        """``arm_q``, then (unless ``exact_turns``) the same posture with the rolls turned round."""
+        return [arm_q] if exact_turns else [arm_q, *(q for q in self.turn_variants(arm_q) if q is not arm_q)]
+
+    def reached_by_lines(self, arm_q: np.ndarray) -> bool:
+        """Whether :meth:`plan_to` reaches ``arm_q`` by joint-space lines, without seconds of random planning."""
+        with self._tolerating_start_contacts():
+            return any(self._lines_to(goal) is not None for goal in self._goals(arm_q))
 
     def _lines_to(self, arm_q: np.ndarray) -> np.ndarray | None:
         """Clear joint-space lines to ``arm_q``: direct, through the ready posture, or with the hand lifted."""

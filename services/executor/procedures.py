@@ -577,7 +577,7 @@ class Procedures:
         supports = self._standing_on(object, Box.of(obj), snap)
         stood_on = max([snap.table_z, *(Box.of(snap.objects[oid]).top for oid in supports)])
         reason = "it slipped out of my fingers"
-        candidates, looked_again = itertools.chain([first], plans), False
+        candidates, looked_again = _reached_by_lines_first(kin, itertools.chain([first], plans)), False
         for attempt in range(PICK_ATTEMPTS):
             if (candidate := next(candidates, None)) is None:
                 break
@@ -1221,3 +1221,23 @@ class Procedures:
         count = len(objects)
         noun = "object" if count == 1 else "objects"
         return Done(message=f"Found {count} {noun}." if count else "I don't see any objects on the table.")
+
+
+def _reached_by_lines_first(
+    kin: ArmKinematics, candidates: Iterator[tuple[geo.Grasp, np.ndarray]]
+) -> Iterator[tuple[geo.Grasp, np.ndarray]]:
+    """Grasp candidates whose pre-grasp joint-space lines reach, as they are found; the others after them.
+
+    A pre-grasp only the random planner reaches (a side grasp low over a
+    plate) costs seconds of planning and may not be found at all, while the
+    next grasp in preference order is often reached at once. Each is judged
+    from where the arm is when it comes up, as an attempt that failed has
+    moved it.
+    """
+    later = []
+    for candidate in candidates:
+        if kin.reached_by_lines(candidate[1]):
+            yield candidate
+        else:
+            later.append(candidate)
+    yield from later

@@ -19,7 +19,7 @@ from services.executor.kinematics import (
     PLANNING_TRIES,
     ArmKinematics,
 )
-from services.executor.procedures import Procedures, StepFailed
+from services.executor.procedures import Procedures, StepFailed, _reached_by_lines_first
 from services.executor.reach import REACH_KEYS, reach_map, sync
 from services.executor.scene import Scene, measured, perceived
 from services.executor.targets import Held
@@ -386,3 +386,22 @@ def test_a_pre_grasp_a_turn_of_the_forearm_away_is_reached_with_the_rolls_a_turn
         turns = (end - pre_q) / (2 * np.pi)
         assert np.allclose(turns, np.round(turns), atol=1e-9) and np.any(np.round(turns) != 0)
         np.testing.assert_allclose(kin.fk(end), kin.fk(pre_q), atol=1e-6)
+
+
+def test_a_pick_up_sets_off_with_a_grasp_the_lines_reach_before_one_only_the_random_planner_might(
+    arms: dict[str, ArmKinematics],
+) -> None:
+    """From the side posture, the left hand's preferred grasp of a cup beyond the plate (a side grasp low over
+    the plate) is reached by no joint-space line, and the random planner did not find it in 7 s; the next grasps
+    are reached at once, so they are tried first and the preferred one after them."""
+    plate = cup("plate", 0.482, 0.026, color="white", size=(0.16, 0.16, 0.015)) | {"type": "plate"}
+    box = cup("box", 0.587, 0.17, color="green", size=(0.06, 0.06, 0.06)) | {"type": "box"}
+    scene = scene_with(cup("red", 0.643, 0.062), cup("blue", 0.532, -0.125, color="blue"), box, plate, pose="side")
+    procedures = Procedures(scene, None, arms, list)  # type: ignore[arg-type]
+    kin, snap = procedures._ready("left")
+    preferred = list(procedures._grasp_plans(kin, snap.objects["red"]))
+    assert not kin.reached_by_lines(preferred[0][1]), "no longer a case for the order"
+    ordered = list(_reached_by_lines_first(kin, iter(preferred)))
+    assert sorted(id(c) for c in ordered) == sorted(id(c) for c in preferred)
+    reached = [kin.reached_by_lines(q) for _, q in ordered]
+    assert reached[0] and reached == sorted(reached, reverse=True)
