@@ -171,18 +171,25 @@ class ArmKinematics:
     ) -> None:
         self.arm = arm
         self._cancel = cancel
+        free_speeds = planning_speeds(arm)
+        # (speed, acceleration) limits of the group by kind of move, for time parameterisation
+        self._limits = {
+            "free": (free_speeds, free_speeds / ACCELERATION_TIME),
+            "carrying": (planning_speeds(arm, CARRYING_SPEED_SHARE), np.full(len(free_speeds), CAREFUL_ACCEL)),
+            "careful": (np.full(len(free_speeds), CAREFUL_SPEED), np.full(len(free_speeds), CAREFUL_ACCEL)),
+        }
         self.planner = mplib.Planner(
             urdf=str(urdf),
             srdf=str(srdf),
             move_group=tool_frame(arm),
-            joint_vel_limits=planning_speeds(arm),
-            joint_acc_limits=planning_speeds(arm) / ACCELERATION_TIME,
+            joint_vel_limits=self._limits["free"][0],
+            joint_acc_limits=self._limits["free"][1],
         )
         self.model = self.planner.pinocchio_model
         self.names = list(self.planner.user_joint_names)
         self.index = {name: i for i, name in enumerate(self.names)}
         self.arm_idx = np.array([self.index[n] for n in joint_names(arm)])
-        self.speeds = planning_speeds(arm)[1:]
+        self.speeds = free_speeds[1:]
         self.torso_idx = self.index[ROBOT.torso_joint]
         self.group_idx = np.asarray(self.planner.move_group_joint_indices)
         if list(self.group_idx) != [self.torso_idx, *self.arm_idx]:
@@ -464,17 +471,13 @@ class ArmKinematics:
         if len(arm_path) < 2 or np.max(np.abs(arm_path[-1] - arm_path[0])) < 1e-4 and len(arm_path) == 2:
             return Trajectory(arm_path[-1:], np.array([0.0]))
         group = np.column_stack([np.full(len(arm_path), self.qpos[self.torso_idx]), arm_path])
-        free = self.planner.joint_vel_limits, self.planner.joint_acc_limits
-        if careful:
-            self.planner.joint_vel_limits = np.full(len(free[0]), CAREFUL_SPEED)
-            self.planner.joint_acc_limits = np.full(len(free[1]), CAREFUL_ACCEL)
-        elif self.held:
-            self.planner.joint_vel_limits = planning_speeds(self.arm, CARRYING_SPEED_SHARE)
-            self.planner.joint_acc_limits = np.full(len(free[1]), CAREFUL_ACCEL)
+        # mplib's TOPP reads the planner's own limits: set for this path, then back to the free ones
+        kind = "careful" if careful else "carrying" if self.held else "free"
+        self.planner.joint_vel_limits, self.planner.joint_acc_limits = self._limits[kind]
         try:
             times, positions, *_ = self.planner.TOPP(group, step=0.05)
         finally:
-            self.planner.joint_vel_limits, self.planner.joint_acc_limits = free
+            self.planner.joint_vel_limits, self.planner.joint_acc_limits = self._limits["free"]
         if len(times) < 2:
             times, positions = np.array([0.0, 0.1]), group[[0, -1]]
         return Trajectory(positions[:, 1:].copy(), np.asarray(times, float))
