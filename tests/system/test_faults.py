@@ -12,6 +12,7 @@ the taught action keeps its steps, and the next command works.
 
 from __future__ import annotations
 
+import math
 import re
 import signal
 import socket
@@ -30,6 +31,7 @@ from textual.pilot import Pilot
 from shared.bus import Bus
 from shared.config import free_port, loopback_options
 from shared.messages import Say
+from shared.robot import ROBOT
 from tests.processes import start_up
 from tests.tui.helpers import until
 from tui.app import PbdApp
@@ -96,6 +98,14 @@ class Robot:
 
     def moving(self) -> bool:
         return any((self.sim.get("moving") or {}).values())
+
+    def arms_at_side(self) -> bool:
+        """Both arms still in the posture a record takes (a roll a whole turn round counts as there)."""
+        joints = self.sim.get("joints") or {}
+        if self.moving() or not joints:
+            return False
+        side = ROBOT.arm_pose_map("side")
+        return all(abs(math.remainder(joints[joint] - goal, math.tau)) < 0.06 for joint, goal in side.items())
 
 
 def _wait_listening(port: int, timeout: float = 60) -> None:
@@ -271,15 +281,18 @@ async def test_each_service_killed_mid_work_is_restarted_and_the_robot_carries_o
             reply = bus.request(bus.keys.executor_control("command"), {"procedure": "record", "args": {}})
             assert reply["ok"], reply
             await until(pilot, lambda: robot.robot.get("busy") == "record", 30, "the record taken up")
-            await _until_progress(pilot, robot.moving, busy, "the arms going out of the view", robot.recent_changes)
-            still = time.monotonic()
-            while time.monotonic() - still < 3.0:  # the arms to the side and the head on the table, then the query
-                await pilot.pause(0.1)
-                if robot.moving():
-                    still = time.monotonic()
+            await _until_progress(pilot, robot.arms_at_side, busy, "the arms out of the view", robot.recent_changes)
+            await pilot.pause(2.0)  # the head already on the table: the query goes out as the last arm arrives
             perception.send_signal(signal.SIGKILL)
             cut = "I couldn't finish looking at the table: the perception service stopped, so it was interrupted."
-            await until(pilot, lambda: cut in robot.lines(since, "error"), 30, "the executor to report the record cut")
+            await _until_progress(
+                pilot,
+                lambda: cut in robot.lines(since, "error"),
+                lambda: False,
+                "the record cut",
+                lambda: str(robot.lines(since)),
+                quiet=30,
+            )
             await _restarted(pilot, app, robot, up, "perception", since, perception.pid)
             since = len(robot.said)
             reply = bus.request(bus.keys.executor_control("command"), {"procedure": "record", "args": {}})
