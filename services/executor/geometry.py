@@ -34,7 +34,10 @@ ON_TOP = 0.05
 POINT_DISTANCE = 0.14
 RELEASE_CLEARANCE = 0.015  # a placed object's bottom is released this far above its support
 PLACE_SHIFT = 0.02  # metres a release point may move off the exact one when that is out of reach
-DOWN_RINGS = (0.04, 0.08, 0.12)  # metres: "put it down" may move the object this far when right below is taken
+# metres: "put it down" may move the object this far when right below is taken; past 12 cm only when nothing
+# nearer is free (a cup lifted off a box near the table's edge, with the plate and the other cup beside it)
+DOWN_RINGS = (0.04, 0.08, 0.12, 0.16, 0.20, 0.25)
+DOWN_SPACING = 0.06  # metres at most between neighbouring spots of one ring
 TOP_MARGIN = 0.01  # a held object released on a top stays this far inside its edges
 ROTATE_STEP = 1.6  # rad, the paper's wrist-roll increment
 MAX_GRIP_WIDTH = 0.085  # widest object the open gripper can close around, with margin
@@ -270,12 +273,16 @@ def table_release_centers(held_center: np.ndarray, held_size: np.ndarray, table_
 
     "Put it down" means about here: when the spot below is taken (the hand
     was moved over a plate) or cannot be reached straight down, a free spot
-    a few centimetres away is as good.
+    a few centimetres away is as good, and one farther away is better than
+    not putting it down at all. Each ring has spots at most
+    ``DOWN_SPACING`` apart, so the wider rings leave no free gap between
+    objects unvisited.
     """
     below = table_release_center(held_center, held_size, table_z)
     out = [below]
     for radius in DOWN_RINGS:
-        for angle in np.linspace(0.0, 2 * np.pi, 8, endpoint=False):
+        count = max(8, int(np.ceil(2 * np.pi * radius / DOWN_SPACING)))
+        for angle in np.linspace(0.0, 2 * np.pi, count, endpoint=False):
             out.append(below + radius * np.array([np.cos(angle), np.sin(angle), 0.0]))
     return out
 

@@ -801,7 +801,8 @@ class Procedures:
             and (destination == "here" or not self._back_where_lifted(held, pair[1]))
         ]
         log.info(
-            "down %s from %s: right below %s, %d of %d spots around free; holding %s in %s; objects seen: %s",
+            "down %s from %s: right below %s, %d of %d spots around free; holding %s in %s, lifted from %s;"
+            " table top seen over %s; objects seen: %s",
             where,
             np.round(first[1][:3], 3).tolist(),
             "free" if below else "taken",
@@ -809,6 +810,8 @@ class Procedures:
             len(around),
             held.object_id,
             np.round(held.box.center, 3).tolist(),
+            None if held.lifted_off is None else np.round(held.lifted_off.center, 3).tolist(),
+            None if snap.table is None else np.round(snap.table.extent, 3).tolist(),
             {
                 k: (np.round(o.position, 3).tolist(), np.round(o.size, 3).tolist(), o.held_by)
                 for k, o in snap.objects.items()
