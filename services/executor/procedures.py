@@ -820,6 +820,13 @@ class Procedures:
         done = self._place(
             arm, kin, snap, held, pairs, wording.sentence(f"I can't find a clear path to put it down {where}")
         )
+        if done is None and not pairs:
+            reach = round(100 * max(geo.DOWN_RINGS))
+            raise StepFailed(
+                wording.sentence(
+                    f"There is no free spot on the table within {reach} cm of my {arm} hand to put it down"
+                )
+            )
         if done is None:
             raise StepFailed(wording.sentence(f"I can't lower my {arm} hand to put it down {where}"))
         return done
