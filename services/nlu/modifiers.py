@@ -63,7 +63,11 @@ _UNIT_ONLY = re.compile(
     r"inch(?:es)?|met(?:er|re)s?)\b"
 )
 _BARE_NUMBER = re.compile(r"(?<!action )(?<!number )\b(?:\d+(?:\.\d+)?)\b")
-_BOTH = re.compile(r"\b(?:with )?both(?: of)?(?: (?:your|my|the))? (?:hands|arms|grippers|claws)\b|\bboth\b")
+# "both hands", and a plural said of the robot's own hands ("open your hands", "raise your arms")
+_BOTH = re.compile(
+    r"\b(?:with )?both(?: of)?(?: (?:your|my|the))? (?:hands|arms|grippers|claws)\b|\bboth\b"
+    r"|\b(?:with )?(?:your|my) (?:hands|arms|grippers|claws)\b"
+)
 _TWO_ARMS = re.compile(
     r"\b(?:with )?(?:your |the |my )?(?P<a>right|left)(?: (?:hand|arm|gripper))? (?:and|&) "
     r"(?:your |the |my )?(?P<b>right|left) (?:hands?|arms?|grippers?)\b"

@@ -49,14 +49,17 @@ def situation_scores(world: World, commands: list[Command]) -> np.ndarray:
 
 
 def side_scores(world: World, commands: list[Command]) -> np.ndarray:
-    """Penalty of each arm command on an object lying on the other arm's side (for when no hand was used yet)."""
-    side = {
-        obj.id: ("right" if obj.position[1] < -MARGINS.side_m else "left" if obj.position[1] > MARGINS.side_m else None)
-        for obj in world.objects
-    }
+    """Penalty of each arm command on an object lying on the other arm's side (for when no hand was used yet).
+
+    An object in the middle still has a nearer arm, by the sign of its y
+    (the right arm at exactly 0), preferred by the smaller ``middle_side``:
+    a first "pick up the box" is done, not answered with "which hand?".
+    """
+    side = {obj.id: ("right" if obj.position[1] <= 0 else "left") for obj in world.objects}
+    middle = {obj.id for obj in world.objects if abs(obj.position[1]) <= MARGINS.side_m}
     return np.array(
         [
-            PRIOR.far_side
+            (PRIOR.middle_side if c.arg("object") in middle else PRIOR.far_side)
             if c.arg("arm") is not None and side.get(c.arg("object")) not in (None, c.arg("arm"))
             else 0.0
             for c in commands

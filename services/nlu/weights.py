@@ -17,8 +17,10 @@ Prior P(C|S) (log scale, added to a command's score; 0 = no opinion):
 - ``unreachable``: the reachability map says that arm cannot do that with that
   object, or a directional move would leave the arm's reachable space.
 - ``far_side``: no hand has been used yet and the object lies on the other
-  arm's side of the robot (beyond ``Margins.side_m``); the nearer arm is taken
-  and the question "Which hand?" is left for objects in the middle.
+  arm's side of the robot (beyond ``Margins.side_m``); the nearer arm is taken.
+  ``middle_side``: the same for an object in the middle, by the sign of its y
+  (right at 0), just above the ``Decision.tie`` so a first "pick up the box"
+  is done rather than answered with "Which hand?".
 - ``never``: relative to the object the commanding hand holds (DESIGN.md:
   never its landmark); no words outweigh it.
 - ``impossible``: the command cannot make sense in this state (open an open
@@ -50,6 +52,7 @@ class PriorWeights:
     impossible: float = -6.0
     never: float = -50.0  # a landmark the commanding hand holds: no words can make it one
     far_side: float = -0.5  # no hand used yet: the arm on the other side of the object
+    middle_side: float = -0.1  # ... of an object in the middle (|y| within ``Margins.side_m``): a tie-breaker
 
 
 @dataclass(frozen=True)

@@ -65,8 +65,10 @@ def test_with_no_hand_used_the_hand_on_the_objects_side_is_chosen() -> None:
     fresh = table_scene(last_arm=None)
     assert steps("pick up the red cup", fresh) == [("pick_up", {"arm": "right", "object": "obj0"})]
     assert steps("pick up the blue cup", fresh) == [("pick_up", {"arm": "left", "object": "obj1"})]
-    asked = understood("pick up the box", fresh)  # straight ahead: nothing separates the hands
-    assert asked["kind"] == "clarify" and asked["params"] == ["arm"]
+    # straight ahead: the right hand, unless the box stands a little to the left
+    assert steps("pick up the box", fresh) == [("pick_up", {"arm": "right", "object": "obj2"})]
+    fresh["objects"][2]["position"][1] = 0.02
+    assert steps("pick up the box", fresh) == [("pick_up", {"arm": "left", "object": "obj2"})]
 
 
 def test_reach_decides_the_hand_before_the_side() -> None:

@@ -43,10 +43,10 @@ def test_reply_to_clarification_is_merged() -> None:
 
 def test_arm_reply_is_merged() -> None:
     model, dialogue = Model(parse_world(table_scene(last_arm=None))), Dialogue()
-    assert isinstance(dialogue.understand(model, "point to the box"), Clarify)  # in the middle: no side
+    assert isinstance(dialogue.understand(model, "move up"), Clarify)  # no hand used yet, no object to go by
     reply = dialogue.understand(model, "left")
     assert isinstance(reply, CommandResult)
-    assert dict(reply.command.args) == {"arm": "left", "object": "obj2"}
+    assert dict(reply.command.args) == {"arm": "left", "direction": "up"}
 
 
 def test_new_command_replaces_the_pending_question() -> None:

@@ -308,11 +308,19 @@ def test_execute_while_executing_means_stop_is_preferred() -> None:
     assert isinstance(result, CommandResult) and result.confidence < parse("execute").confidence
 
 
+@pytest.mark.parametrize("y, arm", [(0.0, "right"), (-0.03, "right"), (0.03, "left")])
+def test_an_object_in_the_middle_is_taken_by_the_nearer_hand_when_no_hand_was_used(y: float, arm: str) -> None:
+    scene = world(obj("obj0", "green", "box", 0.6, y), obj("obj1", "red", "cup", 0.6, -0.3), last_arm=None)
+    for text in ("pick up the box", "point to the box", "move above the box"):
+        assert command(text, scene)["arm"] == arm, text
+    assert command("pick up the box with your left hand", scene)["arm"] == "left"
+
+
 @pytest.mark.parametrize(
     "text, last_arm, params, phrase",
     [
         ("pick up the cup", "right", ["object"], "Which object do you mean: the rightmost cup or the leftmost cup?"),
-        ("point to the box", None, ["arm"], "Which hand do you mean: the right hand or the left hand?"),
+        ("move up", None, ["arm"], "Which hand do you mean: the right hand or the left hand?"),
         ("switch action", None, ["target"], "Which action do you mean: the next action or the previous action?"),
         (
             "point to the cup",
