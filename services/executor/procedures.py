@@ -936,6 +936,13 @@ class Procedures:
         )
 
     def place_rel(self, arm: str, relation: str, object: str) -> Done:
+        """Put the held object ``relation`` the landmark; placed "above" it, the object is set down on it.
+
+        A hand only hovers above a landmark ("move to the plate"); a release
+        there would drop the object from the hover's height.
+        """
+        if relation == "above":
+            relation = "on_top_of"
         kin, snap = self._ready(arm)
         held = self._refresh_held(self._holding(arm, snap), snap, kin)
         obj = self._object(snap, object)

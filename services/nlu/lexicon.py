@@ -292,7 +292,8 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
         ("away from", "away", "further from", "farther from", "further away from"),
         ((option("direction", "away_from"),),),
     ),
-    (("to",), ((option("direction", "towards", W.weak),),)),
+    # "go to the red cup": the hand goes over it (as for a grasp); a step towards it is the second reading
+    (("to",), ((option("relation", "above", W.weak * 1.2),), (option("direction", "towards", W.weak),))),
     (("from",), ((option("direction", "away_from", W.weak),),)),
     # object words
     (("leftmost", "left most", "furthest left", "farthest left"), _label("leftmost")),
@@ -441,7 +442,7 @@ LANDMARK_PHRASES = _phrases_with(
         m.weight >= W.option
         and ((m.slot == "relation" and m.value in RELATIONS) or (m.slot == "direction" and m.value in REL_DIRECTIONS))
     )
-)
+) | {"to"}  # weak as a relation, but what follows it is still the place the hand goes
 # phrases that may start or link a relational referring expression (``relational.py``)
 REFERRING_PHRASES = LANDMARK_PHRASES | _phrases_with(lambda m: m.slot in REFERRING_SLOTS)
 MAX_PHRASE_WORDS = max(len(p.split()) for p in PHRASES)
