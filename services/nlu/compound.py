@@ -13,8 +13,9 @@ import re
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
+from services.nlu import tokens
 from services.nlu.commands import Command
-from services.nlu.lexicon import PHRASES
+from services.nlu.lexicon import LANDMARK_PHRASES, OBJECT_SLOTS, PHRASES
 from services.nlu.prior import History
 from services.nlu.results import Clarify, CommandResult, Result
 from services.nlu.weights import LANGUAGE
@@ -53,6 +54,8 @@ def split(text: str) -> list[str]:
         for piece in pieces[1:]:
             if _has_verb(piece):
                 merged.append(piece)
+            elif _object_and_place(piece) and (said := _verb(merged[-1])) is not None:
+                merged.append(f"{said} {piece}")  # "put the red cup on the plate and the blue cup on the box"
             else:
                 merged[-1] = f"{merged[-1]} and {piece}"  # "between the cup and the box"
         parts.extend(merged)
@@ -74,16 +77,34 @@ def _without_opening(text: str) -> str:
 
 
 def _has_verb(text: str) -> bool:
+    return _verb(text) is not None
+
+
+def _verb(text: str) -> str | None:
+    """The verb phrase ``text`` opens with ("put", "pick up"), also after a word or two ("please put it there")."""
     words = text.lower().split()
     for n in range(min(4, len(words)), 0, -1):
-        readings = PHRASES.get(" ".join(words[:n]))
-        if readings and any(m.slot == "procedure" and m.weight >= LANGUAGE.verb for r in readings for m in r):
-            return True
-    for word in words[:3]:  # "please put it there", "now pick it up"
-        readings = PHRASES.get(word, ())
-        if any(m.slot == "procedure" and m.weight >= LANGUAGE.verb for r in readings for m in r):
-            return True
-    return False
+        phrase = " ".join(words[:n])
+        if _is_verb(phrase):
+            return phrase
+    return next((word for word in words[:3] if _is_verb(word)), None)
+
+
+def _is_verb(phrase: str) -> bool:
+    readings = PHRASES.get(phrase, ())
+    return any(m.slot == "procedure" and m.weight >= LANGUAGE.verb for r in readings for m in r)
+
+
+def _object_and_place(text: str) -> bool:
+    """Whether a part with no verb names an object and then a place for it ("the blue cup on the box").
+
+    Such a part repeats the verb before it ("put the red cup on the plate
+    and the blue cup on the box"), where a part naming only an object
+    completes the one before ("between the cup and the box").
+    """
+    terms = tokens.read(text).terms
+    place = next((i for i, term in enumerate(terms) if term.words in LANDMARK_PHRASES), 0)
+    return place > 0 and any(m.slot in OBJECT_SLOTS for term in terms[:place] for r in term.readings for m in r)
 
 
 def run(model: Model, parts: list[str], history: History) -> Result:
