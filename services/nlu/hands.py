@@ -13,7 +13,11 @@ runner-up:
   with nowhere to move to, it is refused;
 - a move of an empty hand to a place is that same pick-up and place when the
   words name an object to move and no hand ("move the blue cup next to the
-  box").
+  box");
+- a move of an empty hand in a direction is a pick-up, that move and a
+  put-down when the words name an object to move and no hand ("move the red
+  cup 10 cm to the left"); moved up, the object stays in the hand ("lift the
+  red cup up").
 """
 
 from __future__ import annotations
@@ -26,6 +30,8 @@ from services.nlu.commands import Command
 from services.nlu.language import Match
 from services.nlu.prior import History
 from shared.contract import ARMS
+
+NAMING_SLOTS = frozenset({"type", "color", "anaphor", "generic"})  # words that name an object themselves
 
 if TYPE_CHECKING:
     from services.nlu.infer import Model
@@ -41,6 +47,10 @@ def situate(model: Model, command: Command, match: Match, history: History, said
     if command.procedure == "pick_up":
         already_held(model, command.procedure, match)
         return (command,)
+    if command.procedure == "move_abs_dir" and not said_arm and _empty(model, command.arg("arm")):
+        moved = _theme(model, command, match) if _names_an_object(match) else None
+        if moved is not None and world.objects[moved].held_by is None and command.arg("direction") != "down":
+            return _carried(model, command, moved, history)
     if command.procedure == "move_rel_dest" and not said_arm and _empty(model, command.arg("arm")):
         carried = _theme(model, command, match)
         if carried is not None:  # "move the cup next to the box": the cup goes there
@@ -54,6 +64,21 @@ def situate(model: Model, command: Command, match: Match, history: History, said
     if command.procedure == "place_rel":
         return (Command("move_rel_dest", command.args),)
     raise Refusal(f"My {command.arg('arm')} hand is not holding anything to put down.")
+
+
+def _carried(model: Model, move: Command, obj: int, history: History) -> tuple[Command, ...]:
+    """Pick ``obj`` up, make ``move`` with it and (unless it went up) put it down there."""
+    arm = _best_arm(model, obj, history, move.arg("arm"))
+    pick_up = Command("pick_up", (("arm", arm), ("object", model.world.ids[obj])))
+    moved = move.with_arg("arm", arm)
+    if move.arg("direction") == "up":
+        return (pick_up, moved)
+    return (pick_up, moved, Command("place_abs", (("arm", arm), ("destination", "table"))))
+
+
+def _names_an_object(match: Match) -> bool:
+    """Whether the words name an object by its kind, colour or "it", not only by a direction word ("left")."""
+    return any(m.slot in NAMING_SLOTS for term in match.terms for reading in term.readings for m in reading)
 
 
 def _theme(model: Model, command: Command, match: Match) -> int | None:

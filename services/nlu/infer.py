@@ -179,7 +179,7 @@ class Model:
         labels = [command_text(c, self.scene) for c in candidates]
         procedure = candidates[0].procedure
         params = [p for p in PROCEDURES[procedure] if len({c.arg(p) for c in candidates}) > 1]
-        if params == ["arm"] and procedure in {*PLACES, "move_rel_dest"}:  # a pick-up first: its hand decides
+        if params == ["arm"] and procedure in {*PLACES, "move_rel_dest", "move_abs_dir"}:  # a pick-up first decides
             situated = self._situated(candidates[0], {}, confidence, best_score, match, history)
             if isinstance(situated, CommandResult) and situated.command.procedure == "pick_up":
                 return situated
@@ -243,15 +243,28 @@ def _too_long(text: str) -> str | None:
 
 
 def qualify(result: CommandResult, said: modifiers.Modifiers, scene: Scene) -> Result:
-    """Put a distance and "both hands" into the command chosen, or say why they do not fit it."""
+    """Put a distance and "both hands" into the command chosen, or say why they do not fit it.
+
+    The distance goes to the first move in a direction among the steps ("move
+    the red cup 10 cm to the left" is a pick-up, that move and a put-down).
+    """
     command = result.command
     if said.distance is not None:
-        if command.procedure not in DISTANCE_PROCEDURES:
+        steps = (command, *result.then)
+        moving = next((i for i, step in enumerate(steps) if step.procedure in DISTANCE_PROCEDURES), None)
+        if moving is None:
             return Clarify(
                 ["distance"],
                 'A distance goes with a move in a direction, like "move up 5 centimetres" '
                 'or "move towards the cup a little".',
             )
+        if moving:
+            steps = tuple(
+                Command(s.procedure, s.args + (("distance", round(said.distance, 4)),)) if i == moving else s
+                for i, s in enumerate(steps)
+            )
+            text = ", then ".join(command_text(step, scene) for step in steps)
+            return CommandResult(command, result.confidence, text, {}, result.score, steps[1:])
         command = Command(command.procedure, command.args + (("distance", round(said.distance, 4)),))
     elif said.bare_number and command.procedure in DISTANCE_PROCEDURES:
         return Clarify(["distance"], 'How far is that? Please say the distance with a unit, like "5 centimetres".')
