@@ -97,6 +97,10 @@ class Model:
                 [command_text(c, self.scene) for c in options],
                 result.score,
             )
+        if said.both and first is not None:
+            each = self._each_hand_in_turn(first, result.score)
+            if each is not None:
+                return each
         if said.both and isinstance(result, Clarify) and result.candidates:
             one_handed = _one_handed(result.candidates[0], self.scene, result.score)
             if one_handed is not None and len({c.procedure for c in result.candidates}) == 1:
@@ -107,6 +111,21 @@ class Model:
         if isinstance(result, CommandResult):
             return qualify(result, said, self.scene)
         return result
+
+    def _each_hand_in_turn(self, command: Command, score: float) -> CommandResult | None:
+        """ "Put both down" with something in each hand: the right hand's place, then the left's.
+
+        A place is done with one hand at a time (DESIGN.md), but with both
+        hands full "both" leaves no doubt which objects are meant.
+        """
+        if command.procedure != "place_abs" or not all(self._holds(arm) for arm in ARMS):
+            return None
+        steps = [command.with_arg("arm", arm) for arm in ARMS]
+        text = ", then ".join(command_text(step, self.scene) for step in steps)
+        return CommandResult(steps[0], 1.0, text, {}, score, tuple(steps[1:]))
+
+    def _holds(self, arm: str) -> bool:
+        return self.world.robot.grippers.get(arm) == "holding" or any(o.held_by == arm for o in self.world.objects)
 
     def history_part(self, history: History) -> np.ndarray:
         """The per-utterance part of the prior: last arm (or the object's side), last object (once per history)."""

@@ -164,6 +164,30 @@ def test_a_compound_puts_the_red_cup_on_the_plate_as_two_steps(stack: Stack) -> 
     assert len(steps_of(stack)) == 2
 
 
+def test_moving_a_cup_5_cm_right_carries_it_there_and_sets_it_down_upright(stack: Stack) -> None:
+    """ "Move the red cup 5 cm to the right" with empty hands: pick up, the move, a put-down (three steps)."""
+    stack.load_scene("default")
+    ok(stack.command("create_action", utterance="create a new action"))
+    before = stack.position("obj0")
+    said = stack.command(
+        "pick_up",
+        {"arm": "right", "object": stack.pid("obj0")},
+        utterance="move the red cup 5 cm to the right",
+        then=[
+            {"procedure": "move_abs_dir", "args": {"arm": "right", "direction": "right", "distance": 0.05}},
+            {"procedure": "place_abs", "args": {"arm": "right", "destination": "table"}},
+        ],
+    )
+    ok(said)
+    stack.settled()
+    after = stack.position("obj0")
+    np.testing.assert_allclose(after[:2] - before[:2], [0.0, -0.05], atol=0.015)
+    assert abs(after[2] - before[2]) < 0.005, "the cup is not standing on the table"
+    assert tilt(stack.truth["obj0"]["pose"]) < 10
+    assert stack.robot["grippers"]["right"]["holding"] is None
+    assert len(steps_of(stack)) == 3
+
+
 def test_distances_repeat_and_undo_walk_back_step_by_step(stack: Stack) -> None:
     stack.load_scene("default")
     ok(stack.command("create_action", utterance="create a new action"))

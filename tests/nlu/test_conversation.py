@@ -71,6 +71,33 @@ def test_with_no_hand_used_the_hand_on_the_objects_side_is_chosen() -> None:
     assert steps("pick up the box", fresh) == [("pick_up", {"arm": "left", "object": "obj2"})]
 
 
+@pytest.mark.parametrize("text", ["put both down", "put both cups down", "put them both on the table"])
+def test_both_put_down_with_a_cup_in_each_hand_is_the_right_hands_place_then_the_lefts(text: str) -> None:
+    full = table_scene(grippers={"right": "holding", "left": "holding"}, last_arm="left")
+    full["objects"][0]["held_by"], full["objects"][1]["held_by"] = "right", "left"
+    assert steps(text, full) == [
+        ("place_abs", {"arm": "right", "destination": "table"}),
+        ("place_abs", {"arm": "left", "destination": "table"}),
+    ]
+    one_hand = understood("put both down", holding())  # only one hand holds: which hand, as before
+    assert one_hand["kind"] == "clarify" and one_hand["params"] == ["arm"]
+
+
+def test_moving_a_named_object_in_a_direction_carries_it_and_a_direction_word_alone_moves_the_hand() -> None:
+    fresh = table_scene(last_arm=None)
+    assert steps("move the red cup 10 cm to the left", fresh) == [
+        ("pick_up", {"arm": "right", "object": "obj0"}),
+        ("move_abs_dir", {"arm": "right", "direction": "left", "distance": 0.1}),
+        ("place_abs", {"arm": "right", "destination": "table"}),
+    ]
+    assert steps("lift the blue cup up", fresh) == [
+        ("pick_up", {"arm": "left", "object": "obj1"}),
+        ("move_abs_dir", {"arm": "left", "direction": "up"}),
+    ]
+    assert steps("move left", table_scene()) == [("move_abs_dir", {"arm": "right", "direction": "left"})]
+    assert steps("move your right hand to the left", fresh) == [("move_abs_dir", {"arm": "right", "direction": "left"})]
+
+
 def test_reach_decides_the_hand_before_the_side() -> None:
     fresh = table_scene(last_arm=None)
     fresh["objects"][0]["reach"] = {"right": {"pick_up": False}, "left": {"pick_up": True}}
