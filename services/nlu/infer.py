@@ -181,6 +181,10 @@ class Model:
         if len(tied) == 1:
             return self._command(tied[0], confidence, best_score, match, history)
         everything = [self._filled(self.index.commands[i], match) for i in tied]
+        table = next((c for c in everything if c.procedure == "place_abs" and c.arg("destination") == "table"), None)
+        if table is not None and all(c.procedure in PLACES for c in everything):
+            # "drop it" over the box it was carried to: no place was said, so down on the table (as "set it down")
+            return self._situated(table, {}, confidence, best_score, match, history)
         if len({c.procedure for c in everything}) > 1:
             firsts = _one_per_procedure(everything)[: DECISION.max_candidates]
             return Clarify(
@@ -202,10 +206,6 @@ class Model:
             situated = self._situated(candidates[0], {}, confidence, best_score, match, history)
             if isinstance(situated, CommandResult) and situated.command.procedure == "pick_up":
                 return situated
-        if params == ["destination"] and procedure == "place_abs":  # "set it down", "drop it": down on the table
-            table = next((c for c in candidates if c.arg("destination") == "table"), None)
-            if table is not None:
-                return self._situated(table, {}, confidence, best_score, match, history)
         return Clarify(params, parameter_question(params, candidates, self.scene), candidates, labels, best_score)
 
     def _command(self, position: int, confidence: float, score: float, match: Match, history: History) -> Result:

@@ -72,7 +72,7 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     (("place", "set", "lay", "drop", "deposit", "stack", "place down", "set down", "lay down"), ((verb(PLACE),),)),
     (("put",), ((verb(PLACE),), (verb(MOVE, W.weak),))),
     (("put down",), ((verb(PLACE), option("destination", "table", W.weak)),)),
-    (("release", "let go", "let go of"), ((verb(_procs("open")),), (verb(PLACE, W.weak),))),
+    (("release", "let go", "let go of", "let it go"), ((verb(_procs("open")),), (verb(PLACE, W.weak),))),
     # looking and pointing
     (
         ("point", "point to", "point at", "point towards", "point toward", "indicate", "show", "show me"),
