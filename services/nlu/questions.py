@@ -41,7 +41,13 @@ _PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple(
             r"^(?:what(?:'s| is| does| do)? (?:(?:in|inside) )?(?:action|program) (?P<number>\w+)"
             r"|how many (?:actions|programs|steps)|which action|what actions|list (?:the |all )?actions"
             r"|what (?:have|did) i (?:program|record|teach|make)|what is the current action|what(?:'s| is) "
-            r"(?:the )?current action|show (?:me )?(?:the )?actions)",
+            r"(?:the )?current action|show (?:me )?(?:the |my )?(?:actions|steps)|list (?:the |my |all )?steps"
+            r"|what (?:are|were) (?:the|my) steps|what is (?:in|inside) (?:this|the|my|the current) (?:action|program))",
+        ),
+        (
+            "saved",
+            r"^(?:(?:i am |we are |all )?(?:done|finished)|that is (?:it|all)|save(?: it| this| that| the action| "
+            r"my action)?|(?:end|finish) (?:the |this )?(?:recording|action|program))$",
         ),
         (
             "object",
@@ -77,18 +83,20 @@ _POLITE = re.compile(
 # the first words a question can start with (after "please", "tell me", ...): a cheap test before the patterns
 _OPENERS = frozenset(
     "help what whats where wheres is are do can have how which list describe tell show could so ok "
-    "okay hey well and robot please now".split()
+    "okay hey well and robot please now done finished i im we were all that thats save end finish".split()
 )
-_CONTRACTED = re.compile(r"\b(what|where)(?:'s|s)\b")
+_CONTRACTED = re.compile(r"\b(what|where|that)(?:'s|s)\b")
+_CONTRACTED_AM_ARE = re.compile(r"\b(?:(i)'?m|(we)'re)\b")
 
 
 def answer(model: Model, text: str, history: History) -> Answer | None:
     """The answer when ``text`` is a question; None when it is not one."""
     first = text.lstrip().split(" ", 1)[0].lower().strip("?!.,")
-    if first not in _OPENERS and not first.startswith(("what'", "where'")):
+    if first.replace("'", "") not in _OPENERS:
         return None
     lowered = " ".join(re.sub(r"[?!.,]+", " ", text.lower()).split())
     lowered = _CONTRACTED.sub(lambda found: found[1] + " is", _POLITE.sub("", lowered))
+    lowered = _CONTRACTED_AM_ARE.sub(lambda found: "i am" if found[1] else "we are", lowered)
     found_any = _match(lowered)
     if found_any is None:  # "what do you sea": the same question with its typos corrected
         found_any = _match(" ".join(word if word in _OPENERS else canonical(word) or word for word in lowered.split()))
@@ -99,6 +107,8 @@ def answer(model: Model, text: str, history: History) -> Answer | None:
         return Answer(topic, _where(model, found["phrase"]))
     if topic == "actions":
         return Answer(topic, _actions(model, found.groupdict().get("number")))
+    if topic == "saved":  # "done", "save it": nothing to do, the steps are kept as they are made
+        return Answer("actions", _saved(model))
     return Answer(topic, {"help": _help, "holding": _holding, "scene": _scene}[topic](model))
 
 
@@ -182,6 +192,18 @@ def _actions(model: Model, number_word: str | None) -> str:
         return f"There is no action {number}; there {'is' if len(steps) == 1 else 'are'} {len(steps)}."
     where = " It is the current one." if robot.action == number else current
     return f"Action {number} has {_steps(steps[number - 1])}.{where}"
+
+
+def _saved(model: Model) -> str:
+    """What "done" or "save it" gets: every step is kept as it is made, and how to replay it."""
+    robot = model.world.robot
+    if robot.action is None or not robot.actions:
+        return 'There is nothing to save yet: say "create a new action", then the steps.'
+    count = list(robot.actions)[robot.action - 1] if 1 <= robot.action <= len(robot.actions) else 0
+    return (
+        f"Action {robot.action} keeps its {_steps(count)} as they are made; nothing more to save. "
+        'Say "execute" to replay it, or "create a new action" for the next one.'
+    )
 
 
 def _help(_model: Model) -> str:
