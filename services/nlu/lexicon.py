@@ -96,7 +96,18 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
         ("record", "scan", "rescan", "look around", "detect", "refresh", "update", "record objects", "scan the table"),
         ((verb(_procs("record")),),),
     ),
-    (("start recording", "start recording a new action", "start programming"), ((verb(_procs("create_action")),),)),
+    (
+        (
+            "start recording",
+            "start recording a new action",
+            "start programming",
+            "start over",
+            "start from scratch",
+            "start afresh",
+            "begin again",
+        ),
+        ((verb(_procs("create_action")),),),
+    ),
     (
         (
             "create",
