@@ -33,7 +33,7 @@ _AND = re.compile(r"\s*(?:,\s*and\b|\band\b|,)\s*")
 # words that open a turn ("ok then, put it down", "good, now lift it"): before the first step, not a step
 OPENING_WORDS = frozenset(
     "ok okay alright all right so well now good great fine cool perfect nice yes yeah and"
-    " thanks thank you very done job excellent awesome".split()
+    " thanks thank you very done job excellent awesome please robot hey hi hello".split()
 )
 _HAND_WORDS = frozenset({"all", "right"})  # "right move up" names a hand; only "all right" alone opens a turn
 _JOINS = re.compile(r"\b(?:and|then|after|afterwards|next)\b|[,;.]")

@@ -256,8 +256,11 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     # directions
     (("up", "upward", "upwards", "higher"), ((option("direction", "up"),),)),
     (("down", "downward", "downwards"), ((option("direction", "down"),), (option("destination", "table", W.weak),))),
-    (("to the left", "leftward", "leftwards", "to your left"), ((option("direction", "left"),),)),
-    (("to the right", "rightward", "rightwards", "to your right"), ((option("direction", "right"),),)),
+    (("to the left", "leftward", "leftwards"), ((option("direction", "left"),),)),
+    (("to the right", "rightward", "rightwards"), ((option("direction", "right"),),)),
+    # "move to your left", and "the cup to your left": where an object stands, as "on your left" says it
+    (("to your left",), ((option("direction", "left"),), (Meaning("label", "leftmost", W.adjective),))),
+    (("to your right",), ((option("direction", "right"),), (Meaning("label", "rightmost", W.adjective),))),
     (
         ("left",),
         (
@@ -416,7 +419,7 @@ TYPE_WORDS: dict[str, str] = {
 
 FILLERS = frozenset(
     "please now could can would will you your my the a an robot kindly just then and ok okay hey with of at "
-    "i want like me is for so use using hmm um uh well also let us lets s its".split()
+    "i want like me is for so use using hmm um uh well also let us lets s its mind hello hi".split()
 )
 
 NUMBER_WORDS: dict[str, int] = {

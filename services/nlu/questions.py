@@ -28,7 +28,8 @@ _PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple(
         (
             "help",
             r"^(?:help\b|help me\b|what (?:can|should|do) i (?:say|do|ask|tell)|what (?:can|do) you (?:do|understand)"
-            r"|what commands|which commands|how do i (?:talk|speak|use)|what are the commands|how does this work)",
+            r"|what commands|which commands|how do i (?:talk|speak|use)|what are the commands|how does this work"
+            r"|(?:hello|hi|hey|good (?:morning|afternoon|evening))(?: robot| there)?$)",
         ),
         (
             "holding",
@@ -83,7 +84,7 @@ _POLITE = re.compile(
 # the first words a question can start with (after "please", "tell me", ...): a cheap test before the patterns
 _OPENERS = frozenset(
     "help what whats where wheres is are do can have how which list describe tell show could so ok "
-    "okay hey well and robot please now done finished i im we were all that thats save end finish".split()
+    "okay hey well and robot please now done finished i im we were all that thats save end finish hello hi good".split()
 )
 _CONTRACTED = re.compile(r"\b(what|where|that)(?:'s|s)\b")
 _CONTRACTED_AM_ARE = re.compile(r"\b(?:(i)'?m|(we)'re)\b")
