@@ -16,8 +16,8 @@ runner-up:
   box");
 - a move of an empty hand in a direction is a pick-up, that move and a
   put-down when the words name an object to move and no hand ("move the red
-  cup 10 cm to the left"); moved up, the object stays in the hand ("lift the
-  red cup up").
+  cup 10 cm to the left", "bring the red cup closer to the blue cup"); moved
+  up, the object stays in the hand ("lift the red cup up").
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from services.nlu.prior import History
 from shared.contract import ARMS
 
 NAMING_SLOTS = frozenset({"type", "color", "anaphor", "generic"})  # words that name an object themselves
+DIRECTIONAL_MOVES = frozenset({"move_abs_dir", "move_rel_dir"})  # moves that can carry an object there
 
 if TYPE_CHECKING:
     from services.nlu.infer import Model
@@ -47,7 +48,7 @@ def situate(model: Model, command: Command, match: Match, history: History, said
     if command.procedure == "pick_up":
         already_held(model, command.procedure, match)
         return (command,)
-    if command.procedure == "move_abs_dir" and not said_arm and _empty(model, command.arg("arm")):
+    if command.procedure in DIRECTIONAL_MOVES and not said_arm and _empty(model, command.arg("arm")):
         moved = _theme(model, command, match) if _names_an_object(match) else None
         if moved is not None and world.objects[moved].held_by is None and command.arg("direction") != "down":
             return _carried(model, command, moved, history)
