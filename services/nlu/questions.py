@@ -188,11 +188,21 @@ def _actions(model: Model, number_word: str | None) -> str:
     number = _number(number_word)
     if number is None:
         counts = ", ".join(f"action {i} has {_steps(n)}" for i, n in enumerate(steps, 1))
-        return f"There {'is 1 action' if len(steps) == 1 else f'are {len(steps)} actions'}: {counts}.{current}"
+        return f"There {'is 1 action' if len(steps) == 1 else f'are {len(steps)} actions'}: {counts}.{current}" + (
+            _step_list(robot.steps)
+        )
     if not 1 <= number <= len(steps):
         return f"There is no action {number}; there {'is' if len(steps) == 1 else 'are'} {len(steps)}."
-    where = " It is the current one." if robot.action == number else current
-    return f"Action {number} has {_steps(steps[number - 1])}.{where}"
+    if robot.action == number:
+        return f"Action {number} has {_steps(steps[number - 1])}. It is the current one.{_step_list(robot.steps)}"
+    return f"Action {number} has {_steps(steps[number - 1])}.{current}"
+
+
+def _step_list(said: tuple[str, ...]) -> str:
+    """The current action's steps in the words they were given ("" when none are known)."""
+    if not said:
+        return ""
+    return " Its steps: " + "; ".join(f"{i}. {step}" for i, step in enumerate(said, 1)) + "."
 
 
 def _saved(model: Model) -> str:

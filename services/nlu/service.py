@@ -27,7 +27,7 @@ from shared.service import run_service, wait_until_stopped
 
 log = logging.getLogger("hfpbd.nlu")
 
-_ROBOT_FIELDS = ("grippers", "last_arm", "last_object", "executing", "can_move", "action", "actions")
+_ROBOT_FIELDS = ("grippers", "last_arm", "last_object", "executing", "can_move", "action", "actions", "steps")
 
 
 class LiveWorld:

@@ -59,6 +59,7 @@ class RobotState:
     can_move: dict[str, dict[str, bool]] = field(default_factory=dict)
     action: int | None = None
     actions: tuple[int, ...] = ()
+    steps: tuple[str, ...] = ()  # the current action's steps in words (the executor's own field; may be absent)
 
 
 @dataclass(frozen=True)
@@ -165,6 +166,9 @@ def _parse_robot(raw: Any) -> RobotState:
     actions = raw.get("actions", []) or []
     if not isinstance(actions, list):
         raise WorldError("robot.actions must be a list of step counts")
+    steps = raw.get("steps", []) or []
+    if not isinstance(steps, list) or not all(isinstance(step, str) for step in steps):
+        raise WorldError("robot.steps must be a list of the current action's steps in words")
     return RobotState(
         dict(grippers),
         last_arm,
@@ -173,6 +177,7 @@ def _parse_robot(raw: Any) -> RobotState:
         _flags(raw.get("can_move", {}), "robot.can_move"),
         action,
         tuple(actions),
+        tuple(steps),
     )
 
 

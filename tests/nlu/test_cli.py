@@ -88,6 +88,7 @@ def test_ground_and_describe(world_file: Path, tmp_path: Path) -> None:
             "object 'a' color must be one of",
         ),
         ('{"objects": [], "robot": {"last_object": "obj9"}}', "robot.last_object 'obj9' is not one of the objects"),
+        ('{"objects": [], "robot": {"steps": [1, 2]}}', "robot.steps must be a list of the current action's steps"),
     ],
 )
 def test_bad_world_file_is_one_line_and_nonzero(tmp_path: Path, content: str | None, message: str) -> None:

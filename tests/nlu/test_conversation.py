@@ -253,6 +253,21 @@ def test_questions_are_answered_from_the_world(text: str, topic: str, says: str)
     assert says in result["text"] and not re.search(r"obj\d", result["text"])
 
 
+@pytest.mark.parametrize("text", ["what's in this action", "list the steps", "what is in action 1"])
+def test_the_current_actions_steps_are_read_back_in_the_users_words(text: str) -> None:
+    scene = table_scene(action=1, actions=[2], steps=["pick up the red cup", "put it on the plate"])
+    result = understood(text, scene)
+    assert result["topic"] == "actions"
+    assert "Its steps: 1. pick up the red cup; 2. put it on the plate." in result["text"]
+
+
+@pytest.mark.parametrize("text", ["done", "I'm finished", "save it", "that's it"])
+def test_done_says_the_steps_are_already_kept_and_how_to_replay(text: str) -> None:
+    result = understood(text, table_scene(action=1, actions=[2]))
+    assert result["kind"] == "answer" and result["topic"] == "actions"
+    assert "Action 1 keeps its 2 steps" in result["text"] and '"execute"' in result["text"]
+
+
 def two_red_cups() -> dict[str, Any]:
     return world(
         obj("obj0", "red", "cup", 0.62, -0.28),
