@@ -77,7 +77,7 @@ class Model:
         self, text: str, history: History, among: list[Command] | None = None, focus: list[str] | None = None
     ) -> Result:
         """One command: the model's choice, with the distance and "both hands" said put into it."""
-        said = modifiers.extract(text)
+        said = modifiers.extract(modifiers.name_the_other_hand(text, history.last_arm))
         if said.problem is not None:
             return Clarify(["distance"], said.problem)
         result = self._understand(said.text, history, among, focus)

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from rapidfuzz import process
 from rapidfuzz.distance import DamerauLevenshtein
 
-from shared.contract import DISTANCE
+from shared.contract import ARMS, DISTANCE, other_arm
 
 _SMALL = (
     "zero one two three four five six seven eight nine ten eleven twelve thirteen fourteen fifteen sixteen "
@@ -73,6 +73,8 @@ _TWO_ARMS = re.compile(
     r"(?:your |the |my )?(?P<b>right|left) (?:hands?|arms?|grippers?)\b"
 )
 
+_OTHER_HAND = re.compile(r"\b(?P<lead>(?:with|using) )?(?:your |the |my )?other (?P<part>hand|arm|gripper|claw)\b")
+
 _ARM_NAMED = re.compile(r"\b(right|left) (?:hand|arm|gripper|claw)s?\b")
 
 # the qualifiers as said aloud, for a speech grammar: every phrase here is read back by :func:`extract`
@@ -111,6 +113,20 @@ class Modifiers:
     problem: str | None = None  # a distance that cannot be used, said as the robot would
     bare_number: bool = False  # a number with no unit ("move up 5")
     two_arms: bool = False  # each hand named apart ("move your right hand up with the left hand")
+
+
+def name_the_other_hand(text: str, last_arm: str | None) -> str:
+    """``text`` with "your other hand" said as the hand not used last ("your left hand" after the right).
+
+    Left alone, "other" reads as "the other object" and the hand as the one
+    last used: "point at the box with your other hand" pointed the same hand
+    at the other cup. With no hand used yet there is no other one, and the
+    words stay as they are (the model then asks which hand).
+    """
+    if last_arm not in ARMS:
+        return text
+    other = other_arm(last_arm)
+    return _OTHER_HAND.sub(lambda found: f"{found['lead'] or ''}your {other} {found['part']}", text.lower())
 
 
 def extract(text: str) -> Modifiers:

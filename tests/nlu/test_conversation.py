@@ -98,6 +98,20 @@ def test_moving_a_named_object_in_a_direction_carries_it_and_a_direction_word_al
     assert steps("move your right hand to the left", fresh) == [("move_abs_dir", {"arm": "right", "direction": "left"})]
 
 
+@pytest.mark.parametrize(
+    "text, expected",
+    [
+        ("point at the box with your other hand", ("point_to", {"arm": "left", "object": "obj2"})),
+        ("move your other hand up", ("move_abs_dir", {"arm": "left", "direction": "up"})),
+        ("use the other arm to point at the plate", ("point_to", {"arm": "left", "object": "obj3"})),
+    ],
+)
+def test_the_other_hand_is_the_one_not_used_last_and_not_the_other_object(
+    text: str, expected: tuple[str, dict[str, Any]]
+) -> None:
+    assert steps(text, holding()) == [expected]
+
+
 def test_reach_decides_the_hand_before_the_side() -> None:
     fresh = table_scene(last_arm=None)
     fresh["objects"][0]["reach"] = {"right": {"pick_up": False}, "left": {"pick_up": True}}
