@@ -13,12 +13,13 @@ import re
 from dataclasses import dataclass, field
 
 from services.nlu import questions
-from services.nlu.commands import ADMIN_PROCEDURES
+from services.nlu.commands import ADMIN_PROCEDURES, Command
 from services.nlu.compound import after
 from services.nlu.infer import Answer, Clarify, CommandResult, Model, Result
 from services.nlu.prior import History
 from services.nlu.tokens import read
 from services.nlu.weights import LANGUAGE
+from shared.contract import ARMS
 
 _WORD = re.compile(r"[a-z]+")
 _CANCEL = re.compile(
@@ -26,6 +27,9 @@ _CANCEL = re.compile(
     r"forget about it|nothing|none|neither|none of them|neither of them|skip it|drop it|leave it)"
     r"(?: please| then)?"
 )
+# commands whose object a bare noun phrase may replace ("point at the red cup", then "and the box"); a place
+# is not among them: after "put the red cup on the plate", "and the blue cup" changes what is put, not where
+ELLIPTIC = frozenset({"pick_up", "point_to", "look_at", "move_rel_dest", "move_rel_dir"})
 _OTHER = re.compile(r"(?:(?:no|nope|not that one|wrong|please) )*(?:the )?other(?: one)?(?: please)?")
 
 
@@ -40,6 +44,7 @@ class Dialogue:
 
     history: History | None = None  # from commands issued here; None = trust the world's
     pending: Pending | None = field(default=None)
+    last: Command | None = None  # the last command a bare noun phrase may stand for with another object
 
     def observe_robot(self) -> None:
         """The robot reported a newer state: its history now supersedes ours."""
@@ -61,8 +66,25 @@ class Dialogue:
             result = model.parse(text, self._history(model), among=clarify.candidates, focus=clarify.params)
         if result is None or (isinstance(result, Clarify) and not result.candidates):
             result = model.parse(text, self._history(model))
+        if isinstance(result, Clarify) and not result.params and self.last is not None and self._is_reply(text):
+            result = self._elliptic(model, text, self.last) or result
         self._remember(result, model)
         return result
+
+    def _elliptic(self, model: Model, text: str, last: Command) -> CommandResult | None:
+        """ "And the blue one", "now the box": the last command again, on the object the words name.
+
+        Either hand may do it (the one that did it last may be full now); the
+        model chooses among those commands only, as for a reply to a question.
+        """
+        among = [last.with_arg("object", oid) for oid in model.world.ids]
+        if last.arg("arm") is not None:
+            among = [command.with_arg("arm", arm) for command in among for arm in ARMS]
+        # the object of a relative move is its landmark, which only words after the relation name
+        slot = next((name for name in ("relation", "direction") if last.arg(name) is not None), None)
+        said = f"{last.arg(slot).replace('_', ' ')} {text}" if slot is not None else text
+        found = model.parse(said, self._history(model), among=among, focus=["object", *([slot] if slot else [])])
+        return found if isinstance(found, CommandResult) else None
 
     def _settle(self, model: Model, text: str) -> Result | None:
         """ "cancel" drops the pending question; "no, the other one" takes the other of two candidates."""
@@ -112,6 +134,8 @@ class Dialogue:
         if isinstance(result, Answer):
             return  # a question answered changes nothing, not even a pending question
         self.pending = None
+        final = result.commands[-1]
+        self.last = final if len(result.commands) == 1 and final.procedure in ELLIPTIC else None
         world = model.world
         for command in result.commands:
             if command.procedure not in ADMIN_PROCEDURES:

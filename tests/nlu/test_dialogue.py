@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from services.nlu.compound import after
 from services.nlu.context import Dialogue
 from services.nlu.infer import Clarify, CommandResult, Model
 from services.nlu.world import parse_world
@@ -98,3 +99,36 @@ def test_put_the_cup_on_the_plate_then_pick_it_up_means_the_cup() -> None:
     assert isinstance(compound, CommandResult) and compound.command.procedure == "pick_up"
     picked = dialogue.understand(Model(parse_world(table_scene())), "pick it up")
     assert isinstance(picked, CommandResult) and picked.command.arg("object") == "obj0"
+
+
+@pytest.mark.parametrize(
+    "first, then, expected",
+    [
+        ("point at the red cup", "and the box", ("point_to", {"arm": "right", "object": "obj2"})),
+        (
+            "move above the red cup",
+            "now the blue cup",
+            ("move_rel_dest", {"arm": "right", "relation": "above", "object": "obj1"}),
+        ),
+        (
+            "move towards the red cup",
+            "the plate",
+            ("move_rel_dir", {"arm": "right", "direction": "towards", "object": "obj3"}),
+        ),
+        ("pick up the red cup", "and the blue one", ("pick_up", {"arm": "left", "object": "obj1"})),
+    ],
+)
+def test_a_bare_object_after_a_command_is_that_command_on_it(first: str, then: str, expected: tuple) -> None:
+    dialogue, world_now = Dialogue(), parse_world(table_scene(last_arm=None))
+    done = dialogue.understand(Model(world_now), first)
+    assert isinstance(done, CommandResult)
+    elliptic = dialogue.understand(Model(after(world_now, done.command)), then)
+    assert isinstance(elliptic, CommandResult)
+    assert (elliptic.command.procedure, dict(elliptic.command.args)) == expected
+
+
+def test_a_bare_object_after_a_placement_or_first_is_still_asked_about() -> None:
+    dialogue, model = Dialogue(), Model(parse_world(table_scene(last_arm=None)))
+    assert isinstance(dialogue.understand(model, "the red cup"), Clarify)
+    assert isinstance(dialogue.understand(model, "put the red cup on the plate"), CommandResult)
+    assert isinstance(dialogue.understand(model, "and the blue cup"), Clarify)
