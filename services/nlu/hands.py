@@ -102,8 +102,12 @@ def already_held(model: Model, procedure: str, match: Match) -> None:
 
 def _empty(model: Model, arm: str) -> bool:
     """The hand is known to hold nothing (an unknown gripper state may be holding)."""
-    state = model.world.robot.grippers.get(arm)
-    return state is not None and state != "holding" and all(o.held_by != arm for o in model.world.objects)
+    return model.world.robot.grippers.get(arm) is not None and not holds(model, arm)
+
+
+def holds(model: Model, arm: str) -> bool:
+    """The hand holds something: its gripper says so, or an object is held by it."""
+    return model.world.robot.grippers.get(arm) == "holding" or any(o.held_by == arm for o in model.world.objects)
 
 
 def _unique(grounding: np.ndarray | None, model: Model) -> int | None:

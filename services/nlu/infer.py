@@ -118,14 +118,11 @@ class Model:
         A place is done with one hand at a time (DESIGN.md), but with both
         hands full "both" leaves no doubt which objects are meant.
         """
-        if command.procedure != "place_abs" or not all(self._holds(arm) for arm in ARMS):
+        if command.procedure != "place_abs" or not all(hands.holds(self, arm) for arm in ARMS):
             return None
         steps = [command.with_arg("arm", arm) for arm in ARMS]
         text = ", then ".join(command_text(step, self.scene) for step in steps)
         return CommandResult(steps[0], 1.0, text, {}, score, tuple(steps[1:]))
-
-    def _holds(self, arm: str) -> bool:
-        return self.world.robot.grippers.get(arm) == "holding" or any(o.held_by == arm for o in self.world.objects)
 
     def history_part(self, history: History) -> np.ndarray:
         """The per-utterance part of the prior: last arm (or the object's side), last object (once per history)."""

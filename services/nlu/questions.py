@@ -210,7 +210,7 @@ def _saved(model: Model) -> str:
     robot = model.world.robot
     if robot.action is None or not robot.actions:
         return 'There is nothing to save yet: say "create a new action", then the steps.'
-    count = list(robot.actions)[robot.action - 1] if 1 <= robot.action <= len(robot.actions) else 0
+    count = robot.actions[robot.action - 1] if 1 <= robot.action <= len(robot.actions) else 0
     return (
         f"Action {robot.action} keeps its {_steps(count)} as they are made; nothing more to save. "
         'Say "execute" to replay it, or "create a new action" for the next one.'
