@@ -212,7 +212,8 @@ def _saved(model: Model) -> str:
         return 'There is nothing to save yet: say "create a new action", then the steps.'
     count = robot.actions[robot.action - 1] if 1 <= robot.action <= len(robot.actions) else 0
     return (
-        f"Action {robot.action} keeps its {_steps(count)} as they are made; nothing more to save. "
+        f"Action {robot.action} has {_steps(count)}, {'kept' if count == 1 else 'each kept'} as it was made; "
+        "nothing more to save. "
         'Say "execute" to replay it, or "create a new action" for the next one.'
     )
 

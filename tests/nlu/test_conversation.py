@@ -279,7 +279,12 @@ def test_the_current_actions_steps_are_read_back_in_the_users_words(text: str) -
 def test_done_says_the_steps_are_already_kept_and_how_to_replay(text: str) -> None:
     result = understood(text, table_scene(action=1, actions=[2]))
     assert result["kind"] == "answer" and result["topic"] == "actions"
-    assert "Action 1 keeps its 2 steps" in result["text"] and '"execute"' in result["text"]
+    assert "Action 1 has 2 steps, each kept as it was made" in result["text"] and '"execute"' in result["text"]
+
+
+def test_done_after_one_step_says_it_in_the_singular() -> None:
+    result = understood("done", table_scene(action=2, actions=[8, 1]))
+    assert result["text"].startswith("Action 2 has 1 step, kept as it was made;")
 
 
 def two_red_cups() -> dict[str, Any]:
