@@ -60,7 +60,7 @@ def situate(model: Model, command: Command, match: Match, history: History, said
         return (command,)
     theme = _theme(model, command, match)
     if theme is not None and world.objects[theme].held_by is None:
-        arm = command.arg("arm") if said_arm else _best_arm(model, theme, history, command.arg("arm"))
+        arm = command.arg("arm") if said_arm else best_arm(model, theme, history, command.arg("arm"))
         return (Command("pick_up", (("arm", arm), ("object", world.ids[theme]))), command.with_arg("arm", arm))
     if command.procedure == "place_rel":
         return (Command("move_rel_dest", command.args),)
@@ -69,7 +69,7 @@ def situate(model: Model, command: Command, match: Match, history: History, said
 
 def _carried(model: Model, move: Command, obj: int, history: History) -> tuple[Command, ...]:
     """Pick ``obj`` up, make ``move`` with it and (unless it went up) put it down there."""
-    arm = _best_arm(model, obj, history, move.arg("arm"))
+    arm = best_arm(model, obj, history, move.arg("arm"))
     pick_up = Command("pick_up", (("arm", arm), ("object", model.world.ids[obj])))
     moved = move.with_arg("arm", arm)
     if move.arg("direction") == "up":
@@ -118,7 +118,7 @@ def _unique(grounding: np.ndarray | None, model: Model) -> int | None:
     return int(best[0]) if len(best) == 1 else None
 
 
-def _best_arm(model: Model, obj: int, history: History, fallback: str) -> str:
+def best_arm(model: Model, obj: int, history: History, fallback: str) -> str:
     """The arm the prior prefers for picking ``obj`` up (``fallback`` when both are equal)."""
     scores: dict[str, float] = {}
     object_id = model.world.ids[obj]

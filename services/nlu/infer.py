@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from services.nlu import compound, hands, modifiers, questions, relational
+from services.nlu import compound, hands, modifiers, questions, relational, stacking
 from services.nlu.commands import NUMBER, PROCEDURES, Command
 from services.nlu.language import Index, Match
 from services.nlu.lexicon import OBJECT_SLOTS
@@ -77,6 +77,8 @@ class Model:
         self, text: str, history: History, among: list[Command] | None = None, focus: list[str] | None = None
     ) -> Result:
         """One command: the model's choice, with the distance and "both hands" said put into it."""
+        if among is None and (stacked := stacking.spelled_out(self, text, history)) is not None:
+            return stacked
         said = modifiers.extract(modifiers.name_the_other_hand(text, history.last_arm))
         if said.problem is not None:
             return Clarify(["distance"], said.problem)

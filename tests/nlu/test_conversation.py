@@ -71,6 +71,33 @@ def test_with_no_hand_used_the_hand_on_the_objects_side_is_chosen() -> None:
     assert steps("pick up the box", fresh) == [("pick_up", {"arm": "left", "object": "obj2"})]
 
 
+def test_stacking_two_of_a_kind_puts_the_smaller_or_nearer_on_the_other() -> None:
+    small, large = obj("a", "red", "cup", 0.60, -0.10, (0.06, 0.06, 0.08)), obj("b", "blue", "cup", 0.50, 0.10)
+    assert steps("stack the cups", world(small, large)) == [
+        ("pick_up", {"arm": "right", "object": "a"}),
+        ("place_rel", {"arm": "right", "relation": "on_top_of", "object": "b"}),
+    ]
+    # two of a size: the one nearer the robot goes on the other, with the hand on its side (no hand used yet)
+    same = world(obj("a", "red", "cup", 0.65, -0.10), obj("b", "blue", "cup", 0.50, 0.10), last_arm=None)
+    assert steps("stack the cups", same) == [
+        ("pick_up", {"arm": "left", "object": "b"}),
+        ("place_rel", {"arm": "left", "relation": "on_top_of", "object": "a"}),
+    ]
+
+
+def test_stacking_with_one_of_them_in_hand_puts_it_on_the_other_and_both_in_hand_is_refused() -> None:
+    assert steps("stack the cups", holding("left", 1)) == [
+        ("place_rel", {"arm": "left", "relation": "on_top_of", "object": "obj0"})
+    ]
+    both = holding()
+    both["robot"]["grippers"]["left"] = "holding"
+    both["objects"][1]["held_by"] = "left"
+    assert (
+        understood("put one cup on the other", both)["question"]
+        == "I am holding both cups: put one of them down first."
+    )
+
+
 @pytest.mark.parametrize("text", ["put both down", "put both cups down", "put them both on the table"])
 def test_both_put_down_with_a_cup_in_each_hand_is_the_right_hands_place_then_the_lefts(text: str) -> None:
     full = table_scene(grippers={"right": "holding", "left": "holding"}, last_arm="left")
