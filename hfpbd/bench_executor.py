@@ -15,7 +15,8 @@ How it is measured and why:
   the cup is ≥ 5 cm higher and still between the fingers.
 * **Stop latency** — from the stop key (the TUI's request) to the arm at
   rest in the simulator's own state stream, on real simulator and executor
-  processes (:mod:`hfpbd.bench_stop`); the target is p95 ≤ 100 ms.
+  processes (:mod:`hfpbd.bench_stop`); the target is p95 ≤ 100 ms, and the
+  command exits non-zero when it is missed (a check a script can rely on).
 * **Time per procedure** — planning/IK compute time (wall clock) and robot
   motion time (simulated seconds) for each motion procedure, and the compute
   time before its first arm motion starts (what a user waits for after
@@ -392,7 +393,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     for line in failures:
         print(f"  - {line}")
 
-    print_stop(args.stops)
+    stop_code = print_stop(args.stops)
     print(f"\n## Time per procedure ({args.rounds} randomised scenes)")
     rows, firsts = bench_procedures(args.rounds)
     print(
@@ -414,7 +415,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"\nTo first motion over all {len(firsts)} runs: p95 {1000 * p95:.0f} ms "
         f"(target ≤ {1000 * FIRST_MOTION_P95:.0f} ms: {'meets' if p95 <= FIRST_MOTION_P95 else 'MISSES'})"
     )
-    return 0
+    return stop_code
 
 
 if __name__ == "__main__":

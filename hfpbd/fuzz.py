@@ -57,6 +57,15 @@ REFUSED: dict[str, list[dict[str, Any]]] = {
         {"arm": "left", "joints": ["elbow"], "positions": [0.0] * 7},
         {"arm": "right"},
     ],
+    "sim/control/arms": [
+        {"arms": {}},
+        {"arms": 3},
+        {"arms": {"third": {"positions": [0.0] * 7}}},
+        {"arms": {"right": 5}},
+        {"arms": {"left": {"positions": [0.0] * 3}}},
+        {"arms": {"right": {"positions": [float("nan")] * 7}, "left": {"points": "x", "times": [1.0]}}},
+        {"arms": {"right": {"points": [[0.0] * 7], "times": [1.0], "contact": "yes"}}},
+    ],
     "sim/control/gripper": [
         {"arm": "right", "width": "wide"},
         {"arm": "left", "width": 5.0},

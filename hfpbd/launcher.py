@@ -8,15 +8,18 @@ end it with its parent, see :mod:`hfpbd.lifeline`). Services run as separate
 processes exactly as they would across machines.
 
 This process is the robot host's Zenoh router: it listens on loopback by
-default (``tcp/127.0.0.1:7447``), or where ``--listen`` says with
-``--secure DIR`` (mutual TLS, the access-control roles enforced here) or
-``--insecure``. Every service connects to it over loopback with multicast
-scouting off; remote laptops connect to it in client mode.
+default (``tcp/127.0.0.1:7447``, ``tls/127.0.0.1:7447`` with ``--secure``),
+or where ``--listen`` says with ``--secure DIR`` (mutual TLS, the
+access-control roles enforced here) or ``--insecure``. Every service
+connects to it over loopback with multicast scouting off; remote laptops
+connect to it in client mode. One ``hfpbd up`` per namespace on this
+machine: it holds a lock in the namespace's data directory while it runs.
 """
 
 from __future__ import annotations
 
 import argparse
+import fcntl
 import logging
 import os
 import signal
@@ -26,11 +29,13 @@ import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import IO
 
 import zenoh
 
 from hfpbd.lifeline import command
 from hfpbd.spawn import ROOT, ServiceProcess, spawn
+from services.executor.store import namespace_dir
 from shared.bus import Bus
 from shared.config import DEFAULT_NAMESPACE, SessionOptions, add_security_arguments
 from shared.denials import unfiltered_stdout
@@ -43,7 +48,8 @@ log = logging.getLogger("hfpbd.up")
 
 BACKGROUND_SERVICES = ("sim", "perception", "nlu", "executor")
 MAX_RESTARTS = 5
-DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
+DEFAULT_PORT = 7447
+LOCK_NAME = "up.lock"
 _WILDCARDS = ("0.0.0.0", "::")
 
 
@@ -82,10 +88,10 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--headless", action="store_true", help="no terminal UI: run the services until Ctrl-C")
     parser.add_argument(
         "--listen",
-        default=DEFAULT_LISTEN,
+        default=None,
         metavar="ENDPOINT",
         help="where remote clients (a TUI on a laptop) connect: beyond loopback, tls/… with "
-        "--secure, or --insecure (default: %(default)s)",
+        f"--secure, or --insecure (default: {default_listen(None)}, {default_listen('DIR')} with --secure)",
     )
     parser.add_argument("--namespace", "-n", default=os.environ.get("HFPBD_NAMESPACE", DEFAULT_NAMESPACE))
     parser.add_argument("--scene", help="scene for the simulator (default: its default scene)")
@@ -98,6 +104,7 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     )
     add_security_arguments(parser, default_identity=None)
     args = parser.parse_args(argv)
+    args.listen = args.listen or default_listen(args.secure)
     args.service_names = _service_list(args.services)
     try:
         args.hub = hub_options(args)
@@ -114,6 +121,16 @@ def _service_list(raw: str) -> list[str]:
             f"hfpbd up: unknown service(s) {', '.join(unknown)}; choose from {', '.join(BACKGROUND_SERVICES)}, speech"
         )
     return names
+
+
+def default_listen(secure: str | None) -> str:
+    """Loopback on the usual port; ``tls/`` with ``--secure``.
+
+    Why TLS even on loopback: the router then enforces the roles, whose
+    subjects are certificate common names, so a session that arrives in
+    clear (the services' own included) would be dropped.
+    """
+    return f"{'tcp' if secure is None else 'tls'}/127.0.0.1:{DEFAULT_PORT}"
 
 
 def local_endpoint(listen: str) -> str:
@@ -238,6 +255,37 @@ def _already_up(args: argparse.Namespace, error: Exception) -> str:
     return f"hfpbd up: cannot listen on {args.listen}: {error}"
 
 
+def hold_namespace(namespace: str, listen: str) -> IO[str] | None:
+    """Lock ``<data dir>/<namespace>/up.lock`` for this process; None when another ``hfpbd up`` holds it.
+
+    Why a lock beside the probe in :func:`_already_up`: a second ``hfpbd up``
+    on the namespace but another port opens a router of its own and sees
+    nothing of the first. The kernel's lock (``flock``) goes with the process
+    however it ends. The file names the holder, for the refusal.
+    """
+    directory = namespace_dir(None, namespace)
+    directory.mkdir(parents=True, exist_ok=True)
+    handle = open(directory / LOCK_NAME, "a+", encoding="utf-8")  # noqa: SIM115 — held open on purpose
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        handle.close()
+        return None
+    handle.truncate(0)
+    handle.write(f"{listen} (process {os.getpid()})")
+    handle.flush()
+    return handle
+
+
+def _held_elsewhere(namespace: str) -> str:
+    """The refusal when another ``hfpbd up`` holds the namespace: where it listens, as its lock file says."""
+    holder = (namespace_dir(None, namespace) / LOCK_NAME).read_text(encoding="utf-8").strip()
+    return (
+        f"hfpbd up: a robot is already up on namespace {namespace!r} at {holder or 'another port'}; "
+        "not starting a second one"
+    )
+
+
 def _run_tui(args: argparse.Namespace) -> subprocess.Popen[bytes]:
     """The terminal UI in the foreground (this terminal), as the operator."""
     return subprocess.Popen(
@@ -248,6 +296,16 @@ def _run_tui(args: argparse.Namespace) -> subprocess.Popen[bytes]:
 def main(argv: list[str] | None = None) -> int:
     args = _parse(argv)
     setup_logging("up")
+    lock = hold_namespace(args.namespace, args.listen)
+    if lock is None:
+        print(_held_elsewhere(args.namespace), file=sys.stderr)
+        return 1
+    with lock:
+        return _supervise(args)
+
+
+def _supervise(args: argparse.Namespace) -> int:
+    """Open the router, start the services (and the TUI) and keep them up until told to stop."""
     supervisor = Supervisor(args)
 
     stop_on((signal.SIGINT, signal.SIGTERM, signal.SIGHUP), supervisor.stop, log, "received %s, stopping every service")

@@ -56,7 +56,7 @@ class SessionOptions:
             raise ValueError(f"--mode must be one of {', '.join(MODES)}, not {self.mode!r}")
         if self.secure is not None:
             tls_settings(self.secure, self.identity)  # every file there, before any socket opens
-        check_listen(self.listen, self.secure, self.insecure)
+        check_listen(self.listen, self.secure, self.insecure, enforces_access_control(self))
 
     @property
     def effective_mode(self) -> str:
@@ -66,7 +66,9 @@ class SessionOptions:
     @property
     def warnings(self) -> list[str]:
         """What to log every time a session opens with these options (``--insecure`` listeners)."""
-        return check_listen(configured_listen(zenoh_config(self)), self.secure, self.insecure)
+        return check_listen(
+            configured_listen(zenoh_config(self)), self.secure, self.insecure, enforces_access_control(self)
+        )
 
     def to_argv(self) -> list[str]:
         """Flags that reproduce these options in a child process."""
@@ -226,7 +228,7 @@ def zenoh_config(options: SessionOptions) -> zenoh.Config:
     for key, value in options.overrides:
         config.insert_json5(key, value)
     # a --config file or a --cfg item may name listeners too: the same rule holds for them
-    check_listen(configured_listen(config), options.secure, options.insecure)
+    check_listen(configured_listen(config), options.secure, options.insecure, enforces_access_control(options))
     return config
 
 

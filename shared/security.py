@@ -74,17 +74,26 @@ def is_loopback(endpoint: str) -> bool:
         return False
 
 
-def check_listen(listen: tuple[str, ...], secure: str | None, insecure: bool) -> list[str]:
+def check_listen(
+    listen: tuple[str, ...], secure: str | None, insecure: bool, enforces_roles: bool = False
+) -> list[str]:
     """Refuse listeners the contract forbids; return the warnings to log at every start.
 
     A listener beyond loopback needs ``--secure`` (and then must be ``tls/``,
-    the only link that authenticates) or an explicit ``--insecure``.
+    the only link that authenticates) or an explicit ``--insecure``. A
+    session that enforces the roles (``enforces_roles``) must listen on
+    ``tls/`` even on loopback: its subjects are certificate common names, so
+    everything arriving on another link, its own services' included, is dropped.
     """
     remote = [endpoint for endpoint in listen if not is_loopback(endpoint)]
     if secure is not None:
-        plain = [endpoint for endpoint in remote if endpoint_host(endpoint)[0] != "tls"]
+        checked = list(listen) if enforces_roles else remote
+        plain = [endpoint for endpoint in checked if endpoint_host(endpoint)[0] != "tls"]
         if plain:
-            raise SecurityError(f"with --secure, a listener beyond loopback must be tls/…, not {', '.join(plain)}")
+            where = "a listener of a session enforcing the roles" if enforces_roles else "a listener beyond loopback"
+            raise SecurityError(
+                f"with --secure, {where} must be tls/… (roles go by certificate), not {', '.join(plain)}"
+            )
         return []
     if remote and not insecure:
         raise SecurityError(

@@ -31,6 +31,15 @@ TOKEN_GRACE_S = 2.0
 ALREADY_RUNNING = 3
 
 
+class AlreadyRunning(Exception):
+    """Raised by a service body that finds another instance doing its work (e.g. holding its store).
+
+    Why beside the liveliness check: two instances on separate routers never
+    see each other's tokens, yet may share a resource on this machine. The
+    message is the one line logged; the exit code is :data:`ALREADY_RUNNING`.
+    """
+
+
 def already_alive(bus: Bus, name: str, look: float = LOOK_S, grace: float = TOKEN_GRACE_S) -> bool:
     """Whether ``name`` is alive on this namespace: its token seen within ``look`` s and still up ``grace`` s later."""
     started = time.monotonic()
@@ -58,7 +67,8 @@ def run_service(
     """Parse ``argv``, open the bus and run ``body(bus, args, stop)`` until stopped.
 
     A service already alive on the namespace is not started twice: the line
-    names both and the exit code is :data:`ALREADY_RUNNING`. ``body``
+    names both and the exit code is :data:`ALREADY_RUNNING`, as when ``body``
+    raises :class:`AlreadyRunning`. ``body``
     declares its liveliness token (``bus.declare_alive(name)``) once it is
     ready to serve, then returns when ``stop`` is set. Returns the exit code.
     """
@@ -83,6 +93,9 @@ def run_service(
                 return ALREADY_RUNNING
             log.info("%s up on namespace %r", name, options.namespace)
             body(bus, args, stop)
+    except AlreadyRunning as exc:
+        log.error("%s", exc)
+        return ALREADY_RUNNING
     except Exception:
         log.exception("%s failed", name)
         return 1

@@ -6,10 +6,11 @@ import argparse
 import sys
 import threading
 from collections.abc import Sequence
+from typing import IO
 
 from services.executor.store import ActionStore, StoreError, default_data_dir, hold_store, namespace_dir
 from shared.bus import Bus
-from shared.service import run_service, wait_until_stopped
+from shared.service import AlreadyRunning, run_service, wait_until_stopped
 
 DESCRIPTION = (
     "Carries out commands on the simulated PR2, publishes what is possible (reachability, "
@@ -28,15 +29,33 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def open_store(data_dir: str | None, namespace: str) -> tuple[IO[str], ActionStore]:
+    """The namespace's actions, locked for this executor (the lock held while the returned file stays open).
+
+    A store another executor holds means one already serves this namespace,
+    perhaps through another router where its token cannot be seen: that is
+    :class:`AlreadyRunning` (exit 3, which ``hfpbd up`` does not restart).
+    """
+    directory = namespace_dir(data_dir, namespace)
+    try:
+        lock = hold_store(directory)
+    except StoreError as exc:
+        raise AlreadyRunning(
+            f"executor is already running on namespace {namespace!r}: {exc}; not starting a second one"
+        ) from None
+    except OSError as exc:
+        raise SystemExit(f"hfpbd executor: {exc}") from exc
+    try:
+        return lock, ActionStore(directory)
+    except (StoreError, OSError) as exc:
+        lock.close()
+        raise SystemExit(f"hfpbd executor: {exc}") from exc
+
+
 def body(bus: Bus, args: argparse.Namespace, stop: threading.Event) -> None:
+    lock, store = open_store(args.data_dir, bus.keys.namespace)  # before the heavy import: a refusal is quick
     from services.executor.executor import Executor  # heavy (planner models): only when serving
 
-    try:
-        directory = namespace_dir(args.data_dir, bus.keys.namespace)
-        lock = hold_store(directory)
-        store = ActionStore(directory)
-    except (StoreError, OSError) as exc:
-        raise SystemExit(f"hfpbd executor: {exc}") from exc
     executor = Executor(bus, store)
     executor.start()
     bus.declare_alive("executor")

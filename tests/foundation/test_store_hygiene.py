@@ -18,7 +18,10 @@ from services.executor.store import (
     hold_store,
     namespace_dir,
 )
-from tests.processes import ROOT
+from shared.bus import Bus
+from shared.config import free_port, loopback_options
+from shared.service import ALREADY_RUNNING
+from tests.processes import ROOT, Launcher, Network
 
 HOLDER = (
     "import sys; from pathlib import Path; from services.executor.store import hold_store; "
@@ -56,6 +59,38 @@ def test_a_second_executor_on_one_store_is_refused_while_the_first_lives(tmp_pat
         holder.kill()
         holder.wait(10)
     hold_store(tmp_path).close()  # the lock went with the process, even killed
+
+
+def test_a_second_executor_on_a_held_store_exits_as_already_running(
+    network: Network, launcher: Launcher, tmp_path: Path
+) -> None:
+    """One namespace and data directory, each executor on its own router: no token tells them apart, the lock does."""
+    data = tmp_path / "data"
+    first = launcher.start("executor", "--data-dir", str(data))
+    port = free_port()
+    with Bus(loopback_options(network.namespace, port, listen=True)):
+        second = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "services.executor",
+                *loopback_options(network.namespace, port, listen=False).to_argv(),
+                "--data-dir",
+                str(data),
+            ],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            timeout=90,
+            check=False,
+        )
+    assert second.returncode == ALREADY_RUNNING, second.stderr
+    assert (
+        f"executor is already running on namespace {network.namespace!r}: another executor "
+        f"(process {first.popen.pid}) is using the actions in {data / network.namespace}; not starting a second one"
+    ) in second.stderr
+    assert "Traceback" not in second.stderr
+    assert first.exited() is None
 
 
 WRITER = (

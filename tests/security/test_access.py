@@ -14,10 +14,19 @@ from shared.config import SessionOptions, zenoh_config
 from tests.security.conftest import RobotHost, collect, eventually
 
 UTTERANCE = {"text": "move your right hand up"}
+AUDIO = {"stamp": 1.0, "rate": 16000, "pcm": b"\x00\x00" * 160}
+# the operator's other queryables (beside nlu/**), each answered by a robot-side stand-in
+COMMAND_QUERIES = ("executor/control/command", "sim/control/stop", "speech/ptt")
 
 
 def _serve_parse(host: RobotHost) -> None:
     host.service.serve(host.key("nlu/parse"), lambda request: {"ok": True, "heard": request.get("text")})
+
+
+def _serve_commands(host: RobotHost) -> None:
+    """Robot-side queryables on :data:`COMMAND_QUERIES` that answer with the key they serve."""
+    for key in COMMAND_QUERIES:
+        host.service.serve(host.key(key), lambda request, key=key: {"ok": True, "served": key})
 
 
 def _reaches_service(host: RobotHost, key: str, send) -> bool:
@@ -82,6 +91,7 @@ def test_unauthenticated_clients_get_nothing(robot_host: RobotHost, foreign_pki,
 
 def test_operator_commands_and_receives(robot_host: RobotHost) -> None:
     _serve_parse(robot_host)
+    _serve_commands(robot_host)
     robot_host.service.declare_alive("nlu")
     cached = robot_host.service.publisher(robot_host.key("executor/state"), cached=True)
     cached.put({"stamp": 1.0, "robot": {"action": 3}})
@@ -89,7 +99,12 @@ def test_operator_commands_and_receives(robot_host: RobotHost) -> None:
         assert _reaches_service(
             robot_host, "dialog/utterance", lambda: operator.publish(operator.keys.utterance, UTTERANCE)
         )
+        assert _reaches_service(
+            robot_host, "speech/audio", lambda: operator.publish(robot_host.key("speech/audio"), AUDIO)
+        )
         assert operator.request(operator.keys.nlu_query("parse"), {"text": "hello"}, timeout=5)["heard"] == "hello"
+        for key in COMMAND_QUERIES:
+            assert operator.request(robot_host.key(key), {}, timeout=5)["served"] == key
         history = collect(operator, operator.keys.executor_state, history=True)
         assert history.get(timeout=5)["robot"]["action"] == 3, "a cached stream's last sample reaches the operator"
         said = collect(operator, operator.keys.say)
@@ -101,12 +116,17 @@ def test_operator_commands_and_receives(robot_host: RobotHost) -> None:
 
 def test_observer_receives_but_cannot_command(robot_host: RobotHost) -> None:
     _serve_parse(robot_host)
+    _serve_commands(robot_host)
     with robot_host.remote("observer") as observer:
         assert not _reaches_service(
             robot_host, "dialog/utterance", lambda: observer.publish(observer.keys.utterance, UTTERANCE)
         )
-        with pytest.raises(BusTimeout):
-            observer.request(observer.keys.nlu_query("parse"), {"text": "hello"}, timeout=1)
+        assert not _reaches_service(
+            robot_host, "speech/audio", lambda: observer.publish(robot_host.key("speech/audio"), AUDIO)
+        )
+        for key in ("nlu/parse", *COMMAND_QUERIES):
+            with pytest.raises(BusTimeout):
+                observer.request(robot_host.key(key), {"text": "hello"}, timeout=1)
         said = collect(observer, observer.keys.say)
         time.sleep(0.3)
         robot_host.service.publish(robot_host.service.keys.say, {"text": "seen", "kind": "info"})

@@ -79,6 +79,13 @@ def test_listeners_beyond_loopback_need_secure_or_insecure(pki: Path, listen: st
         SessionOptions(listen=(listen,), secure=secure)
 
 
+def test_a_session_enforcing_the_roles_listens_on_tls_even_on_loopback(pki: Path) -> None:
+    with pytest.raises(SecurityError, match="a listener of a session enforcing the roles must be tls/"):
+        SessionOptions(mode="router", listen=("tcp/127.0.0.1:7447",), secure=str(pki))
+    assert SessionOptions(mode="router", listen=("tls/127.0.0.1:7447",), secure=str(pki)).warnings == []
+    assert SessionOptions(listen=("tcp/127.0.0.1:7447",), secure=str(pki)).warnings == []  # a peer: no roles here
+
+
 def test_loopback_tls_and_insecure_listeners_are_accepted(pki: Path) -> None:
     for endpoint in ("tcp/127.0.0.1:7447", "tcp/localhost:7447", "tcp/[::1]:7447"):
         assert SessionOptions(listen=(endpoint,)).warnings == []

@@ -15,7 +15,7 @@ import psutil
 import pytest
 import zenoh
 
-from hfpbd.launcher import hub_listen, local_endpoint
+from hfpbd.launcher import DEFAULT_PORT, hub_listen, local_endpoint
 from hfpbd.secure import init
 from shared.bus import Bus, BusTimeout
 from shared.config import SessionOptions, free_port, loopback_options
@@ -29,6 +29,12 @@ def _wait(predicate, timeout: float) -> bool:
             return True
         time.sleep(0.2)
     return False
+
+
+@pytest.fixture(autouse=True)
+def _private_data_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every ``hfpbd up`` here keeps its namespace lock (and any actions) under the test's own directory."""
+    monkeypatch.setenv("HFPBD_DATA_DIR", str(tmp_path / "data"))
 
 
 @pytest.fixture
@@ -110,10 +116,26 @@ def test_a_second_robot_on_the_namespace_refuses_to_start(robot, tmp_path: Path)
     namespace = bus.keys.namespace
     port = int(bus.options.connect[0].rsplit(":", 1)[1])
     children = psutil.Process(popen.pid).children()
-    second = start_up(namespace, port, tmp_path / "second", services=("nlu",))
+    # another data directory: past the namespace lock, the port itself tells
+    second = start_up(namespace, port, tmp_path / "second", services=("nlu",), data_dir=tmp_path / "second")
     out, _ = second.communicate(timeout=60)
     assert second.returncode == 1
     assert f"a robot is already up on namespace {namespace!r}" in out and "Traceback" not in out
+    assert popen.poll() is None and psutil.Process(popen.pid).children() == children
+    assert _wait(lambda: "nlu" in bus.alive_services(), 5)
+
+
+def test_a_second_robot_on_the_namespace_at_another_port_refuses_to_start(robot, tmp_path: Path) -> None:
+    popen, bus = robot
+    assert _wait(lambda: "nlu" in bus.alive_services(), 60)
+    namespace = bus.keys.namespace
+    children = psutil.Process(popen.pid).children()
+    second = start_up(namespace, free_port(), tmp_path / "second", services=("nlu",))
+    out, _ = second.communicate(timeout=60)
+    assert second.returncode == 1, out
+    first = f"{bus.options.connect[0]} (process {popen.pid})"
+    assert f"a robot is already up on namespace {namespace!r} at {first}; not starting a second one" in out
+    assert "Traceback" not in out
     assert popen.poll() is None and psutil.Process(popen.pid).children() == children
     assert _wait(lambda: "nlu" in bus.alive_services(), 5)
 
@@ -161,11 +183,9 @@ def test_a_listener_beyond_loopback_needs_secure_or_insecure(tmp_path: Path) -> 
     assert "--secure DIR" in result.stderr and "--insecure" in result.stderr and "Traceback" not in result.stderr
 
 
-def test_secure_robot_serves_its_operator_over_mutual_tls(tmp_path: Path) -> None:
-    pki = tmp_path / "pki"
-    init(pki, host="robot-host")
-    namespace, port = "sec" + uuid.uuid4().hex[:8], free_port()
-    popen = subprocess.Popen(
+def _secure_up(pki: Path, namespace: str, log_dir: Path, *extra: str) -> subprocess.Popen[str]:
+    """``hfpbd up --headless --secure PKI`` with the NLU only, its log lines on its standard output."""
+    return subprocess.Popen(
         [
             sys.executable,
             "-m",
@@ -175,12 +195,11 @@ def test_secure_robot_serves_its_operator_over_mutual_tls(tmp_path: Path) -> Non
             "nlu",
             "--namespace",
             namespace,
-            "--listen",
-            f"tls/127.0.0.1:{port}",
             "--secure",
             str(pki),
             "--log-dir",
-            str(tmp_path / "logs"),
+            str(log_dir),
+            *extra,
         ],
         cwd=ROOT,
         stdout=subprocess.PIPE,
@@ -188,23 +207,39 @@ def test_secure_robot_serves_its_operator_over_mutual_tls(tmp_path: Path) -> Non
         text=True,
     )
 
+
+def _remote(namespace: str, port: int, pki: Path, identity: str) -> Bus:
+    """A laptop's client session, once the robot listens (a client cannot open before that)."""
+    options = SessionOptions(
+        namespace=namespace,
+        connect=(f"tls/localhost:{port}",),
+        multicast_scouting=False,
+        secure=str(pki),
+        identity=identity,
+    )
+    deadline = time.monotonic() + 30
+    while True:
+        try:
+            return Bus(options)
+        except zenoh.ZError:
+            if time.monotonic() > deadline:
+                raise
+            time.sleep(0.3)
+
+
+def _port_taken(port: int) -> bool:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
+        return sock.connect_ex(("127.0.0.1", port)) == 0
+
+
+def test_secure_robot_serves_its_operator_over_mutual_tls(tmp_path: Path) -> None:
+    pki = tmp_path / "pki"
+    init(pki, host="robot-host")
+    namespace, port = "sec" + uuid.uuid4().hex[:8], free_port()
+    popen = _secure_up(pki, namespace, tmp_path / "logs", "--listen", f"tls/127.0.0.1:{port}")
+
     def remote(identity: str) -> Bus:
-        """A laptop's client session, once the robot listens (a client cannot open before that)."""
-        options = SessionOptions(
-            namespace=namespace,
-            connect=(f"tls/localhost:{port}",),
-            multicast_scouting=False,
-            secure=str(pki),
-            identity=identity,
-        )
-        deadline = time.monotonic() + 30
-        while True:
-            try:
-                return Bus(options)
-            except zenoh.ZError:
-                if time.monotonic() > deadline:
-                    raise
-                time.sleep(0.3)
+        return _remote(namespace, port, pki, identity)
 
     try:
         with remote("operator") as operator:
@@ -224,6 +259,42 @@ def test_secure_robot_serves_its_operator_over_mutual_tls(tmp_path: Path) -> Non
     assert out.count(f"refused operator: put on pbd/{namespace}/perception/objects") == 1, out
     assert f"refused operator: query on pbd/{namespace}/sim/control/scene" in out
     assert "is authorized" not in out and "TRACE" not in out  # Zenoh's own trace lines stay out
+
+
+def test_secure_robot_listens_on_tls_loopback_by_default(tmp_path: Path) -> None:
+    """With --secure and no --listen the router enforces the roles, so it must listen on tls/, services included."""
+    if _port_taken(DEFAULT_PORT):
+        pytest.skip(f"port {DEFAULT_PORT} is in use on this machine")
+    pki = tmp_path / "pki"
+    init(pki, host="robot-host")
+    namespace = "def" + uuid.uuid4().hex[:8]
+    popen = _secure_up(pki, namespace, tmp_path / "logs")
+    try:
+        with _remote(namespace, DEFAULT_PORT, pki, "operator") as operator:
+            assert _wait(lambda: "nlu" in operator.alive_services(), 60), "the NLU never came up"
+            reply = operator.request(operator.keys.nlu_query("parse"), {"text": "open your left hand"}, timeout=10)
+            assert reply["kind"] == "command" and reply["procedure"] == "open"
+    finally:
+        popen.send_signal(signal.SIGINT)
+        out, _ = popen.communicate(timeout=30)
+    assert popen.returncode == 0, out
+    assert f"router on tls/127.0.0.1:{DEFAULT_PORT};" in out
+
+
+def test_a_secure_router_in_clear_is_refused(tmp_path: Path) -> None:
+    pki = tmp_path / "pki"
+    init(pki, host="robot-host")
+    result = subprocess.run(
+        [sys.executable, "-m", "hfpbd.launcher", "--headless", "--secure", str(pki), "--listen", "tcp/127.0.0.1:7447"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert result.returncode == 2
+    assert "a listener of a session enforcing the roles must be tls/" in result.stderr
+    assert "Traceback" not in result.stderr
 
 
 def test_insecure_listener_warns_and_the_services_stay_on_loopback(tmp_path: Path) -> None:
