@@ -15,7 +15,9 @@ from dataclasses import dataclass, field
 from services.nlu import questions
 from services.nlu.commands import ADMIN_PROCEDURES, Command
 from services.nlu.compound import after
+from services.nlu.hands import NAMING_SLOTS
 from services.nlu.infer import Answer, Clarify, CommandResult, Model, Result
+from services.nlu.lexicon import OBJECT_SLOTS, REFERRING_SLOTS
 from services.nlu.prior import History
 from services.nlu.tokens import read
 from services.nlu.weights import LANGUAGE
@@ -26,6 +28,21 @@ _CANCEL = re.compile(
     r"(?:(?:no|oh|ok|okay|well|please|just) )*(?:cancel|never mind|nevermind|forget it|"
     r"forget about it|nothing|none|neither|none of them|neither of them|skip it|drop it|leave it)"
     r"(?: please| then)?"
+)
+# a turn that only acknowledges, thanks or declines: nothing to do, and any pending question is dropped
+_ACKNOWLEDGED = (
+    (re.compile(r"(?:thanks|thank you|thank you very much|cheers|ta)(?: robot)?"), "You're welcome."),
+    (
+        re.compile(
+            r"(?:yes|yeah|yep|sure|ok|okay|alright|all right|good|great|cool|nice|perfect|fine|well done)"
+            r"(?: robot)?"
+        ),
+        "All right. What should I do next?",
+    ),
+    (
+        re.compile(r"(?:no|nope|not now|never mind|nevermind|forget it|forget about it)(?: robot)?"),
+        'All right, nothing to do. Say "undo" to take back the last step, or what to do next.',
+    ),
 )
 # commands whose object a bare noun phrase may replace ("point at the red cup", then "and the box"); a place
 # is not among them: after "put the red cup on the plate", "and the blue cup" changes what is put, not where
@@ -61,6 +78,10 @@ class Dialogue:
             settled = self._settle(model, text)
             if settled is not None:
                 return settled
+        acknowledged = _acknowledged(text)
+        if acknowledged is not None:
+            self.pending = None
+            return acknowledged
         if self.pending is not None and self._is_reply(text):
             clarify = self.pending.clarify
             result = model.parse(text, self._history(model), among=clarify.candidates, focus=clarify.params)
@@ -68,8 +89,38 @@ class Dialogue:
             result = model.parse(text, self._history(model))
         if isinstance(result, Clarify) and not result.params and self.last is not None and self._is_reply(text):
             result = self._elliptic(model, text, self.last) or result
+        elif self._only_names_an_object(text) and (
+            isinstance(result, CommandResult)
+            or (isinstance(result, Clarify) and result.candidates and not result.params)
+        ):
+            return self._what_to_do_with(model, text)
         self._remember(result, model)
         return result
+
+    def _only_names_an_object(self, text: str) -> bool:
+        """ "The left one" said first: words that name an object and no verb, with nothing said before to repeat."""
+        if self.pending is not None or self.last is not None:
+            return False
+        said = read(text)
+        if said.unknown or not said.terms:
+            return False
+        only_objects = all(
+            any(all(m.slot in OBJECT_SLOTS | REFERRING_SLOTS for m in reading) for reading in term.readings)
+            for term in said.terms
+        )
+        names = any(m.slot in NAMING_SLOTS for term in said.terms for reading in term.readings for m in reading)
+        return only_objects and names
+
+    def _what_to_do_with(self, model: Model, text: str) -> Clarify:
+        """Ask what to do with the object named, which "it" then means ("pick it up")."""
+        grounding = model.ground(text)
+        best = max(grounding.values(), default=0.0)
+        named = [oid for oid, p in grounding.items() if p >= best - 1e-6 and p > 0]
+        if len(named) != 1:
+            return Clarify([], 'What should I do, and with which object? For example, "pick up the red cup".')
+        self.history = History(self._history(model).last_arm, named[0])
+        words = model.scene.describe(model.world.index_of(named[0])).text
+        return Clarify([], f'What should I do with {words}? For example, "pick it up" or "point at it".')
 
     def _elliptic(self, model: Model, text: str, last: Command) -> CommandResult | None:
         """ "And the blue one", "now the box": the last command again, on the object the words name.
@@ -141,3 +192,12 @@ class Dialogue:
             if command.procedure not in ADMIN_PROCEDURES:
                 self.history = self._history(model).after(command, world)
             world = after(world, command)
+
+
+def _acknowledged(text: str) -> Answer | None:
+    """The reply to a turn that only says yes, no or thanks (the help topic: it tells what to say next)."""
+    words = " ".join(_WORD.findall(text.lower()))
+    for pattern, reply in _ACKNOWLEDGED:
+        if pattern.fullmatch(words):
+            return Answer("help", reply)
+    return None

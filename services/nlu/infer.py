@@ -15,11 +15,12 @@ from services.nlu import compound, hands, modifiers, questions, relational, stac
 from services.nlu.commands import NUMBER, PROCEDURES, Command
 from services.nlu.language import Index, Match
 from services.nlu.lexicon import OBJECT_SLOTS
-from services.nlu.phrasing import command_text, parameter_question, rephrase_question
+from services.nlu.phrasing import command_text, not_seen, parameter_question, rephrase_question
 from services.nlu.prior import History, history_scores, side_scores, situation_scores
 from services.nlu.refexp import Scene
 from services.nlu.results import Answer, Clarify, CommandResult, Result
 from services.nlu.tokens import Term, Utterance, read
+from services.nlu.unsupported import unsupported
 from services.nlu.weights import DECISION, LANGUAGE
 from services.nlu.world import World
 from shared.contract import ARMS, BOTH, BOTH_ARM_PROCEDURES, DISTANCE_PROCEDURES, PLACES
@@ -79,7 +80,9 @@ class Model:
         """One command: the model's choice, with the distance and "both hands" said put into it."""
         if among is None and (stacked := stacking.spelled_out(self, text, history)) is not None:
             return stacked
-        said = modifiers.extract(modifiers.name_the_other_hand(text, history.last_arm))
+        if among is None and (why := unsupported(text)) is not None:
+            return Clarify([], why)
+        said = modifiers.extract(modifiers.name_the_other_hand(modifiers.home_as_tucked(text), history.last_arm))
         if said.problem is not None:
             return Clarify(["distance"], said.problem)
         result = self._understand(said.text, history, among, focus)
@@ -184,11 +187,12 @@ class Model:
         if table is not None and all(c.procedure in PLACES for c in everything):
             # "drop it" over the box it was carried to: no place was said, so down on the table (as "set it down")
             return self._situated(table, {}, confidence, best_score, match, history)
+        missing = not_seen(match.terms, self.world)
         if len({c.procedure for c in everything}) > 1:
             firsts = _one_per_procedure(everything)[: DECISION.max_candidates]
             return Clarify(
                 [],
-                rephrase_question(firsts, self.scene),
+                _after(missing, rephrase_question(firsts, self.scene)),
                 firsts,
                 [command_text(c, self.scene) for c in firsts],
                 best_score,
@@ -205,7 +209,8 @@ class Model:
             situated = self._situated(candidates[0], {}, confidence, best_score, match, history)
             if isinstance(situated, CommandResult) and situated.command.procedure == "pick_up":
                 return situated
-        return Clarify(params, parameter_question(params, candidates, self.scene), candidates, labels, best_score)
+        question = parameter_question(params, candidates, self.scene)
+        return Clarify(params, _after(missing, question), candidates, labels, best_score)
 
     def _command(self, position: int, confidence: float, score: float, match: Match, history: History) -> Result:
         command = self._filled(self.index.commands[position], match)
@@ -248,6 +253,11 @@ class Model:
 
     def describe_command(self, command: Command, phrases: dict[str, str] | None = None) -> str:
         return command_text(command, self.scene, phrases)
+
+
+def _after(missing: str | None, question: str) -> str:
+    """The question back, after saying which object named is not in view (when one is not)."""
+    return question if missing is None else f"{missing} {question}"
 
 
 def _too_long(text: str) -> str | None:

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from services.nlu.commands import NUMBER, Command
 from services.nlu.refexp import Scene
+from services.nlu.tokens import Term
+from services.nlu.world import World
 from shared.contract import BOTH, PROCEDURES, arm_words, distance_words
 from shared.contract import value_words as option_words
 
@@ -136,3 +138,36 @@ def rephrase_question(candidates: list[Command], scene: Scene) -> str:
         if text not in options:
             options.append(text)
     return f"Please rephrase the command: do you want me to {either(options)}?"
+
+
+def not_seen(terms: tuple[Term, ...], world: World) -> str | None:
+    """ "I don't see a bowl." when the words name a kind, or a colour of a kind, that nothing in view has.
+
+    Why: a question back that lists the objects in view ("Which object do you
+    mean: the cup or the box?") leaves the user guessing why the one they
+    named is not among them. Kinds or colours perception could not tell
+    ("unknown") might be anything, so nothing is said missing then.
+    """
+    types = {obj.type for obj in world.objects}
+    colors = {obj.color for obj in world.objects}
+    said_color: str | None = None
+    for term in terms:
+        meanings = {(m.slot, m.value) for reading in term.readings for m in reading}
+        color = next((str(v) for slot, v in meanings if slot == "color"), None)
+        kind = next((str(v) for slot, v in meanings if slot == "type"), None)
+        if kind is None:
+            said_color = color or said_color
+            continue
+        known_kind = "unknown" in types or kind in types
+        known_pair = (
+            said_color is None
+            or "unknown" in colors
+            or any(obj.type in (kind, "unknown") and obj.color == said_color for obj in world.objects)
+        )
+        if not (known_kind and known_pair):
+            named = f"{said_color} {kind}" if said_color else kind
+            return f"I don't see {'an' if named[0] in 'aeiou' else 'a'} {named}."
+        said_color = None
+    if said_color is not None and "unknown" not in colors and said_color not in colors:
+        return f"I don't see anything {said_color}."
+    return None

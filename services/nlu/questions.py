@@ -12,7 +12,9 @@ from __future__ import annotations
 import re
 from typing import TYPE_CHECKING
 
+from services.nlu import relational
 from services.nlu.lexicon import NUMBER_WORDS
+from services.nlu.phrasing import either
 from services.nlu.results import Answer
 from services.nlu.tokens import canonical, read
 from services.nlu.weights import MARGINS
@@ -56,6 +58,11 @@ _PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple(
             r"\b(?P<phrase>.*)",
         ),
         (
+            "reach",
+            r"^(?:(?:can|could) you (?:reach|get to)|is (?P<subject>.+?) (?:reachable|within (?:your )?reach"
+            r"|in (?:your )?reach|out of (?:your )?reach|too far(?: away)?|too far for you)$)(?P<phrase>.*)",
+        ),
+        (
             "scene",
             r"^(?:what (?:do |can )?you (?:see|notice)|which (?:objects|things)"
             r"|what(?:'s| is| are) (?:on|in front of you|there|around|in view)"
@@ -63,7 +70,21 @@ _PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple(
             r"|how many (?:objects|things)"
             r"|tell me what you see|what is on the table|what have you (?:got|found) on the table)",
         ),
+        (
+            "count",
+            r"^how many (?P<phrase>.+?)(?: are there| is there| do you see| can you see| are on the table"
+            r"| are in front of you| do you have)?$",
+        ),
+        ("which", r"^which (?P<phrase>.+?)(?: is it| is that)?$"),
     )
+)
+# "which cup is closest to you": the robot is the landmark, which the referring expressions name by label
+_TO_ME = (
+    (re.compile(r"\b(?:is |are )?(?:closest|nearest|closer|nearer) (?:to )?(?:you|me|the robot)\b"), "nearest"),
+    (
+        re.compile(r"\b(?:is |are )?(?:farthest|furthest|farther|further) (?:away )?(?:from )?(?:you|me|the robot)\b"),
+        "farthest",
+    ),
 )
 # questions as they are said aloud, the usual one or two per topic ("{object}" names an object): the
 # speech grammar's sentences for questions, so the recogniser can hear what this reader answers (more
@@ -106,6 +127,12 @@ def answer(model: Model, text: str, history: History) -> Answer | None:
     topic, found = found_any
     if topic == "object":
         return Answer(topic, _where(model, found["phrase"]))
+    if topic == "which":  # "which cup is closest to you": where that one is
+        return Answer("object", _where(model, _about_me(found["phrase"])))
+    if topic == "reach":  # "can you reach the box", "is the plate within reach"
+        return Answer("object", _reach(model, found["subject"] or found["phrase"]))
+    if topic == "count":  # "how many cups are there"
+        return Answer("object", _count(model, found["phrase"]))
     if topic == "actions":
         return Answer(topic, _actions(model, found.groupdict().get("number")))
     if topic == "saved":  # "done", "save it": nothing to do, the steps are kept as they are made
@@ -147,21 +174,70 @@ def _scene(model: Model) -> str:
 
 
 def _where(model: Model, phrase: str) -> str:
+    best = _meant(model, phrase)
+    if isinstance(best, str):
+        return best
+    if len(best) == 1:
+        return _capital(f"{_named(model, best[0])} is {_where_is(model, best[0])}.")
+    places = [f"{_named(model, i)} {_where_is(model, i)}" for i in best]
+    return f"I see {len(best)}: {_listed(places)}."
+
+
+def _meant(model: Model, phrase: str) -> list[int] | str:
+    """The objects ``phrase`` fits best; the answer itself when it names nothing in view (or nothing at all)."""
     terms = read(phrase).terms
     colors = {m.value for t in terms for r in t.readings for m in r if m.slot == "color"}
     types = {m.value for t in terms for r in t.readings for m in r if m.slot == "type"}
     words = " ".join(t.words for t in terms) or "that"
-    matching = model.scene.matching(colors, types)
-    if not (colors or types) or not matching:
-        if not (colors or types):
-            return _scene(model)
+    if not (colors or types):
+        return _scene(model)
+    seen = model.world.objects
+    if any(all(o.type != kind for o in seen) for kind in types) or any(all(o.color != c for o in seen) for c in colors):
         return f"I don't see {_article(words)} {words.removeprefix('the ')}."
-    grounding = model.scene.ground(terms)
-    best = [i for i in matching if grounding[i] >= grounding[list(matching)].max() - 1e-6]
-    if len(best) == 1:
-        return f"{_named(model, best[0])[0].upper()}{_named(model, best[0])[1:]} is {_where_is(model, best[0])}."
-    places = [f"{_named(model, i)} {_where_is(model, i)}" for i in best]
-    return f"I see {len(best)}: {_listed(places)}."
+    # "the cup closest to the plate": the relation decides among the cups, the plate is only its landmark
+    grounding = model.scene.ground(relational.resolve(model.scene, terms, model.scene.last_object, phrase=True))
+    return [i for i, p in enumerate(grounding) if p >= grounding.max() - 1e-6]
+
+
+def _about_me(phrase: str) -> str:
+    """ "cup is closest to you" -> "cup nearest": the robot as landmark said as a label."""
+    for pattern, label in _TO_ME:
+        phrase = pattern.sub(label, phrase)
+    return re.sub(r"\b(?:is|are)\b", " ", phrase)
+
+
+def _reach(model: Model, phrase: str) -> str:
+    """Which hands can pick the object up, from the reach the executor publishes."""
+    best = _meant(model, phrase)
+    if isinstance(best, str):
+        return best
+    if len(best) > 1:
+        return f"Which one do you mean: {either([_named(model, i) for i in best])}?"
+    obj, name = model.world.objects[best[0]], _named(model, best[0])
+    if obj.held_by is not None:
+        return _capital(f"{name} is in my {obj.held_by} hand.")
+    known = {arm: obj.can(arm, "pick_up") for arm in ARMS}
+    hands = [arm for arm, can in known.items() if can]
+    if hands:
+        return f"Yes: I can pick up {name} with {'either hand' if len(hands) == 2 else f'my {hands[0]} hand'}."
+    if any(can is None for can in known.values()):
+        return f"I don't know yet whether I can reach {name}: I have not worked out its reach."
+    return f"No: {name} is out of reach of both my hands."
+
+
+def _count(model: Model, phrase: str) -> str:
+    """How many objects of the kind (and colour) named are in view, and where each is."""
+    terms = read(phrase).terms
+    colors = {m.value for t in terms for r in t.readings for m in r if m.slot == "color"}
+    types = {m.value for t in terms for r in t.readings for m in r if m.slot == "type"}
+    if not (colors or types):
+        return _scene(model)
+    matching = sorted(model.scene.matching(colors, types))
+    if not matching:
+        return f"I don't see any {phrase.removeprefix('the ')}."
+    places = [f"{_named(model, i)} {_where_is(model, i)}" for i in matching]
+    kinds = " or ".join(f"{kind}{'' if len(matching) == 1 else 's'}" for kind in sorted(types)) or "objects"
+    return f"I see {len(matching)} {' '.join([*sorted(colors), kinds])}: {_listed(places)}."
 
 
 def _holding(model: Model) -> str:
@@ -236,6 +312,10 @@ def _number(word: str | None) -> int | None:
 
 def _steps(count: int) -> str:
     return f"{count} step{'' if count == 1 else 's'}"
+
+
+def _capital(text: str) -> str:
+    return text[0].upper() + text[1:]
 
 
 def _article(words: str) -> str:

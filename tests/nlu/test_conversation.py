@@ -294,6 +294,23 @@ def test_questions_are_answered_from_the_world(text: str, topic: str, says: str)
     assert says in result["text"] and not re.search(r"obj\d", result["text"])
 
 
+def test_reach_questions_are_answered_from_the_reach_the_executor_published() -> None:
+    scene = table_scene()
+    reach = {"obj0": (True, False), "obj1": (True, True), "obj2": (False, False)}
+    for item in scene["objects"]:
+        if item["id"] in reach:
+            right, left = reach[item["id"]]
+            item["reach"] = {"right": {"pick_up": right}, "left": {"pick_up": left}}
+    said = {text: understood(text, scene) for text in ("can you reach the red cup", "is the blue cup reachable")}
+    said["can you reach the box"] = understood("can you reach the box", scene)
+    said["is the plate within reach"] = understood("is the plate within reach", scene)
+    assert {text: (r["kind"], r["topic"]) for text, r in said.items()} == dict.fromkeys(said, ("answer", "object"))
+    assert said["can you reach the red cup"]["text"] == "Yes: I can pick up the rightmost cup (red) with my right hand."
+    assert said["is the blue cup reachable"]["text"] == "Yes: I can pick up the leftmost cup (blue) with either hand."
+    assert said["can you reach the box"]["text"] == "No: the box (green) is out of reach of both my hands."
+    assert "I don't know yet" in said["is the plate within reach"]["text"]  # no reach published for it
+
+
 @pytest.mark.parametrize("text", ["what's in this action", "list the steps", "what is in action 1"])
 def test_the_current_actions_steps_are_read_back_in_the_users_words(text: str) -> None:
     scene = table_scene(action=1, actions=[2], steps=["pick up the red cup", "put it on the plate"])
