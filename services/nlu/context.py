@@ -12,7 +12,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 
-from services.nlu import questions
+from services.nlu import modifiers, questions
 from services.nlu.commands import ADMIN_PROCEDURES, Command
 from services.nlu.compound import after
 from services.nlu.hands import NAMING_SLOTS
@@ -20,6 +20,7 @@ from services.nlu.infer import Answer, Clarify, CommandResult, Model, Result
 from services.nlu.lexicon import OBJECT_SLOTS, REFERRING_SLOTS
 from services.nlu.prior import History
 from services.nlu.tokens import read
+from services.nlu.unsupported import unsupported
 from services.nlu.weights import LANGUAGE
 from shared.contract import ARMS
 
@@ -44,6 +45,12 @@ _ACKNOWLEDGED = (
         'All right, nothing to do. Say "undo" to take back the last step, or what to do next.',
     ),
 )
+# "a bit more", "further", "keep going" after a move in a direction: that move again (by the distance said, if any)
+_MORE = re.compile(
+    r"(?:(?:now|ok|okay|and|then|please) )*(?:(?:a (?:little |tiny )?bit |a little |a lot |a tad |some |much |bit )?"
+    r"(?:more|further|farther)|keep going|go on|continue|(?:a )?(?:little|bit) more)(?: please)?"
+)
+MOVES_IN_A_DIRECTION = frozenset({"move_abs_dir", "move_rel_dir"})
 # commands whose object a bare noun phrase may replace ("point at the red cup", then "and the box"); a place
 # is not among them: after "put the red cup on the plate", "and the blue cup" changes what is put, not where
 ELLIPTIC = frozenset({"pick_up", "point_to", "look_at", "move_rel_dest", "move_rel_dir"})
@@ -62,6 +69,7 @@ class Dialogue:
     history: History | None = None  # from commands issued here; None = trust the world's
     pending: Pending | None = field(default=None)
     last: Command | None = None  # the last command a bare noun phrase may stand for with another object
+    last_move: Command | None = None  # the last move in a direction, which "a bit more" continues
 
     def observe_robot(self) -> None:
         """The robot reported a newer state: its history now supersedes ours."""
@@ -78,6 +86,10 @@ class Dialogue:
             settled = self._settle(model, text)
             if settled is not None:
                 return settled
+        more = self._more(model, text)
+        if more is not None:
+            self._remember(more, model)
+            return more
         acknowledged = _acknowledged(text)
         if acknowledged is not None:
             self.pending = None
@@ -87,7 +99,13 @@ class Dialogue:
             result = model.parse(text, self._history(model), among=clarify.candidates, focus=clarify.params)
         if result is None or (isinstance(result, Clarify) and not result.candidates):
             result = model.parse(text, self._history(model))
-        if isinstance(result, Clarify) and not result.params and self.last is not None and self._is_reply(text):
+        if (
+            isinstance(result, Clarify)
+            and not result.params
+            and self.last is not None
+            and self._is_reply(text)
+            and unsupported(text) is None  # "pour it into the cup" is no bare object after a pick-up
+        ):
             result = self._elliptic(model, text, self.last) or result
         elif self._only_names_an_object(text) and (
             isinstance(result, CommandResult)
@@ -96,6 +114,20 @@ class Dialogue:
             return self._what_to_do_with(model, text)
         self._remember(result, model)
         return result
+
+    def _more(self, model: Model, text: str) -> CommandResult | None:
+        """ "A bit more", "further" right after a move in a direction: that move again, by the distance said."""
+        if self.last_move is None or self.pending is not None:
+            return None
+        words = " ".join(_WORD.findall(text.lower()))
+        if not _MORE.fullmatch(words):
+            return None
+        distance = modifiers.extract(words).distance
+        command = self.last_move
+        if distance is not None:
+            kept = tuple((key, value) for key, value in command.args if key != "distance")
+            command = Command(command.procedure, (*kept, ("distance", round(distance, 4))))
+        return CommandResult(command, 1.0, model.describe_command(command), {}, 0.0)
 
     def _only_names_an_object(self, text: str) -> bool:
         """ "The left one" said first: words that name an object and no verb, with nothing said before to repeat."""
@@ -187,6 +219,7 @@ class Dialogue:
         self.pending = None
         final = result.commands[-1]
         self.last = final if len(result.commands) == 1 and final.procedure in ELLIPTIC else None
+        self.last_move = final if final.procedure in MOVES_IN_A_DIRECTION else None
         world = model.world
         for command in result.commands:
             if command.procedure not in ADMIN_PROCEDURES:

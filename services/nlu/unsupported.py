@@ -21,6 +21,13 @@ _SWAP = re.compile(
     r"(?: round| around| over)?$"
 )
 _ACTION_WORDS = re.compile(r"\b(?:actions?|programs?|hands?|arms?|grippers?)\b")
+_HAND_OVER = re.compile(
+    r"^(?:please )?(?:(?:give|pass|hand|transfer|move|put|switch) (?:it|that|the \w+(?: \w+)?) (?:over )?"
+    r"(?:to|into|in) (?:your|the|my) other (?:hand|arm|gripper)|switch hands|change hands|swap hands)$"
+)
+_TILT = re.compile(
+    r"^(?:please )?(?:turn (?:it|that|the \w+(?: \w+)?) (?:upside down|over)|flip|pour|tip|tilt|shake|empty)\b"
+)
 
 
 def unsupported(text: str) -> str | None:
@@ -35,5 +42,15 @@ def unsupported(text: str) -> str | None:
         return (
             "I can't swap two objects in one go. Move one of them aside first "
             '("put the red cup to the left of the plate"), then the other into its place.'
+        )
+    if _HAND_OVER.match(said):
+        return (
+            "I can't pass an object from one hand to the other. Put it down, then pick it up with the other "
+            'hand ("put it down", "pick it up with your left hand").'
+        )
+    if _TILT.match(said):
+        return (
+            "I keep what I hold upright: I can't tip, pour, flip or shake it. I can turn my wrist "
+            '("rotate your right hand clockwise"), move it, or put it down.'
         )
     return None
