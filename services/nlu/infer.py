@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from services.nlu import compound, hands, modifiers, questions, relational, stacking
+from services.nlu import compound, hands, modifiers, questions, relational, sayings, stacking
 from services.nlu.commands import NUMBER, PROCEDURES, Command
 from services.nlu.language import Index, Match
 from services.nlu.lexicon import OBJECT_SLOTS
@@ -68,7 +68,7 @@ class Model:
             reply = questions.answer(self, text, history)
             if reply is not None:
                 return reply
-            parts = compound.split(text)
+            parts = compound.split(sayings.handed_over(text))
             if len(parts) > 1:
                 return compound.run(self, parts, history)
             text = parts[0]
@@ -82,7 +82,7 @@ class Model:
             return stacked
         if among is None and (why := unsupported(text)) is not None:
             return Clarify([], why)
-        said = modifiers.extract(modifiers.name_the_other_hand(modifiers.home_as_tucked(text), history.last_arm))
+        said = modifiers.extract(modifiers.name_the_other_hand(sayings.home_as_tucked(text), history.last_arm))
         if said.problem is not None:
             return Clarify(["distance"], said.problem)
         result = self._understand(said.text, history, among, focus)

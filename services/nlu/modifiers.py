@@ -129,21 +129,6 @@ def name_the_other_hand(text: str, last_arm: str | None) -> str:
     return _OTHER_HAND.sub(lambda found: f"{found['lead'] or ''}your {other} {found['part']}", text.lower())
 
 
-_HOME = re.compile(
-    r"^(?:(?:go|move|get|return|come)(?: back)?(?: to)? (?:your |the )?(?:home|rest|start|starting|initial|ready)"
-    r"(?: position| pose| posture)?|go home|(?:reset|rest)(?: your arms| yourself| the arms| your hands)?)[.!]?$"
-)
-
-
-def home_as_tucked(text: str) -> str:
-    """ "Go home", "reset", "back to the start position": both arms to the side, the posture they start in.
-
-    Said with no hand, these mean the whole robot's resting posture, which
-    for the arms is the side posture; as words they name no destination.
-    """
-    return "move both arms to the side" if _HOME.match(" ".join(text.lower().split())) else text
-
-
 def extract(text: str) -> Modifiers:
     """Take the distance and "both hands" words out of ``text`` (lower-cased)."""
     lowered = _UNIT_TYPO.sub(_unit_fixed, " ".join(text.lower().split()))
