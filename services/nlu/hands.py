@@ -56,15 +56,40 @@ def situate(model: Model, command: Command, match: Match, history: History, said
         carried = _theme(model, command, match)
         if carried is not None:  # "move the cup next to the box": the cup goes there
             command = Command("place_rel", command.args)
+        elif _names_an_object(match) and match.theme_end:
+            _which_to_carry(model, command, match)
     if command.procedure not in ("place_abs", "place_rel") or not _empty(model, command.arg("arm")):
         return (command,)
     theme = _theme(model, command, match)
     if theme is not None and world.objects[theme].held_by is None:
         arm = command.arg("arm") if said_arm else best_arm(model, theme, history, command.arg("arm"))
         return (Command("pick_up", (("arm", arm), ("object", world.ids[theme]))), command.with_arg("arm", arm))
+    if theme is None and _names_an_object(match) and match.theme_end:
+        _which_to_carry(model, command, match)
     if command.procedure == "place_rel":
         return (Command("move_rel_dest", command.args),)
     raise Refusal(f"My {command.arg('arm')} hand is not holding anything to put down.")
+
+
+def _which_to_carry(model: Model, command: Command, match: Match) -> None:
+    """ "Put the red cup on the plate" with three red cups and empty hands: ask which, not move a hand there.
+
+    Only words before the relation count (they name what is carried), and
+    only when they fit several objects, none held, other than the landmark.
+    """
+    grounding = match.grounding(match.theme_end)
+    if grounding is None or grounding.max() <= 0:
+        return
+    landmark = command.arg("object")
+    tied = [
+        i
+        for i in np.flatnonzero(grounding >= grounding.max() - 1e-9)
+        if model.world.ids[i] != landmark and model.world.objects[i].held_by is None
+    ]
+    if len(tied) > 1:
+        names = [model.scene.describe(int(i)).text for i in tied]
+        listed = ", ".join(names[:-1]) + " or " + names[-1]
+        raise Refusal(f"Which one should I carry: {listed}? Say it again naming that one.")
 
 
 def _carried(model: Model, move: Command, obj: int, history: History) -> tuple[Command, ...]:

@@ -104,8 +104,8 @@ class Index:
         Object words before the first relation or direction ("move *the red cup* above the plate") are the
         theme: they may name what the commanding hand holds. Words after it name the landmark only.
         """
-        object_vectors = self.scene.term_vectors(terms, within, last_object)
         theme_end = next((i for i, term in enumerate(terms) if _is_relational(term)), len(terms))
+        object_vectors = self.scene.term_vectors(terms, within, last_object, theme_end)
         total = np.zeros(len(self.commands))
         for index, term in enumerate(terms):
             best = np.zeros(len(self.commands))

@@ -116,13 +116,33 @@ class Scene:
 
     # -- grounding ---------------------------------------------------------
     def term_vectors(
-        self, terms: tuple[Term, ...], within: frozenset[int] | None = None, last_object: int | None = None
+        self,
+        terms: tuple[Term, ...],
+        within: frozenset[int] | None = None,
+        last_object: int | None = None,
+        theme_end: int | None = None,
     ) -> dict[int, np.ndarray]:
         """For each term with an object reading, its best object-reading score per object.
 
         ``within`` limits the label context (e.g. to the objects a pending
         clarification is about); ``last_object`` is what "it" refers to.
+        ``theme_end``: terms from there on name the landmark, whose kind is no
+        part of the theme's label context ("put the middle cup on the plate":
+        the middle of the cups, not of the cups and the plate).
         """
+        cut = len(terms) if theme_end is None else theme_end
+        base = within if within is not None else self.everyone
+        contexts = (self._context(terms[:cut], base), self._context(terms[cut:], base))
+        vectors: dict[int, np.ndarray] = {}
+        for index, term in enumerate(terms):
+            meanings = _object_meanings(term)
+            if meanings:
+                context = contexts[index >= cut]
+                vectors[index] = np.max([self._meaning_vector(m, context, last_object) for m in meanings], axis=0)
+        return vectors
+
+    def _context(self, terms: tuple[Term, ...], base: frozenset[int]) -> frozenset[int]:
+        """The objects the colours and kinds among ``terms`` fit (all of ``base`` when they fit none)."""
         colors, types = set(), set()
         for term in terms:
             for meaning in _object_meanings(term):
@@ -130,14 +150,7 @@ class Scene:
                     colors.add(meaning.value)
                 elif meaning.slot == "type":
                     types.add(meaning.value)
-        base = within if within is not None else self.everyone
-        context = self.matching(colors, types) & base or base
-        vectors: dict[int, np.ndarray] = {}
-        for index, term in enumerate(terms):
-            meanings = _object_meanings(term)
-            if meanings:
-                vectors[index] = np.max([self._meaning_vector(m, context, last_object) for m in meanings], axis=0)
-        return vectors
+        return self.matching(colors, types) & base or base
 
     def _meaning_vector(self, meaning: Meaning, context: frozenset[int], last_object: int | None) -> np.ndarray:
         vector = np.zeros(self.n)

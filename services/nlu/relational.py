@@ -49,7 +49,7 @@ def resolve(
     i = 0
     while i < len(out):
         relation = _relation_of(out[i])
-        if relation in RELATIONS and command_relation_free:
+        if relation in RELATIONS and command_relation_free and not _refers_before_another(scene, out, i, referent):
             command_relation_free = False  # the command's own relation: the object before it is the theme
             i += 1
             continue
@@ -77,6 +77,35 @@ def resolve(
         out[start:extra_end] = [Term(words, ((Meaning("refer", chosen, weight),),), out[start].start)]
         i = start + 1
     return tuple(out)
+
+
+# relations that describe where an object stands among others, not what it stands on
+_BESIDE = frozenset({"next_to", "left_of", "right_of", "in_front_of", "behind", "near"})
+
+
+def _refers_before_another(scene: Scene, terms: list[Term], i: int, referent: int | None) -> bool:
+    """Whether the relation at ``i`` is part of the theme's description, a later one being the command's.
+
+    "Put the cup next to the box on the plate": the first relation follows
+    an object phrase, another relation comes after its landmark, and it
+    picks out some of the objects its head names (the cup by the box, not
+    every cup). Otherwise ("put the cup on the plate next to the box") the
+    first relation is the command's and the later one describes its landmark.
+    """
+    relation = _relation_of(terms[i])
+    head = _phrase_before(terms, i)
+    landmark_end = _phrase_end(terms, i + 1)
+    if (
+        relation not in _BESIDE
+        or not head
+        or landmark_end == i + 1
+        or not any(_relation_of(t) in RELATIONS for t in terms[landmark_end:])
+    ):
+        return False
+    landmarks = _group(scene, terms[i + 1 : landmark_end], referent)
+    candidates = _group(scene, head, referent) - landmarks
+    chosen = _related(scene, candidates, landmarks, relation)
+    return bool(chosen) and len(chosen) < len(candidates)
 
 
 _DESCRIBED = {
