@@ -82,7 +82,9 @@ class Model:
             return stacked
         if among is None and (why := unsupported(text)) is not None:
             return Clarify([], why)
-        said = modifiers.extract(modifiers.name_the_other_hand(sayings.home_as_tucked(text), history.last_arm))
+        said = modifiers.extract(
+            modifiers.name_the_other_hand(sayings.closer_to_me(sayings.home_as_tucked(text)), history.last_arm)
+        )
         if said.problem is not None:
             return Clarify(["distance"], said.problem)
         result = self._understand(said.text, history, among, focus)

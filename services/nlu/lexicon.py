@@ -280,7 +280,19 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
         ),
     ),
     (
-        ("forward", "forwards", "ahead", "further", "farther", "away from me", "outward"),
+        (
+            "forward",
+            "forwards",
+            "ahead",
+            "further",
+            "farther",
+            "away from me",
+            "away from you",
+            "away from yourself",
+            "further away",
+            "farther away",
+            "outward",
+        ),
         ((option("direction", "forward"),),),
     ),
     (

@@ -22,6 +22,9 @@ _GIVE_HELD = re.compile(
     r"^(?:please )?(?:give|hand|pass|bring) (?:it|that|this)(?: over)? (?:to me|here|over)(?: please)?[.!]?$"
 )
 
+# "bring it closer", "move the cup a bit closer": closer to the user when no landmark follows
+_CLOSER = re.compile(r"\b(?:closer|nearer)(?= *(?:please)?[.!]?$)")
+
 
 def home_as_tucked(text: str) -> str:
     """ "Go home", "reset", "back to the start position": both arms to the side, the posture they start in.
@@ -45,3 +48,8 @@ def handed_over(text: str) -> str:
     if found is None or found["object"] in ("it", "that", "this"):
         return text
     return f"pick up {found['object']}, then move it towards me"
+
+
+def closer_to_me(text: str) -> str:
+    """ "Bring it closer" with nothing after "closer": towards the user ("closer to the box" is left alone)."""
+    return _CLOSER.sub("towards me", " ".join(text.lower().split()))
