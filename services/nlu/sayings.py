@@ -23,7 +23,7 @@ _GIVE_HELD = re.compile(
 )
 
 # "bring it closer", "move the cup a bit closer": closer to the user when no landmark follows
-_CLOSER = re.compile(r"\b(?:closer|nearer)(?= *(?:please)?[.!]?$)")
+_CLOSER = re.compile(r"(?<!\bis )(?<!\bare )(?<!\bthe )(?<!\bs )\b(?:closer|nearer)(?= *(?:please)?[.!]?$)")
 
 
 def home_as_tucked(text: str) -> str:

@@ -6,7 +6,8 @@ word by word, "stack the cups" is a place with an empty hand and is refused.
 With exactly two of that kind in view there is no doubt what is meant: the
 smaller goes on the larger (on two of a size, the one nearer the robot goes
 on the other), picked up by the hand the prior prefers for it, unless a hand
-already holds one of them. With more or fewer than two, the robot says so.
+already holds one of them; where the executor's reach says that hand cannot
+pick it up or reach the other's top, the next choice that can is taken. With more or fewer than two, the robot says so.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from services.nlu.lexicon import TYPE_WORDS
 from services.nlu.phrasing import command_text
 from services.nlu.prior import History
 from services.nlu.results import Clarify, CommandResult, Result
+from shared.contract import other_arm
 
 if TYPE_CHECKING:
     from services.nlu.infer import Model
@@ -68,13 +70,33 @@ def spelled_out(model: Model, text: str, history: History) -> Result | None:
     held = [i for i in pair if world.objects[i].held_by is not None]
     if len(held) == 2:
         return Clarify([], f"I am holding both {kind}s: put one of them down first.")
-    top = held[0] if held else _top(model, pair)
-    base = pair[1] if top == pair[0] else pair[0]
-    arm = world.objects[top].held_by or hands.best_arm(model, top, history, history.last_arm or "right")
+    top, base, arm = _chosen(model, pair, held, history)
     place = Command("place_rel", (("arm", arm), ("relation", "on_top_of"), ("object", world.ids[base])))
     steps = (place,) if held else (Command("pick_up", (("arm", arm), ("object", world.ids[top]))), place)
     said = ", then ".join(command_text(step, model.scene) for step in steps)
     return CommandResult(steps[0], 1.0, said, {}, 0.0, steps[1:])
+
+
+def _chosen(model: Model, pair: list[int], held: list[int], history: History) -> tuple[int, int, str]:
+    """(top, base, arm): the held one on the other; else the smaller (or nearer) on the other by the hand the
+    prior prefers, unless the executor's reach says that hand cannot do both and another choice can."""
+    world = model.world
+    if held:
+        top = held[0]
+        return top, pair[1] if top == pair[0] else pair[0], str(world.objects[top].held_by)
+    first = _top(model, pair)
+    choices = []
+    for top in (first, pair[1] if first == pair[0] else pair[0]):
+        base = pair[1] if top == pair[0] else pair[0]
+        preferred = hands.best_arm(model, top, history, history.last_arm or "right")
+        choices += [(top, base, arm) for arm in (preferred, other_arm(preferred))]
+    for top, base, arm in choices:
+        if (
+            world.objects[top].can(arm, "pick_up") is not False
+            and world.objects[base].can(arm, "on_top_of") is not False
+        ):
+            return top, base, arm
+    return choices[0]
 
 
 def _not_two(kind: str, count: int) -> str:

@@ -85,6 +85,15 @@ def test_stacking_two_of_a_kind_puts_the_smaller_or_nearer_on_the_other() -> Non
     ]
 
 
+def test_stacking_takes_a_hand_that_reaches_both_when_the_preferred_one_cannot() -> None:
+    near = obj("a", "orange", "cup", 0.45, -0.12, reach={"right": {"pick_up": True}, "left": {"pick_up": True}})
+    far = obj("b", "purple", "cup", 0.81, 0.36, reach={"right": {"on_top_of": False}, "left": {"on_top_of": True}})
+    assert steps("stack the cups", world(near, far, last_arm=None)) == [
+        ("pick_up", {"arm": "left", "object": "a"}),
+        ("place_rel", {"arm": "left", "relation": "on_top_of", "object": "b"}),
+    ]
+
+
 def test_stacking_with_one_of_them_in_hand_puts_it_on_the_other_and_both_in_hand_is_refused() -> None:
     assert steps("stack the cups", holding("left", 1)) == [
         ("place_rel", {"arm": "left", "relation": "on_top_of", "object": "obj0"})
