@@ -224,19 +224,51 @@ def placement_centers(relation: str, landmark: Box, held_size: np.ndarray, table
                 points.append(c[:2] + offset)
         return [np.array([p[0], p[1], z]) for p in points]
     z = table_z + RELEASE_CLEARANCE + half[2]
+    base, outward, along = _beside(relation, landmark, half)
+    close = base - (GAP - CLOSE_GAP) * outward
+    points = [base, base + PLACE_SHIFT * outward, base - PLACE_SHIFT * along, base + PLACE_SHIFT * along, close]
+    return [np.array([p[0], p[1], z]) for p in points]
+
+
+def placement_centers_along(
+    relation: str, landmark: Box, held_size: np.ndarray, table_z: float, shift: float
+) -> list[np.ndarray]:
+    """Release centres ``relation`` the landmark moved ``shift`` along its side, each way, at GAP and CLOSE_GAP.
+
+    Tried after :func:`placement_centers` when every way down there ran into
+    the landmark or its neighbours: sliding along the side moves the hand off
+    the landmark's line and off an object standing right behind the spot.
+    Only side relations have a side to slide along.
+    """
+    if relation in COMPOSITE:
+        return [
+            p
+            for part in COMPOSITE[relation]
+            for p in placement_centers_along(part, landmark, held_size, table_z, shift)
+        ]
+    if relation in ("above", "on_top_of"):
+        return []
+    half = np.asarray(held_size, float) / 2
+    base, outward, along = _beside(relation, landmark, half)
+    close = base - (GAP - CLOSE_GAP) * outward
+    z = table_z + RELEASE_CLEARANCE + half[2]
+    points = [p + sign * shift * along for p in (base, close) for sign in (-1.0, 1.0)]
+    return [np.array([p[0], p[1], z]) for p in points]
+
+
+def _beside(relation: str, landmark: Box, held_half: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For a side relation: the held object's centre GAP off that side, the outward unit, the unit along the side."""
+    c, lh = landmark.center, landmark.half
     sides = {  # (offset from the landmark's centre, outward unit, unit along the side)
-        "left_of": ([0.0, lh[1] + GAP + half[1], 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]),
-        "right_of": ([0.0, -lh[1] - GAP - half[1], 0.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]),
-        "in_front_of": ([-lh[0] - GAP - half[0], 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
-        "behind": ([lh[0] + GAP + half[0], 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        "left_of": ([0.0, lh[1] + GAP + held_half[1], 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]),
+        "right_of": ([0.0, -lh[1] - GAP - held_half[1], 0.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]),
+        "in_front_of": ([-lh[0] - GAP - held_half[0], 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        "behind": ([lh[0] + GAP + held_half[0], 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
     }
     if relation not in sides:
         raise ValueError(f"unknown relation {relation!r}")
     offset, outward, along = (np.asarray(v, float) for v in sides[relation])
-    base = c + offset
-    close = base - (GAP - CLOSE_GAP) * outward
-    points = [base, base + PLACE_SHIFT * outward, base - PLACE_SHIFT * along, base + PLACE_SHIFT * along, close]
-    return [np.array([p[0], p[1], z]) for p in points]
+    return c + offset, outward, along
 
 
 def carry_pose(tool_pose: np.ndarray, held_center: np.ndarray, new_center: np.ndarray, yaw: float = 0.0) -> np.ndarray:

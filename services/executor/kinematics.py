@@ -54,11 +54,13 @@ IK_ITERATIONS = 25  # Newton steps per start: a start that converges does so in 
 ARM_REACH = 1.0  # metres from the shoulder pan axis to the farthest tool position (0.1 + 0.4 + 0.321 + 0.18)
 # Time parameterisation. A free move of an empty hand: each arm joint at up to this share of its rated
 # speed, reached in ACCELERATION_TIME, so a reach across the table takes 2-3 s. Carrying an object: a
-# smaller share, at the careful acceleration, so it is not shaken out of the fingers. Near and against
-# objects (straight approaches, descents, lifts, presses): every joint at CAREFUL_SPEED and CAREFUL_ACCEL,
-# so a cup is not knocked over or tipped by its landing.
+# smaller share and CARRYING_ACCEL (about 1.5 m/s² at the hand, well within the fingers' grip on a cup),
+# so it is not shaken out of the fingers. Near and against objects (straight approaches, descents, lifts,
+# presses): every joint at CAREFUL_SPEED and CAREFUL_ACCEL, so a cup is not knocked over or tipped by its
+# landing.
 SPEED_SHARE = 0.9
 CARRYING_SPEED_SHARE = 0.6
+CARRYING_ACCEL = 3.0  # rad/s²
 ACCELERATION_TIME = 0.4
 CAREFUL_SPEED = 1.0  # rad/s
 CAREFUL_ACCEL = 1.5  # rad/s²
@@ -175,7 +177,7 @@ class ArmKinematics:
         # (speed, acceleration) limits of the group by kind of move, for time parameterisation
         self._limits = {
             "free": (free_speeds, free_speeds / ACCELERATION_TIME),
-            "carrying": (planning_speeds(arm, CARRYING_SPEED_SHARE), np.full(len(free_speeds), CAREFUL_ACCEL)),
+            "carrying": (planning_speeds(arm, CARRYING_SPEED_SHARE), np.full(len(free_speeds), CARRYING_ACCEL)),
             "careful": (np.full(len(free_speeds), CAREFUL_SPEED), np.full(len(free_speeds), CAREFUL_ACCEL)),
         }
         self.planner = mplib.Planner(
@@ -553,17 +555,17 @@ class ArmKinematics:
     def plan_to(self, arm_q: np.ndarray, exact_turns: bool = False) -> Trajectory | None:
         """A collision-free joint trajectory from the current joints to ``arm_q``.
 
-        The straight joint path when it is clear (most moves), then two lines
-        through the ready posture, then lines with the hand lifted first or
-        last; each is tried for ``arm_q`` and then for the same posture with
-        the roll joints a whole turn round (see :meth:`turn_variants`), unless
-        ``exact_turns`` (a wrist turned by a stated angle must turn that way):
-        a goal whose forearm roll lies a turn away from the ready posture's
-        swings the forearm through the table on the way. Last, OMPL's
-        RRTConnect in repeated one-second tries, because a narrow passage
-        (over a tall box with a cup in hand) is sometimes missed in one. None
-        when no path was found or the user said stop meanwhile (see
-        :attr:`cancelled`).
+        The straight joint path when it is clear (most moves), else the
+        quicker of two lines through the ready posture and lines with the hand
+        lifted first or last; each is tried for ``arm_q`` and then for the
+        same posture with the roll joints a whole turn round (see
+        :meth:`turn_variants`), unless ``exact_turns`` (a wrist turned by a
+        stated angle must turn that way): a goal whose forearm roll lies a
+        turn away from the ready posture's swings the forearm through the
+        table on the way. Last, OMPL's RRTConnect in repeated one-second
+        tries, because a narrow passage (over a tall box with a cup in hand)
+        is sometimes missed in one. None when no path was found or the user
+        said stop meanwhile (see :attr:`cancelled`).
         """
         with self._tolerating_start_contacts():
             lift = self._out_of_contact() if self.collisions(self.arm_q) else None
@@ -613,13 +615,23 @@ class ArmKinematics:
             return any(self._lines_to(goal) is not None for goal in self._goals(arm_q))
 
     def _lines_to(self, arm_q: np.ndarray) -> np.ndarray | None:
-        """Clear joint-space lines to ``arm_q``: direct, through the ready posture, or with the hand lifted."""
+        """Clear joint-space lines to ``arm_q``: direct, else the quicker of through the ready posture or lifted.
+
+        Both detours are tried (milliseconds each) because neither is the
+        shorter one in general: a carried cup blocked by the box beside its
+        goal goes over it in half the time of a swing back through the
+        ready posture, while a hand coming from the side needs the ready way.
+        """
         if not self.collisions(self.arm_q):
             straight = self._joint_line(self.arm_q, arm_q)
             if straight is not None:
                 return straight
-        via = self._via_ready(arm_q)
-        return via if via is not None else self._via_lifts(arm_q)
+        detours = [path for path in (self._via_ready(arm_q), self._via_lifts(arm_q)) if path is not None]
+        return min(detours, key=self._corner_to_corner_time, default=None)
+
+    def _corner_to_corner_time(self, path: np.ndarray) -> float:
+        """Seconds along ``path`` at the free speeds, each line on its own: a cheap ranking of paths made of lines."""
+        return float(np.sum(np.max(np.abs(np.diff(path, axis=0)) / self.speeds, axis=1)))
 
     def _via_ready(self, arm_q: np.ndarray) -> np.ndarray | None:
         """Two clear joint-space lines through the ready posture (arm bent in front of the body).
@@ -642,7 +654,7 @@ class ArmKinematics:
             way = posture.copy()
             way[rolls] = source[rolls]
             ways.append(way)
-        travel = [np.max((np.abs(w - self.arm_q) + np.abs(arm_q - w)) / self.speeds) for w in ways]
+        travel = [self._corner_to_corner_time(np.array([self.arm_q, w, arm_q])) for w in ways]
         for index in np.argsort(travel, kind="stable"):
             way = ways[index]
             if self.collisions(way):

@@ -29,9 +29,13 @@ CARRY_YAWS = (0.0, 0.35, -0.35, 0.7, -0.7)
 # Wider headings, tried only for a placement whose every way down at CARRY_YAWS ran into the landmark: an object
 # held from the side has the forearm behind it at its own height, and only a swing of the forearm past the
 # landmark's side lets the hand come down behind it (the reach map does not try them: each heading costs time).
-SWING_YAWS = (1.0, -1.0, 1.3, -1.3)
+# They go all the way round: an object picked up from its far side is carried with the hand on that side, and
+# set down on the landmark's near side only once the hand is turned to the object's other side.
+SWING_YAWS = (1.0, -1.0, 1.3, -1.3, 1.7, -1.7, 2.2, -2.2, 2.7, -2.7, np.pi)
 # metres further out from a landmark's side when the forearm ran into it: 8-10 cm off is still beside it
 WIDER = 0.03
+# metres along a landmark's side when the forearm ran into it: off its line, still beside it
+ALONG = 0.04
 ROUND_TYPES = ("cup", "bowl", "plate")
 # Gripping a flat object by the part that sticks out over the table's near edge:
 MAX_EDGE_THICKNESS = 0.03  # metres: thicker than this, the fingers cannot pass over and under it
@@ -129,15 +133,22 @@ def place_relation(
 def place_relation_wider(
     relation: str, landmark: Box, tool_pose: np.ndarray, held: Held, table_z: float
 ) -> list[tuple[np.ndarray, np.ndarray]]:
-    """:func:`place_relation` when every way down ran into the landmark: swung headings, then ``WIDER`` out.
+    """:func:`place_relation` when every way down ran into the landmark: swung headings, ``ALONG`` its side,
+    then ``WIDER`` out.
 
-    Both keep the forearm off the landmark: a heading turned past its side,
-    or the held object released further from it.
+    Each keeps the forearm off the landmark: a heading turned past its side,
+    the hand slid off the landmark's line, or the held object released
+    further from it.
     """
+    every_yaw = CARRY_YAWS + SWING_YAWS
+    along = _carry(
+        tool_pose, held, geo.placement_centers_along(relation, landmark, held.box.size, table_z, ALONG), 0.0, every_yaw
+    )
     wider = Box(landmark.center, landmark.size + np.array([2 * WIDER, 2 * WIDER, 0.0]))
     return [
         *place_relation(relation, landmark, tool_pose, held, table_z, SWING_YAWS),
-        *place_relation(relation, wider, tool_pose, held, table_z, CARRY_YAWS + SWING_YAWS),
+        *((geo.shifted(r, [0.0, 0.0, HOVER]), r) for r in along),
+        *place_relation(relation, wider, tool_pose, held, table_z, every_yaw),
     ]
 
 

@@ -196,15 +196,21 @@ def test_in_front_of_a_cup_near_the_tables_edge_the_cup_goes_closer_to_it() -> N
 
 
 @pytest.mark.parametrize("relation", ["left_of", "right_of", "in_front_of", "behind"])
-def test_the_second_try_beside_a_landmark_swings_the_hand_or_goes_further_out_but_stays_beside_it(
+def test_the_second_try_beside_a_landmark_swings_the_hand_slides_along_or_goes_further_out_but_stays_beside_it(
     relation: str,
 ) -> None:
     landmark, held = standing(0.60, 0.05), held_cup()
     outward = {"left_of": [0, 1], "right_of": [0, -1], "in_front_of": [-1, 0], "behind": [1, 0]}[relation]
-    gaps = []
+    along = [-outward[1], outward[0]]
+    gaps, offsets, headings = [], [], set()
     for _, release in targets.place_relation_wider(relation, landmark, held.tool_pose, held, TABLE_TOP_Z):
         center = held.center_at(release)
         gaps.append(float(np.dot(center[:2] - landmark.center[:2], outward)) - landmark.half[0] - CUP[0] / 2)
+        offsets.append(abs(float(np.dot(center[:2] - landmark.center[:2], along))))
+        headings.add(round(float(np.dot(geo.approach_axis(release)[:2], outward)), 2))
     assert min(gaps) >= geo.CLOSE_GAP - 1e-6
     assert max(gaps) <= geo.GAP + targets.WIDER + geo.PLACE_SHIFT + 1e-6 <= 0.10 + 1e-6  # still beside it
     assert any(gap >= geo.GAP + targets.WIDER - 1e-6 for gap in gaps)
+    assert max(offsets) == pytest.approx(targets.ALONG) and targets.ALONG <= 0.05  # slid along, not past it
+    # the hand comes at the spot from every side, the landmark's own included
+    assert min(headings) < -0.9 and max(headings) > 0.9
