@@ -567,6 +567,14 @@ class Procedures:
             first = next(plans, None)
         if first is None:
             box = Box.of(obj)
+            log.info(
+                "no grasp of %s at %s size %s: %d candidates, none with a clear approach; objects seen: %s",
+                object,
+                np.round(obj.position, 3).tolist(),
+                np.round(obj.size, 3).tolist(),
+                len(targets.grasps(obj, self._snapshot().near_edge)),
+                {k: (np.round(o.position, 3).tolist(), np.round(o.size, 3).tolist()) for k, o in snap.objects.items()},
+            )
             if thin_and_wide(box) and overhang(box, self._snapshot().near_edge) < targets.MIN_OVERHANG:
                 raise StepFailed(wording.sentence(f"{words} is too wide to grasp; push it over the table edge first"))
             raise StepFailed(

@@ -227,9 +227,10 @@ class Model:
             text = f"{command_text(switch, self.scene)}, then {command_text(command, self.scene, phrases)}"
             return CommandResult(switch, confidence, text, {}, score, (command,))
         try:
-            commands = hands.situate(self, command, match, history, "arm" in phrases)
+            commands = tuple(_set_down_on(c) for c in hands.situate(self, command, match, history, "arm" in phrases))
         except hands.Refusal as refusal:
             return Clarify([], str(refusal))
+        command = _set_down_on(command)
         if commands[0] != command:  # a pick-up first: the user's words are about the step after it
             texts = [command_text(commands[0], self.scene)]
             texts += [command_text(c, self.scene, phrases) for c in commands[1:]]
@@ -255,6 +256,18 @@ class Model:
 
     def describe_command(self, command: Command, phrases: dict[str, str] | None = None) -> str:
         return command_text(command, self.scene, phrases)
+
+
+def _set_down_on(command: Command) -> Command:
+    """A place "above" a landmark ("put it on top", "move the cup to the plate") is a place on top of it.
+
+    The hand hovers above a landmark, but what it lets go of comes to rest
+    on it: the executor sets it down on the top either way, and one meaning
+    has one command.
+    """
+    if command.procedure == "place_rel" and command.arg("relation") == "above":
+        return command.with_arg("relation", "on_top_of")
+    return command
 
 
 def _after(missing: str | None, question: str) -> str:

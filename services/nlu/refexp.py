@@ -142,7 +142,12 @@ class Scene:
         return vectors
 
     def _context(self, terms: tuple[Term, ...], base: frozenset[int]) -> frozenset[int]:
-        """The objects the colours and kinds among ``terms`` fit (all of ``base`` when they fit none)."""
+        """The objects the colours and kinds among ``terms`` fit, for their labels to pick among.
+
+        When colour and kind together fit nothing ("the small red box" with
+        only blue boxes and red cups), the kind alone decides, as the head of
+        the phrase, then the colour alone; all of ``base`` when neither fits.
+        """
         colors, types = set(), set()
         for term in terms:
             for meaning in _object_meanings(term):
@@ -150,7 +155,12 @@ class Scene:
                     colors.add(meaning.value)
                 elif meaning.slot == "type":
                     types.add(meaning.value)
-        return self.matching(colors, types) & base or base
+        for said_colors, said_types in ((colors, types), (set(), types), (colors, set())):
+            if said_colors or said_types:
+                fitting = self.matching(said_colors, said_types) & base
+                if fitting:
+                    return fitting
+        return base
 
     def _meaning_vector(self, meaning: Meaning, context: frozenset[int], last_object: int | None) -> np.ndarray:
         vector = np.zeros(self.n)

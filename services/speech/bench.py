@@ -34,6 +34,7 @@ from services.speech.corpus import PAPER, Item, corpus, held_out
 from services.speech.grammar import SceneWords
 from services.speech.recogniser import (
     ACOUSTIC_SCALE,
+    COMPOUND_PRIOR,
     OFF_GRAMMAR_PRIOR,
     PER_MEANING,
     Hypothesis,
@@ -44,6 +45,7 @@ from services.speech.vocabulary import nlu_vocabulary
 
 SCALES = (0.0, 0.01, 0.03, 0.1, 0.3, 1.0)
 OFF_GRAMMAR_PRIORS = (1.0, 0.3, 0.1, 0.03, 0.01)
+COMPOUND_PRIORS = (1.0, 0.5, 0.3, 0.1, 0.03)
 NLU_WEIGHTS = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0)
 REJECTION_THRESHOLDS = (0.03, 0.05, 0.1, 0.2, 0.3)
 TARGET_ACCURACY = 0.90
@@ -79,11 +81,12 @@ def rescored(
     scale: float = ACOUSTIC_SCALE,
     off_grammar: float = OFF_GRAMMAR_PRIOR,
     nlu_weight: float = NLU_WEIGHT,
+    compound: float = COMPOUND_PRIOR,
 ) -> Choice | None:
     """The NLU's choice from the n-best as the speech service would send it at these weights."""
     members = {h.text for h in outcome.hypotheses if h.in_grammar}
     results = {h.text: r for h, r in zip(outcome.hypotheses, outcome.results)}
-    nbest = posteriors({h.text: h.loglik for h in outcome.hypotheses}, scale, members, off_grammar)
+    nbest = posteriors({h.text: h.loglik for h in outcome.hypotheses}, scale, members, off_grammar, compound)
     return choose((Reading(h.text, h.score, results[h.text]) for h in nbest if h.score > 0), nlu_weight)
 
 
@@ -149,6 +152,10 @@ def report(outcomes: list[Outcome], vocabulary: str, title: str = "speech benchm
         accuracy = sum(_right(o, rescored(o, off_grammar=prior)) for o in outcomes) / n
         mark = "  <- OFF_GRAMMAR_PRIOR" if prior == OFF_GRAMMAR_PRIOR else ""
         print(f"  ... n-gram-only sentences weighted {prior:<5g} {accuracy:7.2%}{mark}")
+    for prior in COMPOUND_PRIORS:
+        accuracy = sum(_right(o, rescored(o, compound=prior)) for o in outcomes) / n
+        mark = "  <- COMPOUND_PRIOR" if prior == COMPOUND_PRIOR else ""
+        print(f"  ... two-step sentences weighted {prior:<5g}      {accuracy:7.2%}{mark}")
     for weight in NLU_WEIGHTS:
         accuracy = sum(_right(o, rescored(o, nlu_weight=weight)) for o in outcomes) / n
         mark = "  <- NLU_WEIGHT" if weight == NLU_WEIGHT else ""

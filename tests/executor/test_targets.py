@@ -214,3 +214,22 @@ def test_the_second_try_beside_a_landmark_swings_the_hand_slides_along_or_goes_f
     assert max(offsets) == pytest.approx(targets.ALONG) and targets.ALONG <= 0.05  # slid along, not past it
     # the hand comes at the spot from every side, the landmark's own included
     assert min(headings) < -0.9 and max(headings) > 0.9
+
+
+def test_a_square_box_off_to_the_side_is_squeezed_across_its_own_sides() -> None:
+    """A 7 cm box 30 cm right: 9.4 cm across at the heading from the robot, 7 cm across its sides."""
+    box = standing(0.61, -0.30, np.array([0.07, 0.07, 0.074]))
+    grasps = geo.grasp_candidates(box)
+    squeezed = []
+    for grasp in grasps:
+        rotation = geo.rotation_of(grasp.grasp)
+        fingers = rotation.apply([0.0, 1.0, 0.0])
+        squeezed.append(abs(fingers[0]) * box.size[0] + abs(fingers[1]) * box.size[1])
+    assert max(squeezed) <= geo.MAX_GRIP_WIDTH + 1e-9  # every grasp offered fits the open gripper
+    assert min(squeezed) == pytest.approx(0.07)
+    headings = {
+        tuple(np.round(geo.approach_axis(g.grasp)[:2], 2)) for g in grasps if abs(geo.approach_axis(g.grasp)[2]) < 0.1
+    }
+    assert {(1.0, 0.0), (0.0, 1.0), (0.0, -1.0)} <= headings  # from the front and from either side
+    tops = [g for g in grasps if geo.approach_axis(g.grasp)[2] < -0.99]
+    assert len(tops) >= 2  # from above, fingers across either pair of sides

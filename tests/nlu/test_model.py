@@ -257,7 +257,7 @@ def test_holding_turns_put_into_place_and_empty_hand_into_move() -> None:
         ("on the blue cup", "on_top_of"),
         ("in blue", "on_top_of"),
         ("next to the blue cup", "next_to"),
-        ("above blue", "above"),
+        ("above blue", "on_top_of"),
     ],
 )
 def test_holding_hand_turns_a_bare_destination_into_place(utterance: str, relation: str) -> None:

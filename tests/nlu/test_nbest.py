@@ -93,3 +93,11 @@ def test_a_compound_is_not_grouped_with_its_first_step(model: Model) -> None:
     )
     assert isinstance(choice.reading.result, CommandResult) and len(choice.reading.result.commands) == 2
     assert choice.share == pytest.approx(0.6)
+
+
+def test_a_stop_heard_clearly_enough_to_act_on_wins_over_likelier_commands(model: Model) -> None:
+    heard = (("pick up the red cup", 0.55), ("point at the red cup", 0.3), ("stop it", 0.15))
+    assert command(pick(model, *heard)) == {"procedure": "stop", "args": {}}
+    # below the share a command needs to be acted on, a stop is one more guess
+    faint = (("pick up the red cup", 0.95), ("stop", 0.05))
+    assert command(pick(model, *faint))["procedure"] == "pick_up"
