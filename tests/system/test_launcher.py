@@ -22,6 +22,13 @@ from shared.config import SessionOptions, free_port, loopback_options
 from tests.processes import ROOT, start_up
 
 
+def _run_module(*argv: str, timeout: float = 60) -> subprocess.CompletedProcess[str]:
+    """``python -m <argv>`` from the repository root, to its end, its output kept for the assertions."""
+    return subprocess.run(
+        [sys.executable, "-m", *argv], cwd=ROOT, capture_output=True, text=True, timeout=timeout, check=False
+    )
+
+
 def _wait(predicate, timeout: float) -> bool:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -75,14 +82,7 @@ def test_crashed_service_is_reported_and_restarted_and_stop_leaves_no_orphans(ro
 
 
 def test_unknown_service_is_refused(tmp_path: Path) -> None:
-    result = subprocess.run(
-        [sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", "nlu,teleporter"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=60,
-        check=False,
-    )
+    result = _run_module("hfpbd.launcher", "--headless", "--services", "nlu,teleporter")
     assert result.returncode != 0 and "unknown service(s) teleporter" in result.stderr
 
 
@@ -143,14 +143,7 @@ def test_a_second_robot_on_the_namespace_at_another_port_refuses_to_start(robot,
 def test_a_second_service_on_the_namespace_refuses_to_start(robot) -> None:
     _, bus = robot
     assert _wait(lambda: "nlu" in bus.alive_services(), 60)
-    result = subprocess.run(
-        [sys.executable, "-m", "services.nlu", *bus.options.to_argv()],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=90,
-        check=False,
-    )
+    result = _run_module("services.nlu", *bus.options.to_argv(), timeout=90)
     assert result.returncode == 3
     assert f"nlu is already running on namespace {bus.keys.namespace!r}" in result.stderr
     assert "Traceback" not in result.stderr
@@ -171,14 +164,7 @@ def test_services_end_with_the_launcher_however_it_ends(robot, sig: int) -> None
 
 
 def test_a_listener_beyond_loopback_needs_secure_or_insecure(tmp_path: Path) -> None:
-    result = subprocess.run(
-        [sys.executable, "-m", "hfpbd.launcher", "--headless", "--services", "nlu", "--listen", "tcp/0.0.0.0:7447"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=60,
-        check=False,
-    )
+    result = _run_module("hfpbd.launcher", "--headless", "--services", "nlu", "--listen", "tcp/0.0.0.0:7447")
     assert result.returncode == 2
     assert "--secure DIR" in result.stderr and "--insecure" in result.stderr and "Traceback" not in result.stderr
 
@@ -284,14 +270,7 @@ def test_secure_robot_listens_on_tls_loopback_by_default(tmp_path: Path) -> None
 def test_a_secure_router_in_clear_is_refused(tmp_path: Path) -> None:
     pki = tmp_path / "pki"
     init(pki, host="robot-host")
-    result = subprocess.run(
-        [sys.executable, "-m", "hfpbd.launcher", "--headless", "--secure", str(pki), "--listen", "tcp/127.0.0.1:7447"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=60,
-        check=False,
-    )
+    result = _run_module("hfpbd.launcher", "--headless", "--secure", str(pki), "--listen", "tcp/127.0.0.1:7447")
     assert result.returncode == 2
     assert "a listener of a session enforcing the roles must be tls/" in result.stderr
     assert "Traceback" not in result.stderr
