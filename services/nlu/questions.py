@@ -16,7 +16,7 @@ from services.nlu import relational
 from services.nlu.lexicon import NUMBER_WORDS
 from services.nlu.phrasing import either
 from services.nlu.results import Answer
-from services.nlu.tokens import canonical, read
+from services.nlu.tokens import Term, canonical, read
 from services.nlu.weights import MARGINS
 from shared.contract import ARMS
 
@@ -186,8 +186,7 @@ def _where(model: Model, phrase: str) -> str:
 def _meant(model: Model, phrase: str) -> list[int] | str:
     """The objects ``phrase`` fits best; the answer itself when it names nothing in view (or nothing at all)."""
     terms = read(phrase).terms
-    colors = {m.value for t in terms for r in t.readings for m in r if m.slot == "color"}
-    types = {m.value for t in terms for r in t.readings for m in r if m.slot == "type"}
+    colors, types = _said(terms, "color"), _said(terms, "type")
     words = " ".join(t.words for t in terms) or "that"
     if not (colors or types):
         return _scene(model)
@@ -197,6 +196,11 @@ def _meant(model: Model, phrase: str) -> list[int] | str:
     # "the cup closest to the plate": the relation decides among the cups, the plate is only its landmark
     grounding = model.scene.ground(relational.resolve(model.scene, terms, model.scene.last_object, phrase=True))
     return [i for i, p in enumerate(grounding) if p >= grounding.max() - 1e-6]
+
+
+def _said(terms: tuple[Term, ...], slot: str) -> set[str]:
+    """The colours (or kinds) the words name."""
+    return {str(m.value) for t in terms for r in t.readings for m in r if m.slot == slot}
 
 
 def _about_me(phrase: str) -> str:
@@ -228,8 +232,7 @@ def _reach(model: Model, phrase: str) -> str:
 def _count(model: Model, phrase: str) -> str:
     """How many objects of the kind (and colour) named are in view, and where each is."""
     terms = read(phrase).terms
-    colors = {m.value for t in terms for r in t.readings for m in r if m.slot == "color"}
-    types = {m.value for t in terms for r in t.readings for m in r if m.slot == "type"}
+    colors, types = _said(terms, "color"), _said(terms, "type")
     if not (colors or types):
         return _scene(model)
     matching = sorted(model.scene.matching(colors, types))
@@ -251,8 +254,7 @@ def _holding(model: Model) -> str:
             parts.append(f"my {arm} hand is holding something I can't see")
         else:
             parts.append(f"my {arm} hand is empty")
-    text = " and ".join(parts)
-    return text[0].upper() + text[1:] + "."
+    return _capital(" and ".join(parts) + ".")
 
 
 def _actions(model: Model, number_word: str | None) -> str:
