@@ -901,7 +901,13 @@ class Procedures:
         words: str,
     ) -> str:
         """Why no spot ``relation`` the landmark is free: the objects standing where the held one would go."""
-        taken = sorted({oid for _, release in candidates for oid in self._spot_taken_by(held, release, snap, on)})
+        taken = sorted(
+            {
+                oid
+                for _, release in candidates
+                for oid in self._spot_taken_by(held, release, snap, self._landing(held, release, snap, on))
+            }
+        )
         if not taken:
             return wording.sentence(
                 f"There is no room on the table {wording.RELATION_WORDS[relation]} {words}: it would be past the edge"
@@ -911,6 +917,15 @@ class Procedures:
         return wording.sentence(
             f"There is no free spot {wording.RELATION_WORDS[relation]} {words}: {' and '.join(names)} {verb} in the way"
         )
+
+    @classmethod
+    def _landing(cls, held: Held, release: np.ndarray, snap: SceneSnapshot, on: Collection[str]) -> tuple[str, ...]:
+        """What the held object released at ``release`` on top of ``on`` may stand over: those, and whatever is lower.
+
+        A cup set on a cup rests high above the plate beside it; the plate's
+        footprint takes no spot on top of that cup.
+        """
+        return (*on, *cls._flat_below(held, release, snap)) if on else ()
 
     @staticmethod
     def _flat_below(held: Held, release: np.ndarray, snap: SceneSnapshot) -> list[str]:
@@ -963,7 +978,9 @@ class Procedures:
         no_path = wording.sentence(f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}")
 
         def on_free_spots(pairs: list[tuple[np.ndarray, np.ndarray]]) -> list[tuple[np.ndarray, np.ndarray]]:
-            return [(h, r) for h, r in pairs if self._free_spot(held, r, snap, on, on_table=not on)]
+            return [
+                (h, r) for h, r in pairs if self._free_spot(held, r, snap, self._landing(held, r, snap, on), not on)
+            ]
 
         candidates = targets.place_relation(relation, box, kin.fk(), held, snap.table_z)
         pairs = on_free_spots(candidates)

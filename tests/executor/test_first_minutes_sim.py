@@ -85,3 +85,18 @@ def test_either_cup_on_the_plate_next_to_the_other_on_the_box_and_down(stack: St
         verdict = placed(truth, cup, relation or "down", landmark)
         assert verdict.success, verdict.reason
         assert stack.state["robot"]["grippers"][arm] == "open"
+
+
+@pytest.mark.parametrize("colour", list(CUPS))
+def test_either_cup_stacked_on_the_other_beside_the_plate(stack: Stack, colour: str) -> None:
+    """"Stack the cups": the plate beside the lower cup lies under the carried cup's bottom and is not in the way."""
+    cup, other, arm = CUPS[colour]
+    stack.load_scene("default")
+    said = stack.command("pick_up", {"arm": arm, "object": seen(stack, cup)})
+    assert texts(said, "error") == [], f"picking up the {colour} cup: {texts(said)}"
+    said = stack.command("place_rel", {"arm": arm, "relation": "on_top_of", "object": seen(stack, other)})
+    assert texts(said, "error") == [], f"stacking the {colour} cup: {texts(said)}; {scene(stack)}"
+    stack.settled()
+    truth = {oid: msgspec.convert(obj, TruthObject) for oid, obj in stack.truth.items()}
+    verdict = placed(truth, cup, "on_top_of", other)
+    assert verdict.success, verdict.reason
