@@ -27,12 +27,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from services.nlu.commands import Command
-from services.nlu.language import Match
+from services.nlu.language import Match, relation_at
 from services.nlu.prior import History
 from shared.contract import ARMS
 
 NAMING_SLOTS = frozenset({"type", "color", "anaphor", "generic"})  # words that name an object themselves
 DIRECTIONAL_MOVES = frozenset({"move_abs_dir", "move_rel_dir"})  # moves that can carry an object there
+# what a full hand does to the object it holds (a move of it, or its release)
+CARRYING_MOVES = DIRECTIONAL_MOVES | {"move_rel_dest", "place_abs", "place_rel"}
 
 if TYPE_CHECKING:
     from services.nlu.infer import Model
@@ -48,6 +50,8 @@ def situate(model: Model, command: Command, match: Match, history: History, said
     if command.procedure == "pick_up":
         already_held(model, command.procedure, match)
         return (command,)
+    if command.procedure in CARRYING_MOVES and holds(model, command.arg("arm")):
+        command = _hand_for_named(model, command, match, said_arm)
     if command.procedure in DIRECTIONAL_MOVES and not said_arm and _empty(model, command.arg("arm")):
         moved = _theme(model, command, match) if _names_an_object(match) else None
         if moved is not None and world.objects[moved].held_by is None and command.arg("direction") != "down":
@@ -69,6 +73,51 @@ def situate(model: Model, command: Command, match: Match, history: History, said
     if command.procedure == "place_rel":
         return (Command("move_rel_dest", command.args),)
     raise Refusal(f"My {command.arg('arm')} hand is not holding anything to put down.")
+
+
+def _hand_for_named(model: Model, command: Command, match: Match, said_arm: bool) -> Command:
+    """ "Put the red cup on the plate" while this hand holds the blue cup: the hand that holds, or can take, the red cup.
+
+    The words for what to carry outweigh the hand the prior chose: it is
+    the hand holding that object, else the empty other hand (which picks it
+    up, by the empty-hand rules); with both hands full, or that hand said,
+    it is refused. Putting it on an object a hand holds is refused too.
+    """
+    world = model.world
+    arm = command.arg("arm")
+    said_before = relation_at(match.terms)
+    theme = _unique(match.grounding(said_before), model)
+    in_hand = next((i for i, obj in enumerate(world.objects) if obj.held_by == arm), None)
+    if theme is None or theme == in_hand or not _names_by_kind(match, said_before):
+        return command
+    landmark = _unique(match.grounding_from(said_before), model)
+    if landmark is not None and world.objects[landmark].held_by is not None:
+        holder = world.objects[landmark].held_by
+        raise Refusal(
+            f"I am holding {model.scene.describe(landmark).text} in my {holder} hand."
+            f" Put it down first, then say it again."
+        )
+    holder = world.objects[theme].held_by
+    other = next(a for a in ARMS if a != arm)
+    if holder is None and _empty(model, other) and not said_arm:
+        return command.with_arg("arm", other)
+    if holder is not None and (holder == other) and not said_arm:
+        return command.with_arg("arm", other)
+    carrying = model.scene.describe(in_hand).text if in_hand is not None else "something"
+    named = model.scene.describe(theme).text
+    if holder is None and not said_arm:
+        raise Refusal(f"Both my hands are full. Put one down first, then I can take {named}.")
+    raise Refusal(f"My {arm} hand is holding {carrying}, not {named}.")
+
+
+def _names_by_kind(match: Match, upto: int) -> bool:
+    """Whether the terms before ``upto`` name an object by its kind, colour or position ("the left one"), not "it"."""
+    return any(
+        m.slot in NAMING_SLOTS - {"anaphor"}
+        for term in match.terms[:upto]
+        for reading in term.readings
+        for m in reading
+    )
 
 
 def _which_to_carry(model: Model, command: Command, match: Match) -> None:

@@ -28,9 +28,9 @@ CARRYING = MOVES | PLACES | {"rotate"}
 LANDMARKED = frozenset({"move_rel_dest", "move_rel_dir", "place_rel"})
 
 
-def _is_relational(term: Term) -> bool:
-    """A relation or object-relative direction: what follows it is a landmark."""
-    return term.words in LANDMARK_PHRASES
+def relation_at(terms: tuple[Term, ...]) -> int:
+    """Where the first relation or object-relative direction is (what follows it is a landmark); else the end."""
+    return next((i for i, term in enumerate(terms) if term.words in LANDMARK_PHRASES), len(terms))
 
 
 @dataclass
@@ -46,6 +46,11 @@ class Match:
     def grounding(self, upto: int | None = None) -> np.ndarray | None:
         """The summed object-word scores per object (of the terms before ``upto``); None when none was said."""
         vectors = [v for i, v in self.object_vectors.items() if upto is None or i < upto]
+        return np.sum(vectors, axis=0) if vectors else None
+
+    def grounding_from(self, start: int) -> np.ndarray | None:
+        """The summed object-word scores per object of the terms from ``start`` on (a landmark's words)."""
+        vectors = [v for i, v in self.object_vectors.items() if i >= start]
         return np.sum(vectors, axis=0) if vectors else None
 
 
@@ -104,7 +109,7 @@ class Index:
         Object words before the first relation or direction ("move *the red cup* above the plate") are the
         theme: they may name what the commanding hand holds. Words after it name the landmark only.
         """
-        theme_end = next((i for i, term in enumerate(terms) if _is_relational(term)), len(terms))
+        theme_end = relation_at(terms)
         object_vectors = self.scene.term_vectors(terms, within, last_object, theme_end)
         total = np.zeros(len(self.commands))
         for index, term in enumerate(terms):
@@ -136,7 +141,7 @@ class Index:
         phrases: dict[str, str] = {}
         object_words: list[str] = []
         obj = self.object[command_index]
-        theme_end = next((i for i, term in enumerate(match.terms) if _is_relational(term)), len(match.terms))
+        theme_end = relation_at(match.terms)
         for index, term in enumerate(match.terms):
             best_score = 0.0
             best_slots: tuple[str, ...] = ()

@@ -89,7 +89,7 @@ def test_either_cup_on_the_plate_next_to_the_other_on_the_box_and_down(stack: St
 
 @pytest.mark.parametrize("colour", list(CUPS))
 def test_either_cup_stacked_on_the_other_beside_the_plate(stack: Stack, colour: str) -> None:
-    """"Stack the cups": the plate beside the lower cup lies under the carried cup's bottom and is not in the way."""
+    """ "Stack the cups": the plate beside the lower cup lies under the carried cup's bottom and is not in the way."""
     cup, other, arm = CUPS[colour]
     stack.load_scene("default")
     said = stack.command("pick_up", {"arm": arm, "object": seen(stack, cup)})

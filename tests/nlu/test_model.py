@@ -282,6 +282,22 @@ def test_held_object_named_by_its_words() -> None:
     assert command("put the red cup down", scene) == {"procedure": "place_abs", "arm": "right", "destination": "table"}
 
 
+def test_an_object_named_with_both_hands_full_is_refused_saying_why() -> None:
+    scene = table_scene(grippers={"right": "holding", "left": "holding"})
+    scene["objects"][0]["held_by"] = "right"
+    scene["objects"][1]["held_by"] = "left"
+    result = parse("put the box on the plate", scene)
+    assert isinstance(result, Clarify)
+    assert result.question == "Both my hands are full. Put one down first, then I can take the box."
+    # what a hand holds is still put down by its words
+    assert command("put the blue cup on the plate", scene) == {
+        "procedure": "place_rel",
+        "arm": "left",
+        "relation": "on_top_of",
+        "object": "obj3",
+    }
+
+
 def test_unreachable_object_is_avoided_by_arm() -> None:
     scene = table_scene()
     scene["objects"][1]["reach"] = {"right": {"pick_up": False}, "left": {"pick_up": True}}
