@@ -47,7 +47,7 @@ from services.executor.commands import ADMIN, BOTH, RECORDED, CommandError, Step
 from services.executor.grounding import Regrounding, reground
 from services.executor.interrupted import InProgress, interrupted_sentence
 from services.executor.kinematics import ArmKinematics, joint_names
-from services.executor.procedures import Done, Procedures, StepFailed
+from services.executor.procedures import Procedures, StepFailed
 from services.executor.reach import reach_map
 from services.executor.referring import refer
 from services.executor.robot import SimRobot, Stopped
@@ -412,12 +412,11 @@ class Executor:
                     procedure, args, context.get("phrases"), lambda oid: refer(snap.objects, oid), held=held_words
                 )
             )
-        method = getattr(self.procedures, procedure)
         kwargs = dict(args)
         if preferred is not None and procedure == "move_rel_dest":
             kwargs["preferred"] = preferred
         try:
-            done: Done = method(**kwargs)
+            done = self.procedures.run(procedure, kwargs)
         except Stopped:
             self.say("Stopped.", "info")
             return False

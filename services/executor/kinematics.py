@@ -208,6 +208,9 @@ class ArmKinematics:
         self._obstacle_boxes: dict[str, Box] = {}
         # the objects straight lines were found to run into, since last cleared: what a failure can be blamed on
         self.lines_blocked_by: set[str] = set()
+        # whether a pose checked since last cleared touched the other arm: that arm standing aside may help
+        self.other_arm_met = False
+        self._other_arm_prefix = f"{PREFIX[next(a for a in PREFIX if a != arm)]}_"
         self.held: str | None = None
         self._build_seeds(seeds, rng_seed)
         mplib.set_global_seed(rng_seed + 1)  # (OMPL refuses 0) OMPL's sampling: the same request plans the same path
@@ -348,7 +351,10 @@ class ArmKinematics:
         """Colliding pairs (robot links, obstacles, held object) at ``arm_q``."""
         world = self.planner.planning_world
         self.planner.robot.set_qpos(self.full(arm_q), True)
-        return [(c.link_name1 or c.object_name1, c.link_name2 or c.object_name2) for c in world.check_collision()]
+        pairs = [(c.link_name1 or c.object_name1, c.link_name2 or c.object_name2) for c in world.check_collision()]
+        if any(name.startswith(self._other_arm_prefix) for pair in pairs for name in pair):
+            self.other_arm_met = True
+        return pairs
 
     def within_limits(self, arm_q: np.ndarray) -> bool:
         lim = self.limits[self.arm_idx]

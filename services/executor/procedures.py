@@ -59,6 +59,12 @@ PICK_ATTEMPTS = 3  # grasps tried in turn (an approach found blocked on arrival 
 FLAT_MARGIN = 0.01  # metres: how far a "flat" object's top may reach above a released object's bottom
 PRESS_KEPT = 0.03  # metres between the measured and the commanded tool position of a hand still pressing
 AWAY = -0.5  # cosine between a move and the press direction below which the move leaves the object
+# the procedures for which an idle other arm in the way stands aside, and the step is tried once more
+MAKES_ROOM_FOR = frozenset(
+    {"pick_up", "place_abs", "place_rel", "move_rel_dest", "move_rel_dir", "move_abs_dir", "point_to"}
+)
+STILL = 0.01  # rad: an arm whose joints moved less than this during a failed step did not move
+AT_SIDE = 0.05  # rad: an arm within this of its side posture already stands aside
 
 
 @dataclass(frozen=True)
@@ -124,6 +130,55 @@ class Procedures:
         if held is None:
             return None
         return refer(snap.objects, held.object_id, held.seen_as)
+
+    # -- running one procedure -------------------------------------------------------------
+    def run(self, procedure: str, args: dict[str, Any]) -> Done:
+        """Run ``procedure``; when it failed before moving and the other, empty arm was in its way, that arm
+        moves to the side and it is tried once more.
+
+        After one hand has worked in the middle of the table, its arm stays
+        where it let go, across the other hand's way to the box or plate in
+        front of it; a person would expect the robot to move it aside.
+        """
+        method = getattr(self, procedure)
+        arm = args.get("arm")
+        if procedure not in MAKES_ROOM_FOR or arm not in ARMS:
+            return method(**args)
+        kin = self.arms[arm]
+        kin.other_arm_met = False
+        before = self._snapshot().joints()
+        try:
+            return method(**args)
+        except StepFailed as failed:
+            if not (kin.other_arm_met and self._still(arm, before) and self._can_stand_aside(other_arm(arm))):
+                raise
+            self._stand_aside(other_arm(arm), failed)
+        done: Done = method(**args)
+        done.message = " ".join(filter(None, [f"I moved my {other_arm(arm)} hand aside to make room.", done.message]))
+        return done
+
+    def _still(self, arm: str, before: dict[str, float]) -> bool:
+        """Whether ``arm`` is where it was (joints ``before``): a step that failed without moving it."""
+        now = self._snapshot().joints()
+        return all(abs(now.get(name, 0.0) - before.get(name, 0.0)) < STILL for name in ROBOT.arm_joint_names(arm))
+
+    def _can_stand_aside(self, arm: str) -> bool:
+        """Whether ``arm`` is free to move to the side: empty, pressing nothing, and not there already."""
+        snap = self._snapshot()
+        if self.held()[arm] is not None or self._press[arm] is not None or snap.gripper_state(arm) == "holding":
+            return False
+        side = np.asarray(ROBOT.arm_pose("side", arm), float)
+        joints = snap.joints()
+        now = np.array([joints.get(name, 0.0) for name in ROBOT.arm_joint_names(arm)])
+        return bool(np.max(np.abs(now - side)) > AT_SIDE)
+
+    def _stand_aside(self, arm: str, failed: StepFailed) -> None:
+        """Move the empty ``arm`` to the side so the other can try again; where it cannot, the first failure stands."""
+        log.info("the %s arm was in the other's way: it moves to the side and the step is tried again", arm)
+        try:
+            self.move_abs_dest(arm)
+        except StepFailed:
+            raise failed from None
 
     # -- preconditions -----------------------------------------------------------------
     def precheck(self, procedure: str, args: dict[str, Any]) -> None:

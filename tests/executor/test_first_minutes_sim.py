@@ -100,3 +100,23 @@ def test_either_cup_stacked_on_the_other_beside_the_plate(stack: Stack, colour: 
     truth = {oid: msgspec.convert(obj, TruthObject) for oid, obj in stack.truth.items()}
     verdict = placed(truth, cup, "on_top_of", other)
     assert verdict.success, verdict.reason
+
+
+def test_a_hand_in_the_others_way_stands_aside(stack: Stack) -> None:
+    """The right hand lets go of the red cup on the plate and stays there, across the left hand's way to the box:
+    the left hand's place on the box moves the empty right arm to the side first, and says so."""
+    stack.load_scene("default")
+    red, blue, _ = CUPS["red"]
+    for arm, cup in (("left", blue), ("right", red)):
+        said = stack.command("pick_up", {"arm": arm, "object": seen(stack, cup)})
+        assert texts(said, "error") == [], f"picking up {cup} with the {arm} hand: {texts(said)}"
+    said = stack.command("place_rel", {"arm": "right", "relation": "on_top_of", "object": seen(stack, PLATE)})
+    assert texts(said, "error") == [], f"the red cup on the plate: {texts(said)}"
+    said = stack.command("place_rel", {"arm": "left", "relation": "on_top_of", "object": seen(stack, BOX)})
+    assert texts(said, "error") == [], f"the blue cup on the box: {texts(said)}; {scene(stack)}"
+    assert "I moved my right hand aside to make room." in texts(said, "info")
+    stack.settled()
+    truth = {oid: msgspec.convert(obj, TruthObject) for oid, obj in stack.truth.items()}
+    for cup, landmark in ((red, PLATE), (blue, BOX)):
+        verdict = placed(truth, cup, "on_top_of", landmark)
+        assert verdict.success, verdict.reason
