@@ -35,6 +35,7 @@ import numpy as np
 from services.perception.cloud import CloudError, camera_position
 from services.perception.pipeline import Settings, detect
 from services.perception.robot_mask import hides, segments_from_states
+from services.perception.table_edges import TableExtent, widest
 from services.perception.tracking import Tracker, TrackSettings
 from shared.bus import Bus
 from shared.codec import MessageError
@@ -45,6 +46,7 @@ log = logging.getLogger("hfpbd.perception")
 OK = "ok"
 SETTLE_DISTANCE = 0.01  # m two frames' positions may differ and still agree
 STATE_HISTORY = 50  # sim/state messages kept (2 s at 25 Hz) to find the ones around a cloud
+TABLE_MOVED = 0.02  # m the table top's height may change before its extent seen so far is forgotten
 
 
 @dataclass(frozen=True)
@@ -76,6 +78,7 @@ class PerceptionService:
         self._stopped = False
         self._objects: list[dict] = []
         self._table: dict | None = None
+        self._table_seen: TableExtent | None = None  # the table's extent as far out as it was seen in this scene
         self._frames: deque[Frame] = deque(maxlen=8)
         self._since_load = 0  # frames processed since the tracker last forgot everything
         self._changed = threading.Condition()
@@ -132,6 +135,7 @@ class PerceptionService:
         if scene is not None and scene != self._scene and self._scene is not None:
             log.info("scene %s loaded (load %s): forgetting every object", *scene)
             self.tracker.reset()
+            self._table_seen = None
             self._since_load = 0
         self._since_load += 1
         self._scene = scene if scene is not None else self._scene
@@ -145,11 +149,15 @@ class PerceptionService:
         )
         plane = detection.plane
         centre = detection.table_outline.mean(axis=0)
+        height = round(plane.z_at(float(centre[0]), float(centre[1])), 4)
+        if self._table is not None and abs(height - self._table["height"]) > TABLE_MOVED:
+            self._table_seen = None
+        self._table_seen = widest(self._table_seen, detection.table_extent)
         self._table = {
-            "height": round(plane.z_at(float(centre[0]), float(centre[1])), 4),
+            "height": height,
             "normal": [round(float(v), 4) for v in plane.normal],
             "outline": np.round(detection.table_outline, 3).tolist(),
-            **detection.table_extent.message(),
+            **self._table_seen.message(),
         }
         self._publish(cloud.stamp, OK, cloud.sim_time)
 

@@ -42,12 +42,8 @@ class Stack:
         self.truth_at = 0.0  # when the newest truth arrived (monotonic seconds)
         self.hub.subscribe(keys.truth, self._on_truth, latest_only=True)
         self.hub.subscribe(keys.sim_state, lambda m: self._store("robot", m), latest_only=True)
-        self.hub.subscribe(
-            keys.objects,
-            lambda m: self._store("objects", {o["id"]: o for o in m["objects"]}),
-            latest_only=True,
-            history=True,
-        )
+        self.table: dict[str, Any] | None = None  # perception's latest view of the table
+        self.hub.subscribe(keys.objects, self._on_objects, latest_only=True, history=True)
 
     # -- processes -------------------------------------------------------------------
     def start(self) -> None:
@@ -67,6 +63,12 @@ class Stack:
     def _store(self, name: str, value: Any) -> None:
         with self._changed:
             setattr(self, name, value)
+            self._changed.notify_all()
+
+    def _on_objects(self, message: dict[str, Any]) -> None:
+        with self._changed:
+            self.objects = {o["id"]: o for o in message["objects"]}
+            self.table = message.get("table", self.table)
             self._changed.notify_all()
 
     def _on_truth(self, message: dict[str, Any]) -> None:

@@ -21,6 +21,7 @@ pytestmark = pytest.mark.slow
 CUPS = {"red": ("obj0", "obj1", "right"), "blue": ("obj1", "obj0", "left")}
 PLATE, BOX = "obj3", "obj2"
 LIFTED = 0.06  # metres above where it stood: the pick-up lifted it
+NEAR_EDGE = 0.35  # metres: x of the table's edge facing the robot (services/sim/layout.py)
 SEEN_WITHIN = 0.08  # metres: perception places a cup standing on a plate or box a few centimetres off
 
 
@@ -110,6 +111,9 @@ def test_a_hand_in_the_others_way_stands_aside(stack: Stack) -> None:
     for arm, cup in (("left", blue), ("right", red)):
         said = stack.command("pick_up", {"arm": arm, "object": seen(stack, cup)})
         assert texts(said, "error") == [], f"picking up {cup} with the {arm} hand: {texts(said)}"
+    # both arms held up in front of the camera hide the table's near part; its near edge is where it was seen
+    stack.settled()
+    assert stack.table is not None and stack.table["edges"]["near"] == pytest.approx(NEAR_EDGE, abs=0.01)
     said = stack.command("place_rel", {"arm": "right", "relation": "on_top_of", "object": seen(stack, PLATE)})
     assert texts(said, "error") == [], f"the red cup on the plate: {texts(said)}"
     said = stack.command("place_rel", {"arm": "left", "relation": "on_top_of", "object": seen(stack, BOX)})

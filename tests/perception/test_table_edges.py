@@ -6,6 +6,7 @@ import pytest
 
 from services.perception.pipeline import detect
 from services.perception.synthetic import Box, Camera, Scene, render
+from services.perception.table_edges import widest
 
 pytestmark = pytest.mark.unit
 
@@ -34,3 +35,20 @@ def test_an_object_over_the_near_edge_does_not_move_it() -> None:
     plate = Box((0.48, 0.05, 0.756), (0.22, 0.22, 0.012), "blue")
     extent = detect(render(Scene([plate], table_x=(0.45, 1.05)), Camera())).table_extent
     assert extent.edges["near"] == pytest.approx(0.45, abs=0.004)
+
+
+def test_an_edge_hidden_for_a_while_stays_where_it_was_seen() -> None:
+    """Something held up in front of the camera (an arm with a cup) hides the near part of the table.
+
+    In that view alone the near edge seems to lie where the shadow begins;
+    the table as seen so far keeps it where it was seen before.
+    """
+    table = dict(table_x=(0.45, 1.05), table_y=(-0.30, 0.35))
+    clear = detect(render(Scene([CUP], **table))).table_extent
+    held_up = Box((0.55, 0.0, 1.00), (0.14, 0.70, 0.04), "grey")
+    hidden = detect(render(Scene([CUP, held_up], **table))).table_extent
+    assert hidden.bounds[0, 0] > 0.47, "the occluder should hide the near edge in this view"
+    kept = widest(clear, hidden)
+    assert kept.edges["near"] == pytest.approx(0.45, abs=0.004)
+    assert kept.bounds[0, 0] == pytest.approx(clear.bounds[0, 0])
+    assert widest(None, hidden) is hidden
