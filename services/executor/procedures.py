@@ -96,6 +96,7 @@ class Done:
     landmark: dict[str, Any] | None = None
     relative_pose: list[float] | None = None
     extra: dict[str, Any] = field(default_factory=dict)
+    released: np.ndarray | None = None  # where a placed object's centre was let go (base frame)
 
 
 class Procedures:
@@ -892,6 +893,8 @@ class Procedures:
             )
         if done is None:
             raise StepFailed(wording.sentence(f"I can't lower my {arm} hand to put it down {where}"))
+        if done.released is not None:
+            done.message = wording.set_down_elsewhere(held.center_at(first[1]) - done.released)
         return done
 
     @staticmethod
@@ -1178,7 +1181,9 @@ class Procedures:
                 )
                 continue
             self._go(arm, descent)
-            return self._release(arm, held)
+            done = self._release(arm, held)
+            done.released = held.center_at(release)
+            return done
         return None
 
     def put_back(self, arm: str, center: np.ndarray) -> Done:

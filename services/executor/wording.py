@@ -10,7 +10,7 @@ moved. Failures name the arm, the place and the object, never a bare
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 
 from shared import contract
 
@@ -24,6 +24,9 @@ DESTINATION_WORDS = {
     name: contract.VALUE_WORDS[name] for name in (*contract.MOVE_DESTINATIONS, *contract.PLACE_DESTINATIONS)
 }
 VOWELS = set("aeiou")
+NOTED_SHIFT = 0.03  # metres off the spot right below the hand a put-down is told, along either table axis
+# (axis of the base frame, sign) -> direction word: +x away from the robot, +y to its left
+TABLE_DIRECTIONS = {(0, 1): "forward", (0, -1): "backward", (1, 1): "left", (1, -1): "right"}
 
 
 def gerund(verb: str) -> str:
@@ -159,3 +162,21 @@ def gone(obj_words: str) -> str:
 
 def unknown_object(object_id: str) -> str:
     return sentence(f'I don\'t know any object called {object_id!r}; say "record" to look at the table again')
+
+
+def set_down_elsewhere(below_minus_released: Sequence[float]) -> str:
+    """What to say when a put-down went off the spot right below the hand (that spot was taken or out of reach).
+
+    ``below_minus_released``: the spot right below less where the object was
+    let go. A few centimetres are not worth a word; more are, so the user is
+    not surprised to find it there.
+    """
+    parts = []
+    for axis in (0, 1):
+        offset = -float(below_minus_released[axis])
+        if abs(offset) >= NOTED_SHIFT:
+            word = DIRECTION_WORDS[TABLE_DIRECTIONS[(axis, 1 if offset > 0 else -1)]]
+            parts.append(f"{round(100 * abs(offset))} cm {word}")
+    if not parts:
+        return ""
+    return f"I couldn't put it down right below my hand, so I set it down {' and '.join(parts)}."

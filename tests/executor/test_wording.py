@@ -113,3 +113,18 @@ def test_an_object_perception_lost_is_named_by_its_kind_and_never_by_its_id() ->
     cup = PerceivedObject(id="obj5", color="red", type="cup", position=(0.6, 0.2, 0.9), size=(0.07, 0.07, 0.1))
     assert name_object({}, "obj5", cup) == "the red cup"
     assert "obj5" not in name_object({}, "obj5")
+
+
+@pytest.mark.parametrize(
+    "below_minus_released, said",
+    [
+        ((0.0, 0.13, 0.0), "I couldn't put it down right below my hand, so I set it down 13 cm to the right."),
+        (
+            (-0.05, -0.04, 0.0),
+            "I couldn't put it down right below my hand, so I set it down 5 cm forward and 4 cm to the left.",
+        ),
+        ((0.02, -0.01, 0.0), ""),
+    ],
+)
+def test_a_put_down_off_the_spot_below_says_where_it_went(below_minus_released: tuple, said: str) -> None:
+    assert wording.set_down_elsewhere(below_minus_released) == said
