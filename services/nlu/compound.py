@@ -13,9 +13,10 @@ import re
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
-from services.nlu import tokens
+from services.nlu import pairs, tokens
 from services.nlu.commands import Command
 from services.nlu.lexicon import LANDMARK_PHRASES, OBJECT_SLOTS, PHRASES
+from services.nlu.phrasing import command_text
 from services.nlu.prior import History
 from services.nlu.results import Clarify, CommandResult, Result
 from services.nlu.weights import LANGUAGE
@@ -39,6 +40,7 @@ _HAND_WORDS = frozenset({"all", "right"})  # "right move up" names a hand; only 
 _JOINS = re.compile(r"\b(?:and|then|after|afterwards|next)\b|[,;.]")
 SPOKEN_JOINS = ("and then",)  # how steps are joined aloud, for a speech grammar (a bare "then" is heard in "the")
 MAX_STEPS = 6  # more than this in one breath is almost surely pasted text
+ONE_OBJECT = frozenset({"pick_up", "point_to", "look_at"})  # procedures whose only argument besides a hand is an object
 
 
 def split(text: str) -> list[str]:
@@ -56,6 +58,10 @@ def split(text: str) -> list[str]:
                 merged.append(piece)
             elif _object_and_place(piece) and (said := _verb(merged[-1])) is not None:
                 merged.append(f"{said} {piece}")  # "put the red cup on the plate and the blue cup on the box"
+            elif (
+                _only_an_object(piece) and (said := _verb(merged[-1])) is not None and _one_object_of(merged[-1], said)
+            ):
+                merged.append(f"{said} {piece}")  # "pick up the red cup and the blue cup"
             else:
                 merged[-1] = f"{merged[-1]} and {piece}"  # "between the cup and the box"
         parts.extend(merged)
@@ -107,6 +113,27 @@ def _object_and_place(text: str) -> bool:
     return place > 0 and any(m.slot in OBJECT_SLOTS for term in terms[:place] for r in term.readings for m in r)
 
 
+def _only_an_object(text: str) -> bool:
+    """Whether a part with no verb only names an object ("the blue cup", "the box"), no place or direction."""
+    terms = tokens.read(text).terms
+    return bool(terms) and all(
+        term.words not in LANDMARK_PHRASES and all(m.slot in OBJECT_SLOTS for r in term.readings for m in r)
+        for term in terms
+    )
+
+
+def _one_object_of(part: str, verb: str) -> bool:
+    """Whether ``part`` acts on one object and nothing else (pick up, point at, look at; no relation said): an
+    object joined to it by "and" is the same verb again, where a place's or a move's is part of where it goes
+    and "the cup between the plate and the box" is one object."""
+    procedures = {p for r in PHRASES.get(verb, ()) for m in r if m.slot == "procedure" for p in m.value}
+    relation = any(
+        term.words in LANDMARK_PHRASES or any(m.slot == "relate" for r in term.readings for m in r)
+        for term in tokens.read(part).terms
+    )
+    return bool(procedures) and procedures <= ONE_OBJECT and not relation
+
+
 def run(model: Model, parts: list[str], history: History) -> Result:
     """Understand the parts in order, each in the world the ones before leave."""
     if len(parts) > MAX_STEPS:
@@ -114,6 +141,7 @@ def run(model: Model, parts: list[str], history: History) -> Result:
     commands: list[Command] = []
     texts: list[str] = []
     score, confidence = 0.0, 1.0
+    arm_said = False
     current = model
     for part in parts:
         result = current.parse_step(part, history)
@@ -129,6 +157,7 @@ def run(model: Model, parts: list[str], history: History) -> Result:
                 )
             return result
         commands.extend(result.commands)
+        arm_said = arm_said or "arm" in result.phrases
         texts.append(result.text)
         score += result.score
         confidence *= result.confidence
@@ -137,6 +166,8 @@ def run(model: Model, parts: list[str], history: History) -> Result:
             history = history.after(command, world)
             world = after(world, command)
         current = type(model)(world)
+    if not arm_said and (each := pairs.uncrossed(model.world, commands)) != commands:
+        commands, texts = each, [command_text(command, model.scene) for command in each]
     return CommandResult(commands[0], confidence, ", then ".join(texts), {}, score, tuple(commands[1:]))
 
 

@@ -9,9 +9,12 @@ to rephrase (``params`` empty).
 
 from __future__ import annotations
 
+import re
+from dataclasses import replace
+
 import numpy as np
 
-from services.nlu import compound, hands, modifiers, questions, relational, sayings, stacking
+from services.nlu import compound, hands, modifiers, pairs, questions, relational, sayings, stacking
 from services.nlu.commands import NUMBER, PROCEDURES, Command
 from services.nlu.language import Index, Match
 from services.nlu.lexicon import OBJECT_SLOTS
@@ -30,6 +33,7 @@ __all__ = ["Answer", "Clarify", "CommandResult", "Model", "Result"]
 
 MAX_WORDS = 60  # a few steps at a time; longer input is almost surely pasted text
 MAX_CHARS = 400
+_THEM = re.compile(r"\b(?:them|both of them)\b")  # the objects in both hands, when both hold one
 
 
 class Model:
@@ -80,6 +84,8 @@ class Model:
         """One command: the model's choice, with the distance and "both hands" said put into it."""
         if among is None and (stacked := stacking.spelled_out(self, text, history)) is not None:
             return stacked
+        if among is None and (each := pairs.spelled_out(self, text)) is not None:
+            return each
         if among is None and (why := unsupported(text)) is not None:
             return Clarify([], why)
         said = modifiers.extract(
@@ -87,6 +93,8 @@ class Model:
         )
         if said.problem is not None:
             return Clarify(["distance"], said.problem)
+        if _THEM.search(said.text) and all(hands.holds(self, arm) for arm in ARMS):
+            said = replace(said, both=True)  # "put them on the plate" with a cup in each hand: each in turn
         result = self._understand(said.text, history, among, focus)
         first = (
             result.command
@@ -120,12 +128,13 @@ class Model:
         return result
 
     def _each_hand_in_turn(self, command: Command, score: float) -> CommandResult | None:
-        """ "Put both down" with something in each hand: the right hand's place, then the left's.
+        """ "Put both down", "put them on the plate" with something in each hand: the right hand's place, then
+        the left's.
 
         A place is done with one hand at a time (DESIGN.md), but with both
         hands full "both" leaves no doubt which objects are meant.
         """
-        if command.procedure != "place_abs" or not all(hands.holds(self, arm) for arm in ARMS):
+        if command.procedure not in ("place_abs", "place_rel") or not all(hands.holds(self, arm) for arm in ARMS):
             return None
         steps = [command.with_arg("arm", arm) for arm in ARMS]
         text = ", then ".join(command_text(step, self.scene) for step in steps)

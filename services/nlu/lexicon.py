@@ -428,6 +428,10 @@ TYPE_WORDS: dict[str, str] = {
     "saucer": "plate",
     "bowl": "bowl",
 }
+# "cups", "boxes", "dishes": a kind said in the plural (several objects meant at once)
+PLURAL_TYPE_WORDS: dict[str, str] = {
+    f"{word}es" if word.endswith(("x", "ss", "sh")) else f"{word}s": kind for word, kind in TYPE_WORDS.items()
+}
 
 FILLERS = frozenset(
     "please now could can would will you your my the a an robot kindly just then and ok okay hey with of at "

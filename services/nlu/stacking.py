@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 from services.nlu import hands
 from services.nlu.commands import Command
-from services.nlu.lexicon import TYPE_WORDS
+from services.nlu.lexicon import PLURAL_TYPE_WORDS, TYPE_WORDS
 from services.nlu.phrasing import command_text
 from services.nlu.prior import History
 from services.nlu.results import Clarify, CommandResult, Result
@@ -26,8 +26,7 @@ from shared.contract import other_arm
 if TYPE_CHECKING:
     from services.nlu.infer import Model
 
-_PLURALS = {f"{word}es" if word.endswith(("x", "ss", "sh")) else f"{word}s": kind for word, kind in TYPE_WORDS.items()}
-_KINDS = "|".join(sorted((*_PLURALS, *TYPE_WORDS), key=len, reverse=True))
+_KINDS = "|".join(sorted((*PLURAL_TYPE_WORDS, *TYPE_WORDS), key=len, reverse=True))
 _ON_EACH_OTHER = r"(?: up)?(?: on(?: top of)? (?:each other|one another)| one on(?: top of)? the other| together)?"
 _SAID = (
     # "stack the cups", "stack both boxes on top of each other", "pile up the two mugs"
@@ -46,15 +45,20 @@ _SAID = (
 SAME_SIZE = 0.1  # volumes within this share of each other: neither is the obvious base
 
 
+def plain(text: str) -> str:
+    """``text`` in lower case without punctuation or a polite opening or ending ("please", "ok")."""
+    said = re.sub(r"[^a-z ]", "", text.lower()).strip()
+    return re.sub(r"^(?:please |robot |now |ok |okay )+|(?: please)$", "", said)
+
+
 def kind_named(text: str) -> str | None:
     """The kind of object ``text`` asks to stack ("cup" for "stack the mugs"), or None when it asks something else."""
-    said = re.sub(r"[^a-z ]", "", text.lower()).strip()
-    said = re.sub(r"^(?:please |robot |now |ok |okay )+|(?: please)$", "", said)
+    said = plain(text)
     for pattern in _SAID:
         match = pattern.match(said)
         if match is not None:
             word = match.group("kind")
-            return _PLURALS.get(word) or TYPE_WORDS[word]
+            return PLURAL_TYPE_WORDS.get(word) or TYPE_WORDS[word]
     return None
 
 

@@ -289,6 +289,11 @@ def test_an_object_named_with_both_hands_full_is_refused_saying_why() -> None:
     result = parse("put the box on the plate", scene)
     assert isinstance(result, Clarify)
     assert result.question == "Both my hands are full. Put one down first, then I can take the box."
+    # "them": what both hands hold, each put down in turn
+    result = parse("put them down", scene)
+    assert isinstance(result, CommandResult)
+    assert [dict(c.args)["arm"] for c in result.commands] == ["right", "left"]
+    assert {c.procedure for c in result.commands} == {"place_abs"}
     # what a hand holds is still put down by its words
     assert command("put the blue cup on the plate", scene) == {
         "procedure": "place_rel",
