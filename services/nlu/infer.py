@@ -216,6 +216,12 @@ class Model:
         labels = [command_text(c, self.scene) for c in candidates]
         procedure = candidates[0].procedure
         params = [p for p in PROCEDURES[procedure] if len({c.arg(p) for c in candidates}) > 1]
+        if "arm" in params and "object" in params and not _names_a_hand(match):
+            candidates = _best_hand_each(candidates)  # the object decides the hand: ask only which object
+            labels = [command_text(c, self.scene) for c in candidates]
+            params = [p for p in params if p != "arm" or len({c.arg("arm") for c in candidates}) > 1]
+            if "arm" in params and len({c.arg("object") for c in candidates}) == len(candidates):
+                params.remove("arm")
         if params == ["arm"] and procedure in {*PLACES, "move_rel_dest", "move_abs_dir"}:  # a pick-up first decides
             situated = self._situated(candidates[0], {}, confidence, best_score, match, history)
             if isinstance(situated, CommandResult) and situated.command.procedure == "pick_up":
@@ -330,6 +336,23 @@ def qualify(result: CommandResult, said: modifiers.Modifiers, scene: Scene) -> R
     phrases = {k: v for k, v in result.phrases.items() if not (k == "arm" and said.both)}
     text = command_text(command, scene, phrases)
     return CommandResult(command, result.confidence, text, phrases, result.score, result.then)
+
+
+def _names_a_hand(match: Match) -> bool:
+    """Whether the words name a hand ("with your left hand"): then the hand is no part of a question's answer."""
+    return any(m.slot == "arm" for term in match.terms for reading in term.readings for m in reading)
+
+
+def _best_hand_each(candidates: list[Command]) -> list[Command]:
+    """One candidate per object, with the hand ranked first for it (the hand on its side, or the last used).
+
+    "Grab the cup" with a cup on each side is a question about the cup only:
+    once the cup is known, so is the hand.
+    """
+    chosen: dict[object, Command] = {}
+    for command in candidates:
+        chosen.setdefault(command.arg("object"), command)
+    return list(chosen.values())
 
 
 def _one_handed(command: Command, scene: Scene, score: float) -> Clarify | None:

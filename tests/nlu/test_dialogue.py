@@ -132,3 +132,15 @@ def test_a_bare_object_after_a_placement_or_first_is_still_asked_about() -> None
     assert isinstance(dialogue.understand(model, "the red cup"), Clarify)
     assert isinstance(dialogue.understand(model, "put the red cup on the plate"), CommandResult)
     assert isinstance(dialogue.understand(model, "and the blue cup"), Clarify)
+
+
+@pytest.mark.parametrize("reply, arm, cup", [("the red one", "right", "obj0"), ("the left one", "left", "obj1")])
+def test_a_first_pick_up_of_either_cup_asks_only_which_cup(reply: str, arm: str, cup: str) -> None:
+    """No hand used yet: the cup decides the hand (the one on its side), so the question is about the cup."""
+    model, dialogue = Model(parse_world(table_scene(last_arm=None))), Dialogue()
+    asked = dialogue.understand(model, "grab the cup")
+    assert isinstance(asked, Clarify)
+    assert asked.question == "Which object do you mean: the rightmost cup or the leftmost cup?"
+    answered = dialogue.understand(model, reply)
+    assert isinstance(answered, CommandResult)
+    assert dict(answered.command.args) == {"arm": arm, "object": cup}

@@ -343,13 +343,8 @@ def test_an_object_in_the_middle_is_taken_by_the_nearer_hand_when_no_hand_was_us
         ("pick up the cup", "right", ["object"], "Which object do you mean: the rightmost cup or the leftmost cup?"),
         ("move up", None, ["arm"], "Which hand do you mean: the right hand or the left hand?"),
         ("switch action", None, ["target"], "Which action do you mean: the next action or the previous action?"),
-        (
-            "point to the cup",
-            None,
-            ["arm", "object"],
-            "Which hand do you mean: the right hand or the left hand? "
-            "And which object: the rightmost cup or the leftmost cup?",
-        ),
+        # no hand used yet: the cup decides the hand (the one on its side), so only the cup is asked about
+        ("point to the cup", None, ["object"], "Which object do you mean: the rightmost cup or the leftmost cup?"),
     ],
 )
 def test_clarifications_name_the_parameters_in_contention(
