@@ -12,9 +12,10 @@ from __future__ import annotations
 import re
 from typing import TYPE_CHECKING
 
-from services.nlu import relational
+from services.nlu import relational, relations_asked
 from services.nlu.lexicon import NUMBER_WORDS
 from services.nlu.phrasing import either
+from services.nlu.relations_asked import RELATION_WORDS
 from services.nlu.results import Answer
 from services.nlu.tokens import Term, canonical, read
 from services.nlu.weights import MARGINS
@@ -53,14 +54,19 @@ _PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple(
             r"my action)?|(?:end|finish) (?:the |this )?(?:recording|action|program))$",
         ),
         (
-            "object",
-            r"^(?:where(?:'s| is| are)|is there|are there|do you see|can you see|have you seen|where did|where)"
-            r"\b(?P<phrase>.*)",
-        ),
-        (
             "reach",
             r"^(?:(?:can|could) you (?:reach|get to)|is (?P<subject>.+?) (?:reachable|within (?:your )?reach"
             r"|in (?:your )?reach|out of (?:your )?reach|too far(?: away)?|too far for you)$)(?P<phrase>.*)",
+        ),
+        (
+            "related",
+            rf"^(?:is|are) (?:there )?(?P<subject>.+?) (?P<relation>{RELATION_WORDS}) (?P<landmark>.+)$",
+        ),
+        ("what_related", rf"^what(?: is| are| do you see)? (?P<relation>{RELATION_WORDS}) (?P<landmark>.+)$"),
+        (
+            "object",
+            r"^(?:where(?:'s| is| are)|is there|are there|do you see|can you see|have you seen|where did|where)"
+            r"\b(?P<phrase>.*)",
         ),
         (
             "scene",
@@ -129,6 +135,12 @@ def answer(model: Model, text: str, history: History) -> Answer | None:
         return Answer(topic, _where(model, found["phrase"]))
     if topic == "which":  # "which cup is closest to you": where that one is
         return Answer("object", _where(model, _about_me(found["phrase"])))
+    if topic == "related":  # "is the red cup on the plate"
+        return Answer("object", _is_related(model, found["subject"], found["relation"], found["landmark"]))
+    if topic == "what_related" and not _names_an_object(found["landmark"]):  # "what is on the table"
+        return Answer("scene", _scene(model))
+    if topic == "what_related":  # "what is on the plate"
+        return Answer("object", _what_is(model, found["relation"], found["landmark"]))
     if topic == "reach":  # "can you reach the box", "is the plate within reach"
         return Answer("object", _reach(model, found["subject"] or found["phrase"]))
     if topic == "count":  # "how many cups are there"
@@ -196,6 +208,60 @@ def _meant(model: Model, phrase: str) -> list[int] | str:
     # "the cup closest to the plate": the relation decides among the cups, the plate is only its landmark
     grounding = model.scene.ground(relational.resolve(model.scene, terms, model.scene.last_object, phrase=True))
     return [i for i, p in enumerate(grounding) if p >= grounding.max() - 1e-6]
+
+
+def _is_related(model: Model, subject: str, words: str, landmark: str) -> str:
+    """Yes or no: whether the object(s) ``subject`` names stand ``words`` (a relation) the one ``landmark`` names."""
+    marks = _meant_or_it(model, landmark)
+    if isinstance(marks, str) or not _names_an_object(landmark):
+        return _where(model, subject)  # "is the cup close to you": where it is
+    subjects = _meant_or_it(model, subject)
+    if isinstance(subjects, str):
+        return subjects
+    if len(marks) > 1:
+        return f"Which one do you mean: {either([_named(model, i) for i in marks])}?"
+    relation, mark = relations_asked.WORDS[words], marks[0]
+    objects = model.world.objects
+    related = [i for i in subjects if i != mark and relations_asked.holds(objects[i], relation, objects[mark])]
+    said = f"{relations_asked.SAID[relation]} {model.scene.describe(mark).text}"
+    if related:
+        verb = "is" if len(related) == 1 else "are"
+        return f"Yes: {_listed([_named(model, i) for i in related])} {verb} {said}."
+    if len(subjects) == 1:
+        return f"No: {_named(model, subjects[0])} is {_where_is(model, subjects[0])}, not {said}."
+    names = [_named(model, i) for i in subjects]
+    if len(names) == 2:
+        return f"No: neither {names[0]} nor {names[1]} is {said}."
+    return f"No: none of {_listed(names)} is {said}."
+
+
+def _what_is(model: Model, words: str, landmark: str) -> str:
+    """The objects standing ``words`` (a relation) the one ``landmark`` names ("what is on the plate")."""
+    marks = _meant_or_it(model, landmark)
+    if isinstance(marks, str):
+        return marks
+    if len(marks) > 1:
+        return f"Which one do you mean: {either([_named(model, i) for i in marks])}?"
+    relation, mark = relations_asked.WORDS[words], marks[0]
+    objects = model.world.objects
+    related = [i for i, obj in enumerate(objects) if i != mark and relations_asked.holds(obj, relation, objects[mark])]
+    said = f"{relations_asked.SAID[relation]} {model.scene.describe(mark).text}"
+    if not related:
+        return _capital(f"nothing is {said}.")
+    return _capital(f"{_listed([_named(model, i) for i in related])} {'is' if len(related) == 1 else 'are'} {said}.")
+
+
+def _names_an_object(phrase: str) -> bool:
+    """Whether the words name an object of the table (a colour, a kind, "it"), not the robot or the table."""
+    terms = read(phrase).terms
+    return bool(_said(terms, "color") or _said(terms, "type") or _said(terms, "anaphor"))
+
+
+def _meant_or_it(model: Model, phrase: str) -> list[int] | str:
+    """:func:`_meant`, with "it" the object last referred to."""
+    if _said(read(phrase).terms, "anaphor") and model.scene.last_object is not None:
+        return [model.scene.last_object]
+    return _meant(model, phrase)
 
 
 def _said(terms: tuple[Term, ...], slot: str) -> set[str]:

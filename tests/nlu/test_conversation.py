@@ -416,3 +416,43 @@ def test_a_pasted_page_is_refused_at_once() -> None:
     result = model.parse("pick up the red cup " * 500)
     assert time.perf_counter() - start < 0.05
     assert isinstance(result, Clarify) and result.question.startswith("That is too long (10000 characters)")
+
+
+def cup_on_the_plate() -> Model:
+    """A red cup standing on a plate, a blue cup left of it, a box behind the plate."""
+    plate = obj("obj1", "white", "plate", 0.55, 0.0, (0.18, 0.18, 0.02))
+    cup = obj("obj0", "red", "cup", 0.56, 0.01)
+    cup["position"][2] = 0.77 + 0.05  # its bottom on the plate's top
+    return Model(
+        parse_world(world(cup, plate, obj("obj2", "blue", "cup", 0.55, 0.25), obj("obj3", "green", "box", 0.80, 0.0)))
+    )
+
+
+@pytest.mark.parametrize(
+    "text, says",
+    [
+        ("is the red cup on the plate?", "Yes: the rightmost cup (red) is on the plate."),
+        (
+            "is the blue cup on the plate",
+            "No: the leftmost cup (blue) is on my left, 55 cm in front of me, not on the plate.",
+        ),
+        ("is there a cup on the plate", "Yes: the rightmost cup (red) is on the plate."),
+        ("what is on the plate", "The rightmost cup (red) is on the plate."),
+        ("what's on the box?", "Nothing is on the box."),
+        ("is the plate under the red cup", "Yes: the plate (white) is under the rightmost cup."),
+        (
+            "is the blue cup to the left of the red cup",
+            "Yes: the leftmost cup (blue) is to the left of the rightmost cup.",
+        ),
+        ("is the box behind the plate", "Yes: the box (green) is behind the plate."),
+        (
+            "is the box in front of the plate",
+            "No: the box (green) is straight ahead, 80 cm in front of me, not in front of the plate.",
+        ),
+        ("is the yellow bowl on the plate", "I don't see a yellow bowl."),
+    ],
+)
+def test_where_objects_stand_to_each_other_is_answered_not_done(text: str, says: str) -> None:
+    result = cup_on_the_plate().parse(text)
+    assert isinstance(result, Answer), f"{text!r} -> {result.to_json()}"
+    assert result.topic == "object" and result.text == says
