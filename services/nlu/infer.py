@@ -304,11 +304,15 @@ def qualify(result: CommandResult, said: modifiers.Modifiers, scene: Scene) -> R
     """Put a distance and "both hands" into the command chosen, or say why they do not fit it.
 
     The distance goes to the first move in a direction among the steps ("move
-    the red cup 10 cm to the left" is a pick-up, that move and a put-down).
+    the red cup 10 cm to the left" is a pick-up, that move and a put-down); a
+    pick-up with a distance raises the object that far ("lift the red cup
+    10 cm").
     """
     command = result.command
     if said.distance is not None:
         steps = (command, *result.then)
+        if steps[-1].procedure == "pick_up":  # "lift the red cup 10 cm": picked up, then raised that far
+            steps += (Command("move_abs_dir", (("arm", steps[-1].arg("arm")), ("direction", "up"))),)
         moving = next((i for i, step in enumerate(steps) if step.procedure in DISTANCE_PROCEDURES), None)
         if moving is None:
             return Clarify(

@@ -241,7 +241,7 @@ def test_a_distance_towards_an_object_and_none_means_the_default_step() -> None:
         ("move up 50 cm", "between 1 and 30 cm"),
         ("move up some centimetres", "with a number"),
         ("move up 5", "unit"),
-        ("pick up the red cup 5 cm", "A distance goes with a move"),
+        ("open your right hand 5 cm", "A distance goes with a move"),
     ],
 )
 def test_a_distance_that_cannot_be_used_is_a_clear_question(text: str, says: str) -> None:
