@@ -83,7 +83,7 @@ class Dialogue:
         if result is not None:
             return result  # a question, even one asked while a question is pending
         if self.pending is not None:
-            settled = self._settle(model, text)
+            settled = self._settle(model, text) or self._completed(model, text)
             if settled is not None:
                 return settled
         more = self._more(model, text)
@@ -180,6 +180,17 @@ class Dialogue:
             return self._choose(model, 1)
         return None
 
+    def _completed(self, model: Model, text: str) -> Result | None:
+        """A reply to a question that asked for the rest of a sentence ("push the plate" ... "to the left")."""
+        said = self.pending.clarify.completes if self.pending is not None else ""
+        if not said:
+            return None
+        result = model.parse(f"{said} {text}", self._history(model))
+        if not isinstance(result, CommandResult):
+            return None
+        self._remember(result, model)
+        return result
+
     def _choose(self, model: Model, choice: int) -> Result:
         if self.pending is None:
             return Clarify([], "There is no question pending to choose an answer for.")
@@ -211,7 +222,7 @@ class Dialogue:
 
     def _remember(self, result: Result, model: Model) -> None:
         if isinstance(result, Clarify):
-            if result.candidates:
+            if result.candidates or result.completes:
                 self.pending = Pending(result)
             return
         if isinstance(result, Answer):

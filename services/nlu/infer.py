@@ -14,7 +14,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from services.nlu import compound, hands, modifiers, pairs, questions, relational, sayings, stacking
+from services.nlu import compound, hands, modifiers, pairs, pushing, questions, relational, sayings, stacking
 from services.nlu.commands import NUMBER, PROCEDURES, Command
 from services.nlu.language import Index, Match
 from services.nlu.lexicon import OBJECT_SLOTS
@@ -72,7 +72,10 @@ class Model:
             reply = questions.answer(self, text, history)
             if reply is not None:
                 return reply
-            parts = compound.split(sayings.handed_over(text))
+            pushed = pushing.as_steps(self, text)
+            if isinstance(pushed, Clarify):
+                return pushed
+            parts = compound.split(sayings.handed_over(pushed))
             if len(parts) > 1:
                 return compound.run(self, parts, history)
             text = parts[0]

@@ -48,6 +48,8 @@ class Clarify:
     candidates: list[Command] = field(default_factory=list)
     labels: list[str] = field(default_factory=list)  # one sentence per candidate, for menus
     score: float = float("-inf")
+    # words a reply completes: "push the plate", asked which way, read again with "to the left" after it
+    completes: str = ""
 
     def to_json(self) -> dict[str, Any]:
         return {

@@ -144,3 +144,17 @@ def test_a_first_pick_up_of_either_cup_asks_only_which_cup(reply: str, arm: str,
     answered = dialogue.understand(model, reply)
     assert isinstance(answered, CommandResult)
     assert dict(answered.command.args) == {"arm": arm, "object": cup}
+
+
+def test_a_push_asked_which_way_is_completed_by_the_reply() -> None:
+    model, dialogue = Model(parse_world(table_scene())), Dialogue()
+    asked = dialogue.understand(model, "push the plate")
+    assert isinstance(asked, Clarify) and asked.params == ["direction"]
+    pushed = dialogue.understand(model, "towards you")
+    assert isinstance(pushed, CommandResult)
+    assert [(c.procedure, c.arg("direction") or c.arg("relation")) for c in pushed.commands] == [
+        ("move_rel_dest", "above"),
+        ("move_abs_dir", "down"),
+        ("move_abs_dir", "backward"),
+        ("move_abs_dir", "up"),
+    ]
