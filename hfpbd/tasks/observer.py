@@ -25,6 +25,7 @@ T = TypeVar("T")
 STILL_DISTANCE = 0.001  # m an object may move and still be at rest
 STILL_FOR = 0.3  # s of truth samples that must show every object at rest
 STILL_TIMEOUT = 3.0  # s after which objects are judged wherever they are
+FINGER_MOTION = 0.0005  # m a gripper's opening changes between two states while its fingers move
 
 
 class Stillness:
@@ -87,7 +88,10 @@ class Observer:
         self.objects: dict[str, PerceivedObject] = {}
         self.objects_stamp = 0.0  # when the cloud behind the latest object list was rendered
         self._motion_since: float | None = None
-        self.motion_at: float | None = None  # sim stamp of the first arm motion after motion_since
+        # sim stamp of the first motion after motion_since: an arm's, or fingers opening or closing (a press
+        # that starts at the box closes the hand first)
+        self.motion_at: float | None = None
+        self._widths: dict[str, float] = {}  # each gripper's opening in the last state
         keys = bus.keys
         bus.subscribe(keys.say, self._on_say, schema="say")
         bus.subscribe(keys.nlu_result, self._on_result, schema="nlu_result")
@@ -118,7 +122,10 @@ class Observer:
             self.sim = message
             if message.rtf is not None:
                 self.rtf.append(message.rtf)
-            if self._motion_since is not None and self.motion_at is None and any(message.moving.values()):
+            widths = {arm: gripper.width for arm, gripper in message.grippers.items()}
+            fingers = any(abs(width - self._widths.get(arm, width)) > FINGER_MOTION for arm, width in widths.items())
+            self._widths = widths
+            if self._motion_since is not None and self.motion_at is None and (any(message.moving.values()) or fingers):
                 stamp = message.stamp
                 if stamp >= self._motion_since:
                     self.motion_at = stamp
@@ -138,7 +145,7 @@ class Observer:
 
     # -- queries ---------------------------------------------------------------------------
     def watch_motion(self, since: float) -> None:
-        """Start looking for the first arm motion stamped at or after ``since`` (wall clock)."""
+        """Start looking for the first motion (arm or fingers) stamped at or after ``since`` (wall clock)."""
         with self._changed:
             self._motion_since, self.motion_at = since, None
 

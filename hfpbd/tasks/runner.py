@@ -8,8 +8,8 @@ executor to finish it (its ``executor/state`` goes busy, then idle; an
 ``sim/truth``; then reload the scene with the objects re-placed by a seed,
 say "execute" and judge again (PbD generalisation).
 
-Measured per utterance: the time from publishing it to the first arm motion
-in ``sim/state`` (its stamp), and how long the step took; per run: the
+Measured per utterance: the time from publishing it to the first motion (an arm,
+or fingers opening or closing) in ``sim/state`` (its stamp), and how long the step took; per run: the
 programming time (first utterance sent to last step done) and the words.
 """
 
