@@ -785,15 +785,22 @@ class ArmKinematics:
         return path
 
     def straight_line(
-        self, pose: np.ndarray, *, check_collisions: bool = True, ignore: tuple[str, ...] = (), steer: bool = False
+        self,
+        pose: np.ndarray,
+        *,
+        check_collisions: bool = True,
+        ignore: tuple[str, ...] = (),
+        steer: bool = False,
+        careful: bool = True,
     ) -> Trajectory | None:
         """Move the tool in a straight line to ``pose`` (approach, descend, lift), orientation interpolated.
 
         Collisions with obstacles in ``ignore`` (the object being grasped)
-        are allowed along the way; ``steer`` as in :meth:`_cartesian_path`.
+        are allowed along the way; ``steer`` as in :meth:`_cartesian_path`;
+        not ``careful``: a line through free space, timed as a free move.
         """
         path = self.line_path(pose, check_collisions=check_collisions, ignore=ignore, steer=steer)
-        return None if path is None else self.timed(path, careful=True)
+        return None if path is None else self.timed(path, careful=careful)
 
     def line_path(
         self, pose: np.ndarray, *, check_collisions: bool = True, ignore: tuple[str, ...] = (), steer: bool = False

@@ -651,7 +651,8 @@ class Procedures:
             )
             kin, snap = self._ready(arm)
             if isinstance(grasp, EdgeGrasp):
-                down = kin.straight_line(grasp.pregrasp)
+                # down beside the table's edge, in free space: only the way in under the object is careful
+                down = kin.straight_line(grasp.pregrasp, careful=False)
                 if down is None:
                     reason = "I can't reach down to its edge"
                     continue

@@ -8,6 +8,7 @@ prior prefers; anything taller is carried there instead ("move the cup to the
 left": a pick-up, that move and a put-down), which is what the user wants
 of it. "To the edge" is towards the robot, by the distance said or the
 default step; said again, it slides on. A push with no way said asks which.
+"Move the plate to the left" slides the plate too: it cannot be picked up.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from services.nlu.results import Clarify
 if TYPE_CHECKING:
     from services.nlu.infer import Model
 
+_CARRYING_VERBS = frozenset({"move", "bring", "get"})  # verbs that push only a flat object ("move the plate left")
 FLAT = 0.03  # metres: no taller than this, an object is slid under the pressing hand rather than picked up
 _WAYS = {
     "towards me": r"towards? (?:you|me)|to (?:you|me)|closer(?: to (?:you|me))?|back(?:wards?)?|(?:in|nearer)"
@@ -29,10 +31,13 @@ _WAYS = {
     "to the right": r"(?:to the |to your )?right",
 }
 _PUSH = re.compile(
-    r"^(?:please )?(?:push|slide|drag|shove|nudge|pull)(?: over)? (?P<object>.+?) (?P<way>"
+    r"^(?:please )?(?P<verb>push|slide|drag|shove|nudge|pull|move|bring|get)(?: over)? (?P<object>.+?) (?P<way>"
     + "|".join(f"(?P<w{i}>{pattern})" for i, pattern in enumerate(_WAYS.values()))
-    + r")(?P<rest>(?: (?:by )?[a-z0-9. ]+)?)[.!]?$"
+    + r")(?P<rest>(?: (?:by |about )?(?:[0-9.]+|[a-z]+(?: [a-z]+)?) ?"
+    r"(?:cm|mm|m|centimet(?:er|re)s?|millimet(?:er|re)s?|met(?:er|re)s?|inch(?:es)?)"
+    r"| a (?:little|bit|lot)(?: more)?| slightly)?)(?: please)?[.!]?$"
 )
+_HAND = re.compile(r"\b(?:hand|hands|arm|arms|gripper|grippers|yourself)\b")  # "move your hand left": no push
 _NO_WAY = re.compile(r"^(?:please )?(?:push|slide|drag|shove|nudge)(?: over)? (?P<object>.+?)(?: please)?[.!]?$")
 # the flat object's steps; {way} and {rest} (a distance, if one was said) as the user gave them
 _SLIDE = "move your hand above {object}, then move down, then move {way}{rest}, then move up"
@@ -43,6 +48,8 @@ def as_steps(model: Model, text: str) -> str | Clarify:
     push says none."""
     said = " ".join(text.lower().split())
     found = _PUSH.match(said)
+    if found is not None and _HAND.search(found["object"]):
+        return text
     if found is None:
         if (bare := _NO_WAY.match(said)) is not None:
             return Clarify(
@@ -56,8 +63,12 @@ def as_steps(model: Model, text: str) -> str | Clarify:
     best = max(grounding, key=grounding.__getitem__, default=None)
     if best is not None and grounding[best] > 0 and _flat(model, best):
         return _SLIDE.format(object=found["object"], way=way, rest=found["rest"])
+    if found["verb"] in _CARRYING_VERBS:
+        return text  # "move the red cup to the left": the model's own reading
     return f"move {found['object']} {way}{found['rest']}"
 
 
 def _flat(model: Model, object_id: str) -> bool:
-    return model.world.objects[model.world.index_of(object_id)].size[2] <= FLAT
+    """Flat and on the table: slid, not lifted (one in a hand is already carried)."""
+    obj = model.world.objects[model.world.index_of(object_id)]
+    return obj.size[2] <= FLAT and obj.held_by is None
