@@ -223,7 +223,7 @@ def _is_related(model: Model, subject: str, words: str, landmark: str) -> str:
     relation, mark = relations_asked.WORDS[words], marks[0]
     objects = model.world.objects
     related = [i for i in subjects if i != mark and relations_asked.holds(objects[i], relation, objects[mark])]
-    said = f"{relations_asked.SAID[relation]} {model.scene.describe(mark).text}"
+    said = f"{words} {model.scene.describe(mark).text}"  # the relation in the words the user chose
     if related:
         verb = "is" if len(related) == 1 else "are"
         return f"Yes: {_listed([_named(model, i) for i in related])} {verb} {said}."
@@ -245,7 +245,7 @@ def _what_is(model: Model, words: str, landmark: str) -> str:
     relation, mark = relations_asked.WORDS[words], marks[0]
     objects = model.world.objects
     related = [i for i, obj in enumerate(objects) if i != mark and relations_asked.holds(obj, relation, objects[mark])]
-    said = f"{relations_asked.SAID[relation]} {model.scene.describe(mark).text}"
+    said = f"{words} {model.scene.describe(mark).text}"  # the relation in the words the user chose
     if not related:
         return _capital(f"nothing is {said}.")
     return _capital(f"{_listed([_named(model, i) for i in related])} {'is' if len(related) == 1 else 'are'} {said}.")

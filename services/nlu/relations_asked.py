@@ -48,7 +48,6 @@ WORDS: dict[str, str] = {
     "beneath": "under",
     "underneath": "under",
 }
-SAID = {relation: words for words, relation in reversed(WORDS.items())}  # the plainest words of each
 _SIDES = {"left_of": (1, 1.0), "right_of": (1, -1.0), "in_front_of": (0, -1.0), "behind": (0, 1.0)}
 RELATION_WORDS = "|".join(sorted(map(re.escape, WORDS), key=len, reverse=True))
 
