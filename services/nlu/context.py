@@ -54,6 +54,12 @@ MOVES_IN_A_DIRECTION = frozenset({"move_abs_dir", "move_rel_dir"})
 # commands whose object a bare noun phrase may replace ("point at the red cup", then "and the box"); a place
 # is not among them: after "put the red cup on the plate", "and the blue cup" changes what is put, not where
 ELLIPTIC = frozenset({"pick_up", "point_to", "look_at", "move_rel_dest", "move_rel_dir"})
+# "do the same with the blue cup", "now do that to the box", "again with the other hand"
+_SAME_WITH = re.compile(
+    r"(?:(?:now|and|ok|okay|then|please) )*(?:(?:do|try) )?(?:(?:the same(?: thing)?|that|it|this) )?(?:again )?"
+    r"(?:with|to|for|on|using) (?P<rest>.+)"
+)
+_HAND_SAID = re.compile(r"(?:the |your |my )?(?P<hand>other|right|left) (?:hand|arm|gripper)")
 _OTHER = re.compile(r"(?:(?:no|nope|not that one|wrong|please) )*(?:the )?other(?: one)?(?: please)?")
 
 
@@ -86,7 +92,7 @@ class Dialogue:
             settled = self._settle(model, text) or self._completed(model, text)
             if settled is not None:
                 return settled
-        more = self._more(model, text)
+        more = self._more(model, text) or self._same_with(model, text)
         if more is not None:
             self._remember(more, model)
             return more
@@ -128,6 +134,22 @@ class Dialogue:
             kept = tuple((key, value) for key, value in command.args if key != "distance")
             command = Command(command.procedure, (*kept, ("distance", round(distance, 4))))
         return CommandResult(command, 1.0, model.describe_command(command), {}, 0.0)
+
+    def _same_with(self, model: Model, text: str) -> CommandResult | None:
+        """ "Do the same with the blue cup", "again with the other hand": the last command on that object, or by
+        the other hand (the last move in a direction, else the last command that takes an object)."""
+        words = " ".join(_WORD.findall(text.lower()))
+        found = _SAME_WITH.fullmatch(words)
+        last = self.last or self.last_move
+        if found is None or last is None or self.pending is not None:
+            return None
+        hand = _HAND_SAID.fullmatch(found["rest"])
+        if hand is not None and last.arg("arm") in ARMS:
+            said = hand["hand"]
+            arm = next(a for a in ARMS if a != last.arg("arm")) if said == "other" else said
+            command = last.with_arg("arm", arm)
+            return CommandResult(command, 1.0, model.describe_command(command), {}, 0.0)
+        return self._elliptic(model, found["rest"], self.last) if self.last is not None else None
 
     def _only_names_an_object(self, text: str) -> bool:
         """ "The left one" said first: words that name an object and no verb, with nothing said before to repeat."""

@@ -64,6 +64,8 @@ def situate(model: Model, command: Command, match: Match, history: History, said
             _which_to_carry(model, command, match)
     if command.procedure not in ("place_abs", "place_rel") or not _empty(model, command.arg("arm")):
         return (command,)
+    if said_arm:
+        _in_the_other_hand(model, command.arg("arm"), match)
     theme = _theme(model, command, match)
     if theme is not None and world.objects[theme].held_by is None:
         arm = command.arg("arm") if said_arm else best_arm(model, theme, history, command.arg("arm"))
@@ -118,6 +120,20 @@ def _names_by_kind(match: Match, upto: int) -> bool:
         for reading in term.readings
         for m in reading
     )
+
+
+def _in_the_other_hand(model: Model, arm: str, match: Match) -> None:
+    """ "Put it on the plate with your left hand" while the right hand holds it: refused, saying where it is
+    (not a move of the empty left hand to the plate)."""
+    if not any(m.slot == "anaphor" for term in match.terms for reading in term.readings for m in reading):
+        return
+    held = next((i for i, obj in enumerate(model.world.objects) if obj.held_by not in (None, arm)), None)
+    if held is not None:
+        other = model.world.objects[held].held_by
+        raise Refusal(
+            f"My {arm} hand is empty: {model.scene.describe(held).text} is in my {other} hand."
+            f" Say it again without naming a hand, and my {other} hand will do it."
+        )
 
 
 def _which_to_carry(model: Model, command: Command, match: Match) -> None:

@@ -75,7 +75,7 @@ class Model:
             pushed = pushing.as_steps(self, text)
             if isinstance(pushed, Clarify):
                 return pushed
-            parts = compound.split(sayings.handed_over(pushed))
+            parts = compound.split(sayings.handed_over(sayings.taken_back(pushed)))
             if len(parts) > 1:
                 return compound.run(self, parts, history)
             text = parts[0]

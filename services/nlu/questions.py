@@ -46,12 +46,13 @@ _PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple(
             r"|how many (?:actions|programs|steps)|which action|what actions|list (?:the |all )?actions"
             r"|what (?:have|did) i (?:program|record|teach|make)|what is the current action|what(?:'s| is) "
             r"(?:the )?current action|show (?:me )?(?:the |my )?(?:actions|steps)|list (?:the |my |all )?steps"
-            r"|what (?:are|were) (?:the|my) steps|what is (?:in|inside) (?:this|the|my|the current) (?:action|program))",
+            r"|what (?:are|were) (?:the|my) steps|what is (?:in|inside) (?:this|the|my|the current) (?:action|program)"
+            r"|are you (?:still )?recording|is (?:it|this) (?:being )?recorded|what are you recording)",
         ),
         (
             "saved",
             r"^(?:(?:i am |we are |all )?(?:done|finished)|that is (?:it|all)|save(?: it| this| that| the action| "
-            r"my action)?|(?:end|finish) (?:the |this )?(?:recording|action|program))$",
+            r"my action)?|(?:end|finish|stop) (?:the |this )?(?:recording|action|program))$",
         ),
         (
             "reach",
@@ -111,7 +112,8 @@ _POLITE = re.compile(
 # the first words a question can start with (after "please", "tell me", ...): a cheap test before the patterns
 _OPENERS = frozenset(
     "help what whats where wheres is are do can have how which list describe tell show could so ok "
-    "okay hey well and robot please now done finished i im we were all that thats save end finish hello hi good".split()
+    "okay hey well and robot please now done finished i im we were all that thats save end finish stop hello hi"
+    " good".split()
 )
 _CONTRACTED = re.compile(r"\b(what|where|that)(?:'s|s)\b")
 _CONTRACTED_AM_ARE = re.compile(r"\b(?:(i)'?m|(we)'re)\b")
@@ -147,6 +149,8 @@ def answer(model: Model, text: str, history: History) -> Answer | None:
         return Answer("object", _count(model, found["phrase"]))
     if topic == "actions":
         return Answer(topic, _actions(model, found.groupdict().get("number")))
+    if topic == "saved" and lowered.startswith("stop") and model.world.robot.executing:
+        return None  # "stop recording" while an action runs: a stop first of all
     if topic == "saved":  # "done", "save it": nothing to do, the steps are kept as they are made
         return Answer("actions", _saved(model))
     return Answer(topic, {"help": _help, "holding": _holding, "scene": _scene}[topic](model))

@@ -22,6 +22,12 @@ _GIVE_HELD = re.compile(
     r"^(?:please )?(?:give|hand|pass|bring) (?:it|that|this)(?: over)? (?:to me|here|over)(?: please)?[.!]?$"
 )
 
+# "delete the last step", "forget that": the step just made taken back, which is what undo does
+_TAKE_BACK = re.compile(
+    r"^(?:please )?(?:(?:delete|remove|erase|cancel|drop|discard|forget|take out|scrap|get rid of) "
+    r"(?:the |that |this |my )?(?:last |previous |latest )?(?:step|move|command|one)|forget that"
+    r"|take (?:that|it) back|take back (?:that|the last step))(?: please)?[.!]?$"
+)
 # "bring it closer", "move the cup a bit closer": closer to the user when no landmark follows
 _CLOSER = re.compile(r"(?<!\bis )(?<!\bare )(?<!\bthe )(?<!\bs )\b(?:closer|nearer)(?= *(?:please)?[.!]?$)")
 
@@ -53,3 +59,8 @@ def handed_over(text: str) -> str:
 def closer_to_me(text: str) -> str:
     """ "Bring it closer" with nothing after "closer": towards the user ("closer to the box" is left alone)."""
     return _CLOSER.sub("towards me", " ".join(text.lower().split()))
+
+
+def taken_back(text: str) -> str:
+    """ "Delete the last step", "forget that", "take it back": an undo (the step is taken out and reversed)."""
+    return "undo" if _TAKE_BACK.match(" ".join(text.lower().split())) else text

@@ -29,6 +29,11 @@ _TILT = re.compile(
     r"^(?:please )?(?:turn (?:it|that|the \w+(?: \w+)?) (?:upside down|over)|flip|pour|tip|tilt|shake|empty)\b"
 )
 
+_DELETE_ACTION = re.compile(
+    r"^(?:please )?(?:delete|remove|erase|clear|discard|throw away|get rid of) "
+    r"(?:this|that|the|my|the current|the whole|all(?: the)?|every) (?:action|program|actions|programs)s?$"
+)
+
 
 def unsupported(text: str) -> str | None:
     """What to say back when ``text`` asks for something no procedure does; None when it does not."""
@@ -47,6 +52,11 @@ def unsupported(text: str) -> str | None:
         return (
             "I can't pass an object from one hand to the other. Put it down, then pick it up with the other "
             'hand ("put it down", "pick it up with your left hand").'
+        )
+    if _DELETE_ACTION.match(said):
+        return (
+            "I don't delete actions by voice, so a misheard word can't lose one. \"Undo\" takes back the last step; "
+            "on the actions screen (F4), d deletes the highlighted action and x one of its steps."
         )
     if _TILT.match(said):
         return (
