@@ -19,8 +19,8 @@ from services.nlu import hands
 from services.nlu.commands import Command
 from services.nlu.lexicon import PLURAL_TYPE_WORDS
 from services.nlu.phrasing import command_text
+from services.nlu.plurals import plain, the_two
 from services.nlu.results import Clarify, CommandResult, Result
-from services.nlu.stacking import plain
 from shared.contract import ARMS
 
 if TYPE_CHECKING:
@@ -44,12 +44,10 @@ def kind_named(text: str) -> str | None:
 def spelled_out(model: Model, text: str) -> Result | None:
     """The pick-ups "pick up both cups" means in this world; None when ``text`` is no such request."""
     kind = kind_named(text)
-    if kind is None:
-        return None
+    pair = the_two(model, kind, _not_two)
+    if pair is None or isinstance(pair, Clarify):
+        return pair
     world = model.world
-    pair = [i for i, obj in enumerate(world.objects) if obj.type == kind]
-    if len(pair) != 2:
-        return Clarify([], _not_two(kind, len(pair)))
     to_take = [i for i in pair if world.objects[i].held_by is None]
     free = [arm for arm in ARMS if not hands.holds(model, arm)]
     if not to_take:

@@ -214,20 +214,31 @@ def _meant(model: Model, phrase: str) -> list[int] | str:
     return [i for i, p in enumerate(grounding) if p >= grounding.max() - 1e-6]
 
 
+def _landmark(model: Model, words: str, landmark: str) -> tuple[str, int, str] | str:
+    """(relation, landmark index, the relation and landmark as said back) for a question about ``landmark``; the
+    answer itself when the words name no one object in view."""
+    marks = _meant_or_it(model, landmark)
+    if isinstance(marks, str):
+        return marks
+    if len(marks) > 1:
+        return f"Which one do you mean: {either([_named(model, i) for i in marks])}?"
+    # the relation in the words the user chose ("in the bowl", "on top of the box")
+    return relations_asked.WORDS[words], marks[0], f"{words} {model.scene.describe(marks[0]).text}"
+
+
 def _is_related(model: Model, subject: str, words: str, landmark: str) -> str:
     """Yes or no: whether the object(s) ``subject`` names stand ``words`` (a relation) the one ``landmark`` names."""
-    marks = _meant_or_it(model, landmark)
-    if isinstance(marks, str) or not _names_an_object(landmark):
+    if not _names_an_object(landmark):
         return _where(model, subject)  # "is the cup close to you": where it is
     subjects = _meant_or_it(model, subject)
     if isinstance(subjects, str):
         return subjects
-    if len(marks) > 1:
-        return f"Which one do you mean: {either([_named(model, i) for i in marks])}?"
-    relation, mark = relations_asked.WORDS[words], marks[0]
+    found = _landmark(model, words, landmark)
+    if isinstance(found, str):
+        return found
+    relation, mark, said = found
     objects = model.world.objects
     related = [i for i in subjects if i != mark and relations_asked.holds(objects[i], relation, objects[mark])]
-    said = f"{words} {model.scene.describe(mark).text}"  # the relation in the words the user chose
     if related:
         verb = "is" if len(related) == 1 else "are"
         return f"Yes: {_listed([_named(model, i) for i in related])} {verb} {said}."
@@ -241,15 +252,12 @@ def _is_related(model: Model, subject: str, words: str, landmark: str) -> str:
 
 def _what_is(model: Model, words: str, landmark: str) -> str:
     """The objects standing ``words`` (a relation) the one ``landmark`` names ("what is on the plate")."""
-    marks = _meant_or_it(model, landmark)
-    if isinstance(marks, str):
-        return marks
-    if len(marks) > 1:
-        return f"Which one do you mean: {either([_named(model, i) for i in marks])}?"
-    relation, mark = relations_asked.WORDS[words], marks[0]
+    found = _landmark(model, words, landmark)
+    if isinstance(found, str):
+        return found
+    relation, mark, said = found
     objects = model.world.objects
     related = [i for i, obj in enumerate(objects) if i != mark and relations_asked.holds(obj, relation, objects[mark])]
-    said = f"{words} {model.scene.describe(mark).text}"  # the relation in the words the user chose
     if not related:
         return _capital(f"nothing is {said}.")
     return _capital(f"{_listed([_named(model, i) for i in related])} {'is' if len(related) == 1 else 'are'} {said}.")

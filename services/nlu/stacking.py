@@ -19,6 +19,7 @@ from services.nlu import hands
 from services.nlu.commands import Command
 from services.nlu.lexicon import PLURAL_TYPE_WORDS, TYPE_WORDS
 from services.nlu.phrasing import command_text
+from services.nlu.plurals import plain, the_two
 from services.nlu.prior import History
 from services.nlu.results import Clarify, CommandResult, Result
 from shared.contract import other_arm
@@ -45,12 +46,6 @@ _SAID = (
 SAME_SIZE = 0.1  # volumes within this share of each other: neither is the obvious base
 
 
-def plain(text: str) -> str:
-    """``text`` in lower case without punctuation or a polite opening or ending ("please", "ok")."""
-    said = re.sub(r"[^a-z ]", "", text.lower()).strip()
-    return re.sub(r"^(?:please |robot |now |ok |okay )+|(?: please)$", "", said)
-
-
 def kind_named(text: str) -> str | None:
     """The kind of object ``text`` asks to stack ("cup" for "stack the mugs"), or None when it asks something else."""
     said = plain(text)
@@ -65,12 +60,10 @@ def kind_named(text: str) -> str | None:
 def spelled_out(model: Model, text: str, history: History) -> Result | None:
     """The pick-up and place "stack the cups" means in this world; None when ``text`` is no such request."""
     kind = kind_named(text)
-    if kind is None:
-        return None
+    pair = the_two(model, kind, _not_two)
+    if pair is None or isinstance(pair, Clarify):
+        return pair
     world = model.world
-    pair = [i for i, obj in enumerate(world.objects) if obj.type == kind]
-    if len(pair) != 2:
-        return Clarify([], _not_two(kind, len(pair)))
     held = [i for i in pair if world.objects[i].held_by is not None]
     if len(held) == 2:
         return Clarify([], f"I am holding both {kind}s: put one of them down first.")
