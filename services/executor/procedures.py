@@ -632,7 +632,11 @@ class Procedures:
                 {k: (np.round(o.position, 3).tolist(), np.round(o.size, 3).tolist()) for k, o in snap.objects.items()},
             )
             if thin_and_wide(box) and overhang(box, self._snapshot().near_edge) < targets.MIN_OVERHANG:
-                raise StepFailed(wording.sentence(f"{words} is too wide to grasp; push it over the table edge first"))
+                raise StepFailed(
+                    wording.sentence(
+                        f'{words} is too wide to grasp; push it over the table edge first ("push {words} towards you")'
+                    )
+                )
             raise StepFailed(
                 self._out_of_reach(arm, kin, obj, words)
                 or wording.cannot_pick(arm, words, self._in_the_way(kin, snap, obj) or "I can't reach around it")

@@ -60,9 +60,9 @@ def test_a_plate_on_the_table_is_too_wide_to_grasp(stack: Stack, plate: list[flo
     with stack.unchanged_arms():
         said = stack.command("pick_up", {"arm": "right", "object": stack.pid("obj0")})
     errors = texts(said, "error")
-    assert len(errors) == 1 and errors[0].endswith("plate is too wide to grasp; push it over the table edge first."), (
-        errors
-    )
+    assert len(errors) == 1 and errors[0].endswith(
+        'plate is too wide to grasp; push it over the table edge first ("push the plate towards you").'
+    ), errors
 
 
 @pytest.mark.parametrize("box", [[0.58, 0.0], [0.60, 0.04]])
