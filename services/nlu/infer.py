@@ -33,6 +33,8 @@ __all__ = ["Answer", "Clarify", "CommandResult", "Model", "Result"]
 
 MAX_WORDS = 60  # a few steps at a time; longer input is almost surely pasted text
 MAX_CHARS = 400
+# a word not understood where an object is named ("the banana", "that red thingamajig")
+_UNKNOWN_THING = re.compile(r"\b(?:the|a|an|this|that|these|those|my)(?: [a-z]+)? \?[a-z']+")
 _THEM = re.compile(r"\b(?:them|both of them)\b")  # the objects in both hands, when both hold one
 
 
@@ -172,7 +174,24 @@ class Model:
         considered = allowed if allowed is not None else np.arange(len(scores))
         if match.scores[considered].max(initial=0.0) <= 0.0:
             return Clarify([], _not_understood(utterance))
-        return self._decide(scores, considered, match, history)
+        decided = self._decide(scores, considered, match, history)
+        if not utterance.unknown or focus:
+            return decided
+        if isinstance(decided, Clarify):
+            # "pick up the banana": the question back says which word was not understood, not only what is seen
+            return replace(decided, question=f"{_unknown_words(utterance)}. {decided.question}")
+        if not isinstance(decided, CommandResult) or "object" in decided.phrases or decided.then:
+            return decided
+        command = decided.command
+        if command.arg("object"):
+            # the object was named only by a word not understood: the one object in view may not be the one meant
+            name = self.scene.describe(self.world.index_of(str(command.arg("object")))).text
+            question = f"{_unknown_words(utterance)}. Which object do you mean: {name}?"
+            return Clarify(["object"], question, [command], [decided.text], decided.score)
+        if _UNKNOWN_THING.search(" ".join(_said_unknown(text, utterance))):
+            # "move the banana towards me": not a move of the hand alone
+            return Clarify([], f'{_unknown_words(utterance)}. Please name the object another way, like "the red cup".')
+        return decided
 
     def referent(self, history: History) -> int | None:
         """What "it" means: the object in a hand (the last used hand's first), else the last object referred to."""
@@ -408,7 +427,18 @@ def _one_per_procedure(candidates: list[Command]) -> list[Command]:
 
 def _not_understood(utterance: Utterance) -> str:
     if utterance.unknown:
-        words = ", ".join(f"'{w}'" for w in dict.fromkeys(utterance.unknown))
-        plural = "s" if len(utterance.unknown) > 1 else ""
-        return f"Sorry, I don't know the word{plural} {words}. Please rephrase the command."
+        return f"Sorry, {_unknown_words(utterance)}. Please rephrase the command."
     return "Sorry, I did not understand that. Please rephrase the command."
+
+
+def _said_unknown(text: str, utterance: Utterance) -> list[str]:
+    """The words of ``text`` with each one not understood marked (``?banana``), to see what came before it."""
+    unknown = set(utterance.unknown)
+    return [f"?{word}" if word in unknown else word for word in re.findall(r"[a-z']+", text.lower())]
+
+
+def _unknown_words(utterance: Utterance) -> str:
+    """ "I don't know the word 'banana'" for the words of ``utterance`` not in the vocabulary."""
+    words = ", ".join(f"'{w}'" for w in dict.fromkeys(utterance.unknown))
+    plural = "s" if len(set(utterance.unknown)) > 1 else ""
+    return f"I don't know the word{plural} {words}"

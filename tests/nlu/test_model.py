@@ -415,3 +415,16 @@ def test_output_matches_the_design_contract() -> None:
     clarify = parse("pick up the cup").to_json()
     assert set(clarify) == {"kind", "params", "question", "candidates"}
     assert all(set(c) == {"procedure", "args"} for c in clarify["candidates"])
+
+
+def test_an_object_named_by_an_unknown_word_is_asked_about_saying_the_word() -> None:
+    many = parse("pick up the banana")
+    assert isinstance(many, Clarify)
+    assert many.question.startswith("I don't know the word 'banana'. Which object do you mean:")
+    # one object in view: it is not picked up on a word not understood
+    one = parse("pick up the banana", world(obj("obj0", "red", "cup", 0.6, -0.1)))
+    assert isinstance(one, Clarify) and one.params == ["object"]
+    assert one.question == "I don't know the word 'banana'. Which object do you mean: the cup?"
+    assert [dict(c.args) for c in one.candidates] == [{"arm": "right", "object": "obj0"}]
+    # a word not understood beside the object's own words changes nothing
+    assert command("please pick up the cup quicklyy", world(obj("obj0", "red", "cup", 0.6, -0.1)))["object"] == "obj0"
