@@ -216,6 +216,10 @@ class TaskRunner:
         except WaitTimeout as exc:
             step.problem = str(exc)
             return self._finish(step, sent)
+        if result.kind == "answer":  # a question of the user's, answered: nothing to wait for
+            step.understood = {"answer": result.text or ""}
+            step.ok = True
+            return self._finish(step, sent)
         if result.kind != "command":
             step.understood = {"question": result.question or ""}
             step.problem = f"the robot asked: {result.question or ''}"

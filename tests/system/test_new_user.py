@@ -39,8 +39,9 @@ def test_stack_the_cups_then_ask_whether_it_is_on_the_cup(runner: TaskRunner) ->
     said(runner, "stack the cups")
     verdict = placed(runner.watch.settled(), RED_CUP, "on_top_of", BLUE_CUP)
     assert verdict.success, verdict.reason
-    answer = said(runner, "is the red cup on the blue cup?")
-    assert answer.startswith("Yes:"), answer
+    asked = runner.say("is the red cup on the blue cup?")
+    assert asked.ok and asked.understood is not None, asked.problem
+    assert asked.understood["answer"].startswith("Yes:"), asked.understood
 
 
 def test_both_cups_up_at_once_then_down(runner: TaskRunner) -> None:
