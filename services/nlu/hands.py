@@ -83,7 +83,8 @@ def _hand_for_named(model: Model, command: Command, match: Match, said_arm: bool
     The words for what to carry outweigh the hand the prior chose: it is
     the hand holding that object, else the empty other hand (which picks it
     up, by the empty-hand rules); with both hands full, or that hand said,
-    it is refused. Putting it on an object a hand holds is refused too.
+    it is refused. Putting it on an object a hand holds is refused too, and
+    so is putting down an object no hand holds.
     """
     world = model.world
     arm = command.arg("arm")
@@ -99,14 +100,19 @@ def _hand_for_named(model: Model, command: Command, match: Match, said_arm: bool
             f"I am holding {model.scene.describe(landmark).text} in my {holder} hand."
             f" Put it down first, then say it again."
         )
+    if command.arg("object") is not None and theme == world.index_of(str(command.arg("object"))):
+        return command  # the words name the landmark as what to carry too: nothing to go by
     holder = world.objects[theme].held_by
     other = next(a for a in ARMS if a != arm)
+    carrying = model.scene.describe(in_hand).text if in_hand is not None else "something"
+    named = model.scene.describe(theme).text
+    if command.procedure == "place_abs" and holder is None:
+        # "put the red cup down" while holding the blue cup: a pick-up and a put-down would leave it where it is
+        raise Refusal(f"My {arm} hand is holding {carrying}, not {named}.")
     if holder is None and _empty(model, other) and not said_arm:
         return command.with_arg("arm", other)
     if holder is not None and (holder == other) and not said_arm:
         return command.with_arg("arm", other)
-    carrying = model.scene.describe(in_hand).text if in_hand is not None else "something"
-    named = model.scene.describe(theme).text
     if holder is None and not said_arm:
         raise Refusal(f"Both my hands are full. Put one down first, then I can take {named}.")
     raise Refusal(f"My {arm} hand is holding {carrying}, not {named}.")
