@@ -127,10 +127,8 @@ def _one_object_of(part: str, verb: str) -> bool:
     object joined to it by "and" is the same verb again, where a place's or a move's is part of where it goes
     and "the cup between the plate and the box" is one object."""
     procedures = {p for r in PHRASES.get(verb, ()) for m in r if m.slot == "procedure" for p in m.value}
-    relation = any(
-        term.words in LANDMARK_PHRASES or any(m.slot == "relate" for r in term.readings for m in r)
-        for term in tokens.read(part).terms
-    )
+    terms = tokens.read(part).terms
+    relation = "relate" in tokens.slots_said(terms) or any(term.words in LANDMARK_PHRASES for term in terms)
     return bool(procedures) and procedures <= ONE_OBJECT and not relation
 
 

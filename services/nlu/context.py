@@ -19,7 +19,7 @@ from services.nlu.hands import NAMING_SLOTS
 from services.nlu.infer import Answer, Clarify, CommandResult, Model, Result
 from services.nlu.lexicon import OBJECT_SLOTS, REFERRING_SLOTS
 from services.nlu.prior import History
-from services.nlu.tokens import read
+from services.nlu.tokens import read, slots_said
 from services.nlu.unsupported import unsupported
 from services.nlu.weights import LANGUAGE
 from shared.contract import ARMS
@@ -162,7 +162,7 @@ class Dialogue:
             any(all(m.slot in OBJECT_SLOTS | REFERRING_SLOTS for m in reading) for reading in term.readings)
             for term in said.terms
         )
-        names = any(m.slot in NAMING_SLOTS for term in said.terms for reading in term.readings for m in reading)
+        names = bool(slots_said(said.terms) & NAMING_SLOTS)
         return only_objects and names
 
     def _what_to_do_with(self, model: Model, text: str) -> Clarify:

@@ -29,6 +29,7 @@ import numpy as np
 from services.nlu.commands import Command
 from services.nlu.language import Match, relation_at
 from services.nlu.prior import History
+from services.nlu.tokens import slots_said
 from shared.contract import ARMS
 
 NAMING_SLOTS = frozenset({"type", "color", "anaphor", "generic"})  # words that name an object themselves
@@ -109,9 +110,7 @@ def _hand_for_named(model: Model, command: Command, match: Match, said_arm: bool
     if command.procedure == "place_abs" and holder is None:
         # "put the red cup down" while holding the blue cup: a pick-up and a put-down would leave it where it is
         raise Refusal(f"My {arm} hand is holding {carrying}, not {named}.")
-    if holder is None and _empty(model, other) and not said_arm:
-        return command.with_arg("arm", other)
-    if holder is not None and (holder == other) and not said_arm:
+    if not said_arm and (holder is not None or _empty(model, other)):  # held by the other hand, or it is free
         return command.with_arg("arm", other)
     if holder is None and not said_arm:
         raise Refusal(f"Both my hands are full. Put one down first, then I can take {named}.")
@@ -120,18 +119,13 @@ def _hand_for_named(model: Model, command: Command, match: Match, said_arm: bool
 
 def _names_by_kind(match: Match, upto: int) -> bool:
     """Whether the terms before ``upto`` name an object by its kind, colour or position ("the left one"), not "it"."""
-    return any(
-        m.slot in NAMING_SLOTS - {"anaphor"}
-        for term in match.terms[:upto]
-        for reading in term.readings
-        for m in reading
-    )
+    return bool(slots_said(match.terms[:upto]) & (NAMING_SLOTS - {"anaphor"}))
 
 
 def _in_the_other_hand(model: Model, arm: str, match: Match) -> None:
     """ "Put it on the plate with your left hand" while the right hand holds it: refused, saying where it is
     (not a move of the empty left hand to the plate)."""
-    if not any(m.slot == "anaphor" for term in match.terms for reading in term.readings for m in reading):
+    if "anaphor" not in slots_said(match.terms):
         return
     held = next((i for i, obj in enumerate(model.world.objects) if obj.held_by not in (None, arm)), None)
     if held is not None:
@@ -175,7 +169,7 @@ def _carried(model: Model, move: Command, obj: int, history: History) -> tuple[C
 
 def _names_an_object(match: Match) -> bool:
     """Whether the words name an object by its kind, colour or "it", not only by a direction word ("left")."""
-    return any(m.slot in NAMING_SLOTS for term in match.terms for reading in term.readings for m in reading)
+    return bool(slots_said(match.terms) & NAMING_SLOTS)
 
 
 def _theme(model: Model, command: Command, match: Match) -> int | None:

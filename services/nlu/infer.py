@@ -22,7 +22,7 @@ from services.nlu.phrasing import command_text, not_seen, parameter_question, re
 from services.nlu.prior import History, history_scores, side_scores, situation_scores
 from services.nlu.refexp import Scene
 from services.nlu.results import Answer, Clarify, CommandResult, Result
-from services.nlu.tokens import Term, Utterance, read
+from services.nlu.tokens import Term, Utterance, read, slots_said
 from services.nlu.unsupported import unsupported
 from services.nlu.weights import DECISION, LANGUAGE
 from services.nlu.world import World
@@ -238,7 +238,7 @@ class Model:
         labels = [command_text(c, self.scene) for c in candidates]
         procedure = candidates[0].procedure
         params = [p for p in PROCEDURES[procedure] if len({c.arg(p) for c in candidates}) > 1]
-        if "arm" in params and "object" in params and not _names_a_hand(match):
+        if "arm" in params and "object" in params and "arm" not in slots_said(match.terms):  # no hand said
             candidates = _best_hand_each(candidates)  # the object decides the hand: ask only which object
             labels = [command_text(c, self.scene) for c in candidates]
             params = [p for p in params if p != "arm" or len({c.arg("arm") for c in candidates}) > 1]
@@ -362,11 +362,6 @@ def qualify(result: CommandResult, said: modifiers.Modifiers, scene: Scene) -> R
     phrases = {k: v for k, v in result.phrases.items() if not (k == "arm" and said.both)}
     text = command_text(command, scene, phrases)
     return CommandResult(command, result.confidence, text, phrases, result.score, result.then)
-
-
-def _names_a_hand(match: Match) -> bool:
-    """Whether the words name a hand ("with your left hand"): then the hand is no part of a question's answer."""
-    return any(m.slot == "arm" for term in match.terms for reading in term.readings for m in reading)
 
 
 def _best_hand_each(candidates: list[Command]) -> list[Command]:

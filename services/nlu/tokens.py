@@ -72,6 +72,11 @@ class Term:
         return None
 
 
+def slots_said(terms: tuple[Term, ...]) -> frozenset[str]:
+    """The slots any reading of ``terms`` fills ("type", "anaphor", "arm", ...): what kinds of thing were said."""
+    return frozenset(m.slot for term in terms for reading in term.readings for m in reading)
+
+
 @dataclass(frozen=True)
 class Utterance:
     """Result of reading an utterance: its terms and the words nobody knows."""
