@@ -17,7 +17,7 @@ from services.nlu.lexicon import NUMBER_WORDS
 from services.nlu.phrasing import either
 from services.nlu.relations_asked import RELATION_WORDS
 from services.nlu.results import Answer
-from services.nlu.tokens import Term, canonical, read
+from services.nlu.tokens import Term, canonical, read, slots_said
 from services.nlu.weights import MARGINS
 from shared.contract import ARMS
 
@@ -265,13 +265,12 @@ def _what_is(model: Model, words: str, landmark: str) -> str:
 
 def _names_an_object(phrase: str) -> bool:
     """Whether the words name an object of the table (a colour, a kind, "it"), not the robot or the table."""
-    terms = read(phrase).terms
-    return bool(_said(terms, "color") or _said(terms, "type") or _said(terms, "anaphor"))
+    return bool(slots_said(read(phrase).terms) & {"color", "type", "anaphor"})
 
 
 def _meant_or_it(model: Model, phrase: str) -> list[int] | str:
     """:func:`_meant`, with "it" the object last referred to."""
-    if _said(read(phrase).terms, "anaphor") and model.scene.last_object is not None:
+    if "anaphor" in slots_said(read(phrase).terms) and model.scene.last_object is not None:
         return [model.scene.last_object]
     return _meant(model, phrase)
 
