@@ -40,7 +40,7 @@ from typing import Any, TypeVar
 import msgspec
 import numpy as np
 
-from services.executor import wording
+from services.executor import torso, wording
 from services.executor.actions_control import apply as apply_actions_request
 from services.executor.actions_control import step_words
 from services.executor.commands import ADMIN, BOTH, RECORDED, CommandError, Step, check, check_compound
@@ -57,6 +57,7 @@ from services.executor.undo import before_state, reverse
 from shared.bus import Bus, BusTimeout, RemoteError
 from shared.contract import PLACES
 from shared.messages import NluResult, Objects, PerceivedObject, SimState, Table
+from shared.robot import ROBOT
 
 log = logging.getLogger("hfpbd.executor")
 
@@ -569,7 +570,8 @@ class Executor:
             if any(snap.robot.moving.values()):
                 continue
             joints = snap.joints()
-            q = {arm: np.array([joints.get(n, 0.0) for n in joint_names(arm)]) for arm in ARMS}
+            # the torso carries both arms: a new height is a new map
+            q = {arm: np.array([joints.get(n, 0.0) for n in (*joint_names(arm), ROBOT.torso_joint)]) for arm in ARMS}
             held = self.procedures.held()
             held_ids = {arm: (h.object_id if h else None) for arm, h in held.items()}
             moved = not last_q or any(np.max(np.abs(q[a] - last_q[a])) > JOINT_CHANGE for a in ARMS)
@@ -579,6 +581,10 @@ class Executor:
             started = time.perf_counter()
             try:
                 computed = reach_map(self._reach_arms, snap, held, interrupted=self._command_waiting)
+                if computed is not None and not torso.widen_pick_ups(
+                    self._reach_arms, snap, held, computed[0], self._command_waiting
+                ):
+                    computed = None
             except Exception:
                 log.exception("reachability computation failed")
                 continue

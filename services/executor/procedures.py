@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from services.executor import geometry as geo
-from services.executor import reach, targets, wording
+from services.executor import reach, targets, torso, wording
 from services.executor.bimanual import first_clash, timed_together
 from services.executor.commands import BOTH
 from services.executor.geometry import Box
@@ -134,12 +134,13 @@ class Procedures:
 
     # -- running one procedure -------------------------------------------------------------
     def run(self, procedure: str, args: dict[str, Any]) -> Done:
-        """Run ``procedure``; when it failed before moving and the other, empty arm was in its way, that arm
-        moves to the side and it is tried once more.
+        """Run ``procedure``; when it failed before moving, make room or raise or lower the torso, and try once more.
 
         After one hand has worked in the middle of the table, its arm stays
         where it let go, across the other hand's way to the box or plate in
-        front of it; a person would expect the robot to move it aside.
+        front of it; a person would expect the robot to move it aside. And
+        the table's far and outer parts are within reach only with the
+        torso lower than the working height (:mod:`services.executor.torso`).
         """
         method = getattr(self, procedure)
         arm = args.get("arm")
@@ -151,12 +152,55 @@ class Procedures:
         try:
             return method(**args)
         except StepFailed as failed:
-            if not (kin.other_arm_met and self._still(arm, before) and self._can_stand_aside(other_arm(arm))):
+            if not self._still(arm, before):
                 raise
-            self._stand_aside(other_arm(arm), failed)
+            remedy = self._remedy(procedure, args, kin.other_arm_met, failed)
         done: Done = method(**args)
-        done.message = " ".join(filter(None, [f"I moved my {other_arm(arm)} hand aside to make room.", done.message]))
+        done.message = " ".join(filter(None, [remedy, done.message]))
         return done
+
+    def _remedy(self, procedure: str, args: dict[str, Any], other_arm_met: bool, failed: StepFailed) -> str:
+        """Move the other arm aside, or the torso to a height that reaches, for a step that ``failed`` before
+        its arm moved; what was done, to be said. Where neither helps, the failure stands."""
+        arm = args["arm"]
+        if other_arm_met and self._can_stand_aside(other_arm(arm)):
+            self._stand_aside(other_arm(arm), failed)
+            return f"I moved my {other_arm(arm)} hand aside to make room."
+        snap = self._snapshot()
+        held = {
+            hand: None if h is None else self._refresh_held(h, snap, self.arms[hand]) for hand, h in self.held().items()
+        }
+        reaching = torso.height_reaching(self.arms, snap, held, procedure, args)
+        if reaching is None:
+            raise failed
+        now = snap.joints().get(ROBOT.torso_joint, ROBOT.working_torso)
+        log.info("the torso moves from %.2f m to %.2f m to reach", now, reaching.height)
+        if reaching.arm_first is not None:
+            kin, _ = self._ready(arm)
+            trajectory = kin.plan_to(reaching.arm_first)
+            if trajectory is None:
+                raise failed
+            self._go(arm, trajectory)
+        self._move_torso(reaching.height, now, failed)
+        return f"I {'lowered' if reaching.height < now else 'raised'} my torso to reach."
+
+    def _move_torso(self, height: float, now: float, failed: StepFailed) -> None:
+        """Raise or lower the torso from ``now`` to ``height``, then look at the same spot of the table again."""
+        kin = self.arms["right"]
+        kin.set_joints(self._snapshot().joints())
+        looked_at = torso.gaze(kin, self._snapshot().table_z)
+        version = self.scene.snapshot().robot_version
+        try:
+            outcome = self.robot.move_torso(height, abs(height - now))
+            if outcome.status != "done":
+                raise failed
+            self.scene.wait_robot(version, STATE_WAIT)
+            if looked_at is not None:
+                version = self.scene.snapshot().robot_version
+                self.robot.look_at(looked_at)
+                self.scene.wait_robot(version, STATE_WAIT)
+        except MotionError:
+            raise failed from None
 
     def _still(self, arm: str, before: dict[str, float]) -> bool:
         """Whether ``arm`` is where it was (joints ``before``): a step that failed without moving it."""

@@ -22,6 +22,7 @@ import numpy as np
 
 from shared.bus import Bus, BusTimeout, RemoteError
 from shared.messages import SimEvent
+from shared.robot import ROBOT
 
 log = logging.getLogger("hfpbd.executor.robot")
 
@@ -217,6 +218,15 @@ class SimRobot:
 
     def look_at(self, point: np.ndarray) -> Outcome:
         return self._run("head", {"look_at": [float(v) for v in point]}, SHORT_MOTION)
+
+    def move_torso(self, height: float, distance: float) -> Outcome:
+        """Raise or lower the torso to ``height``, ``distance`` metres from where it is.
+
+        The simulator moves it at its rated speed on a minimum-jerk profile
+        (peak 1.875 × the mean), so that is how long it may take.
+        """
+        expected = 1.875 * distance / ROBOT.rated_speeds([ROBOT.torso_joint])[0] + SHORT_MOTION
+        return self._run("torso", {"height": float(height)}, expected)
 
     def turn_head(self, pan: float, tilt: float) -> Outcome:
         """Turn the head to the given joint angles (undoing a look)."""

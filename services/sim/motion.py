@@ -17,6 +17,8 @@ import numpy as np
 from scipy.interpolate import PchipInterpolator
 
 SPEED_FRACTION = 0.4  # default moves use this share of each joint's velocity limit
+# the torso, slow at its rated 5 cm/s, moves at that speed: a step lowering it to reach waits on it
+TORSO_SPEED_FRACTION = 1.0
 MIN_DURATION = 0.4  # s; even tiny moves take a moment
 SETTLE_TOLERANCE = 0.02  # rad or m: "arrived"
 SETTLE_TIMEOUT = 1.5  # s after the reference ends before a motion is declared blocked

@@ -30,7 +30,7 @@ import numpy as np
 
 from services.sim import control
 from services.sim.cloud import cloud_message
-from services.sim.motion import Motion
+from services.sim.motion import TORSO_SPEED_FRACTION, Motion
 from services.sim.render_time import RenderWait
 from services.sim.scene_file import (
     DEFAULT_SCENE,
@@ -303,7 +303,10 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
 
         def start() -> str:
             motion_id = world.new_motion_id()
-            runner.replaced(world.move_joints("torso", ["torso_lift_joint"], np.array([height]), motion_id), motion_id)
+            runner.replaced(
+                world.move_joints("torso", ["torso_lift_joint"], np.array([height]), motion_id, TORSO_SPEED_FRACTION),
+                motion_id,
+            )
             return motion_id
 
         return {"ok": True, "motion_id": runner.call(start)}

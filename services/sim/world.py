@@ -22,7 +22,7 @@ from scipy.spatial.transform import Rotation
 
 from services.sim import objects as object_builder
 from services.sim.halt import Halting
-from services.sim.motion import MinimumJerk, Motion, Waypoints
+from services.sim.motion import SPEED_FRACTION, MinimumJerk, Motion, Waypoints
 from services.sim.scene_file import ObjectSpec, SceneSpec
 from shared.robot import ROBOT
 from shared.robot.build_urdf import model
@@ -255,10 +255,15 @@ class SimWorld:
         self.motions[motion.part] = motion
         return replaced
 
-    def move_joints(self, part: str, names: list[str], goal: np.ndarray, motion_id: str) -> Motion | None:
+    def move_joints(
+        self, part: str, names: list[str], goal: np.ndarray, motion_id: str, speed_fraction: float = SPEED_FRACTION
+    ) -> Motion | None:
+        """A rest-to-rest move of ``names`` to ``goal``, its fastest joint at ``speed_fraction`` of its rated speed."""
         start = self.joint_targets(names)
         velocity = np.array([self.joints[n].velocity for n in names])
-        return self.start_motion(Motion(motion_id, part, names, MinimumJerk(start, goal, velocity), self.sim_time))
+        return self.start_motion(
+            Motion(motion_id, part, names, MinimumJerk(start, goal, velocity, speed_fraction), self.sim_time)
+        )
 
     def follow_waypoints(
         self, part: str, names: list[str], times: np.ndarray, points: np.ndarray, motion_id: str, contact: bool = False
