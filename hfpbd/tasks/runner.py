@@ -127,8 +127,9 @@ class TaskRunner:
         except WaitTimeout as exc:
             raise RunError(str(exc)) from exc
 
-    def load_scene(self, scene: str, seed: int | None = None) -> Truth:
-        """Load (or reload) a scene and wait until perception sees exactly its objects and the robot is idle."""
+    def load_scene(self, scene: str, seed: int | None = None, poses: dict[str, list[float]] | None = None) -> Truth:
+        """Load (or reload) a scene, its objects at their seeded or given ``poses`` (id -> [x, y] or
+        [x, y, yaw]), and wait until perception sees exactly its objects and the robot is idle."""
         try:
             self.watch.wait_for(lambda: not self.watch.busy(), STEP_TIMEOUT, "the executor to finish what it is doing")
         except WaitTimeout as exc:
@@ -136,6 +137,8 @@ class TaskRunner:
         request: dict[str, Any] = {"name": scene}
         if seed is not None:
             request["seed"] = seed
+        if poses:
+            request["poses"] = poses
         try:
             reply = self.bus.request(self.bus.keys.sim_control("scene"), request, timeout=60)
         except (BusTimeout, RemoteError) as exc:

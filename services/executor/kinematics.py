@@ -17,7 +17,8 @@ on top:
   collision-free too.
 * **Only the arm moves.** mplib's move group for a tool frame includes the
   torso; the torso is pinned (IK bounds, planner fixed joint) so plans are
-  pure 7-joint arm trajectories the simulator can follow.
+  pure 7-joint arm trajectories the simulator can follow (the torso moves
+  on its own, between steps: ``services.executor.torso``).
 """
 
 from __future__ import annotations

@@ -5,7 +5,8 @@ the simulator's ground truth, and what it answers from its own words. The
 sentences are the ones that used to fail: "stack the cups" (the plate beside
 the lower cup was taken for in the way), "pick up both cups" (asked which
 hand), "put them down", a question that names a relation ("is the red cup on
-the plate?" was done, not answered), and a push of the plate.
+the plate?" was done, not answered), a push of the plate, and a cup out of
+reach with the torso up (it was refused).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ pytestmark = [pytest.mark.slow, pytest.mark.timeout(900)]
 RED_CUP, BLUE_CUP, BOX, PLATE = "obj0", "obj1", "obj2", "obj3"  # the default scene's ids (services/sim/scenes)
 LIFTED = 0.05  # metres above where it stood: picked up
 PUSHED = 0.05  # metres towards the robot the plate must have slid
+FAR_RIGHT = [0.87, -0.44]  # x, y: beyond both hands with the torso up (docs/architecture.md)
 
 
 def where(runner: TaskRunner, truth_id: str) -> np.ndarray:
@@ -64,3 +66,14 @@ def test_push_the_plate_towards_you(runner: TaskRunner) -> None:
     after = where(runner, "obj0")
     assert before[0] - after[0] > PUSHED, f"the plate moved from {before.round(3)} to {after.round(3)}"
     assert abs(after[2] - before[2]) < 0.01, "the plate left the table"
+
+
+def test_a_cup_out_of_reach_with_the_torso_up_is_picked_up_and_put_on_the_plate(runner: TaskRunner) -> None:
+    runner.load_scene("default", poses={RED_CUP: FAR_RIGHT})
+    before = where(runner, RED_CUP)
+    answer = said(runner, "pick up the red cup")
+    assert "I lowered my torso to reach." in answer, answer
+    assert where(runner, RED_CUP)[2] > before[2] + LIFTED, f"the red cup was not lifted: {answer}"
+    said(runner, "put it on the plate")
+    verdict = placed(runner.watch.settled(), RED_CUP, "on_top_of", PLATE)
+    assert verdict.success, verdict.reason
