@@ -54,13 +54,7 @@ def test_no_height_is_chosen_for_what_is_within_reach_or_beyond_any(arms: dict[s
 def test_a_lowered_torso_is_raised_again_for_what_only_the_working_height_reaches(
     arms: dict[str, ArmKinematics],
 ) -> None:
-    tall = {
-        "id": "tall",
-        "color": "green",
-        "type": "box",
-        "position": [0.47, -0.2, TABLE_TOP_Z + 0.12],
-        "size": [0.1, 0.1, 0.24],
-    }
+    tall = cup("tall", 0.47, -0.2, color="green", size=(0.1, 0.1, 0.24))  # a vase: "above" it is high
     snap = at_side(tall, height=0.05).snapshot()
     reaching = torso.height_reaching(
         arms, snap, EMPTY, "move_rel_dest", {"arm": "right", "relation": "above", "object": "tall"}
