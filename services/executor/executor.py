@@ -293,7 +293,9 @@ class Executor:
             context = _context(step, utterance)
             if len(steps) > 1:
                 context["part"] = {"step": number, "of": len(steps)}
-            if not self._step(step.procedure, step.args, context, keep=True, failure_note=note):
+            after = steps[number] if number < len(steps) else None
+            coming = _coming(step.procedure, step.args, after.procedure, after.args) if after else None
+            if not self._step(step.procedure, step.args, context, keep=True, failure_note=note, coming=coming):
                 return
 
     def _doing(self, steps: list[Step]) -> str:
@@ -385,11 +387,12 @@ class Executor:
         keep: bool,
         preferred: list[float] | None = None,
         failure_note: str | None = None,
+        coming: dict[str, str] | None = None,
     ) -> bool:
         """Narrate, run and (when ``keep``) record one procedure; False when it failed or was stopped.
 
         ``failure_note`` is added to the error sentence (which step of a
-        compound this was).
+        compound this was); ``coming``: the placement a pick-up is followed by.
         """
         snap = self.scene.snapshot()
         if procedure not in ADMIN:
@@ -416,6 +419,8 @@ class Executor:
         kwargs = dict(args)
         if preferred is not None and procedure == "move_rel_dest":
             kwargs["preferred"] = preferred
+        if coming is not None:
+            kwargs["coming"] = coming
         try:
             done = self.procedures.run(procedure, kwargs)
         except Stopped:
@@ -495,11 +500,23 @@ class Executor:
                 "utterance": step.get("utterance", ""),
             }
             preferred = step.get("relative_pose") if step["procedure"] == "move_rel_dest" else None
-            if not self._step(step["procedure"], args, context, keep=False, preferred=preferred):
+            coming = self._coming_in_replay(step, steps[i] if i < len(steps) else None, matched)
+            if not self._step(step["procedure"], args, context, keep=False, preferred=preferred, coming=coming):
                 if not self.cancel.is_set():
                     self.say(f"Action {number} stopped at step {i} of {len(steps)}.", "error")
                 return
         self.say(f"Completed action {number}.", "narration")
+
+    def _coming_in_replay(
+        self, step: dict[str, Any], after: dict[str, Any] | None, matched: Regrounding
+    ) -> dict[str, str] | None:
+        """The placement after a replayed pick-up (see :func:`_coming`), its landmark found where it is now."""
+        if after is None or step["procedure"] != "pick_up" or not after.get("landmark"):
+            return None
+        found = self._reground(after["landmark"], matched)
+        if found is None:
+            return None
+        return _coming(step["procedure"], step["args"], after["procedure"], {**after["args"], "object": found})
 
     def _reground(self, landmark: dict[str, Any], matched: Regrounding) -> str | None:
         """The current id of a step's landmark: the one matched at the start if it is still seen, else matched anew.
@@ -643,6 +660,14 @@ def _typed_or_none(kind: type[T]) -> Callable[[Any], T | None]:
             return None
 
     return convert
+
+
+def _coming(procedure: str, args: dict[str, Any], after: str, after_args: dict[str, Any]) -> dict[str, str] | None:
+    """What a pick-up is to be followed by, when the next step places the object by the same hand beside or
+    on another (``Procedures.pick_up`` then grasps it so that it can be set down there)."""
+    if procedure != "pick_up" or after != "place_rel" or after_args.get("arm") != args.get("arm"):
+        return None
+    return {"relation": str(after_args["relation"]), "object": str(after_args["object"])}
 
 
 def _context(step: Step, utterance: str) -> dict[str, Any]:

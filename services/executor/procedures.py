@@ -56,6 +56,7 @@ RETREAT = 0.08  # after releasing, the hand backs off this far
 STATE_WAIT = 1.0  # seconds to wait for a robot state newer than a finished motion
 PLACE_PLANS = 3  # release candidates a placement may fail to plan a path to before it gives up
 PICK_ATTEMPTS = 3  # grasps tried in turn (an approach found blocked on arrival counts as one)
+SUITED_TRIES = 6  # grasp candidates judged against the placement that follows, before the first is taken anyway
 FLAT_MARGIN = 0.01  # metres: how far a "flat" object's top may reach above a released object's bottom
 PRESS_KEPT = 0.03  # metres between the measured and the commanded tool position of a hand still pressing
 AWAY = -0.5  # cosine between a move and the press direction below which the move leaves the object
@@ -656,7 +657,9 @@ class Procedures:
         return Done(landmark=self._landmark(obj), relative_pose=self._relative(kin, box))
 
     # -- p5 --------------------------------------------------------------------------------------
-    def pick_up(self, arm: str, object: str) -> Done:
+    def pick_up(self, arm: str, object: str, coming: dict[str, str] | None = None) -> Done:
+        """Grasp ``object`` and lift it; ``coming``: the placement that follows (``relation``, ``object``), when
+        known (a compound command, a replay), so that a grasp it can be done with is tried first."""
         kin, snap = self._ready(arm)
         obj = self._object(snap, object)
         words = refer(snap.objects, object)
@@ -690,6 +693,8 @@ class Procedures:
         stood_on = max([snap.table_z, *(Box.of(snap.objects[oid]).top for oid in supports)])
         reason = "it slipped out of my fingers"
         candidates, looked_again = _reached_by_lines_first(kin, itertools.chain([first], plans)), False
+        if coming is not None:
+            candidates = self._suited_first(kin, snap, obj, stood_on, candidates, coming)
         for attempt in range(PICK_ATTEMPTS):
             if (candidate := next(candidates, None)) is None:
                 break
@@ -748,6 +753,80 @@ class Procedures:
             reason = "it slipped out of my fingers when I lifted it"
             self._release_and_back_off(arm)
         raise StepFailed(wording.cannot_pick(arm, words, reason))
+
+    def _suited_first(
+        self,
+        kin: ArmKinematics,
+        snap: SceneSnapshot,
+        obj: PerceivedObject,
+        stood_on: float,
+        candidates: Iterator[tuple[geo.Grasp, np.ndarray]],
+        coming: dict[str, str],
+    ) -> Iterator[tuple[geo.Grasp, np.ndarray]]:
+        """The grasp candidates with the first one the ``coming`` placement can be done with moved to the front.
+
+        How the hand holds the object decides how it can set it down: a cup
+        held from its right cannot be lowered just left of a tall cup by the
+        right hand, whose forearm then comes down over the tall one. Up to
+        ``SUITED_TRIES`` candidates are judged (IK and the straight way down,
+        as the placement itself checks them), the first suited one leads,
+        and the others follow in their own order.
+        """
+        judged = []
+        for candidate in itertools.islice(candidates, SUITED_TRIES):
+            if self._suits(kin, snap, obj, stood_on, candidate, coming):
+                yield candidate
+                break
+            judged.append(candidate)
+        yield from judged
+        yield from candidates
+
+    def _suits(
+        self,
+        kin: ArmKinematics,
+        snap: SceneSnapshot,
+        obj: PerceivedObject,
+        stood_on: float,
+        candidate: tuple[geo.Grasp, np.ndarray],
+        coming: dict[str, str],
+    ) -> bool:
+        """Whether, held as ``candidate`` grasps it and lifted, ``obj`` can be lowered ``coming`` its landmark."""
+        grasp, pre_q = candidate
+        landmark = snap.objects.get(coming["object"])
+        if landmark is None or isinstance(grasp, EdgeGrasp):
+            return True  # nothing to judge by: the candidate keeps its place
+        kin.allow_touching(obj.id, True)
+        try:
+            grasp_q = kin.ik(grasp.grasp, seeds=[pre_q])
+        finally:
+            kin.allow_touching(obj.id, False)
+        if grasp_q is None:
+            return False
+        lift = grasp.lift[:3] - grasp.grasp[:3]
+        grasped = targets.held_in_hand(obj.id, Box.of(obj), kin.fk(grasp_q), stood_on)
+        held = replace(grasped, box=Box(grasped.box.center + lift, grasped.box.size), tool_pose=grasp.lift)
+        relation = "on_top_of" if coming["relation"] == "above" else coming["relation"]
+        on = (landmark.id,) if relation == "on_top_of" else ()
+        box = Box.of(landmark)
+        kin.set_obstacles(snap.obstacles(skip={obj.id}))
+        kin.attach(obj.id, held.box, held.tool_pose)
+        kin.lines_blocked_by.clear()
+
+        def lowerable(pairs: list[tuple[np.ndarray, np.ndarray]]) -> bool:
+            free = self._on_free_spots(held, pairs, snap, on)
+            return any(self._lowerable(kin, snap, held, hover, release) is not None for hover, release in free)
+
+        try:
+            if lowerable(targets.place_relation(relation, box, grasp.lift, held, snap.table_z)):
+                return True
+            # as the placement does: the wider ones only when the way down ran into the landmark
+            return (
+                not on
+                and landmark.id in kin.lines_blocked_by
+                and lowerable(targets.place_relation_wider(relation, box, grasp.lift, held, snap.table_z))
+            )
+        finally:
+            sync(kin, snap, None)
 
     def _out_of_reach(self, arm: str, kin: ArmKinematics, obj: PerceivedObject, words: str) -> str | None:
         """When no grasp of ``obj`` is within the arm's length at all: how far out it is, and whether the other hand can.
@@ -1089,19 +1168,14 @@ class Procedures:
         on = (object,) if relation in ("above", "on_top_of") else ()
         no_path = wording.sentence(f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}")
 
-        def on_free_spots(pairs: list[tuple[np.ndarray, np.ndarray]]) -> list[tuple[np.ndarray, np.ndarray]]:
-            return [
-                (h, r) for h, r in pairs if self._free_spot(held, r, snap, self._landing(held, r, snap, on), not on)
-            ]
-
         candidates = targets.place_relation(relation, box, kin.fk(), held, snap.table_z)
-        pairs = on_free_spots(candidates)
+        pairs = self._on_free_spots(held, candidates, snap, on)
         kin.lines_blocked_by.clear()
         done = self._place(arm, kin, snap, held, pairs, no_path, (object, box))
         if done is None and object in kin.lines_blocked_by and not on:
             # every way down ran into the landmark: swing the forearm past its side, or release further out
             wider = targets.place_relation_wider(relation, box, kin.fk(), held, snap.table_z)
-            done = self._place(arm, kin, snap, held, on_free_spots(wider), no_path, (object, box))
+            done = self._place(arm, kin, snap, held, self._on_free_spots(held, wider, snap, on), no_path, (object, box))
         if done is None:
             log.info(
                 "no placement %s %s: %d candidates, %d on a free spot; objects seen: %s",
@@ -1119,6 +1193,12 @@ class Procedures:
             )
         done.landmark = self._landmark(obj)
         return done
+
+    def _on_free_spots(
+        self, held: Held, pairs: list[tuple[np.ndarray, np.ndarray]], snap: SceneSnapshot, on: tuple[str, ...]
+    ) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The (hover, release) pairs whose release stands clear of everything else (``on``: what it goes on)."""
+        return [(h, r) for h, r in pairs if self._free_spot(held, r, snap, self._landing(held, r, snap, on), not on)]
 
     @staticmethod
     def _arm_over(arm: str, relation: str, words: str) -> str:

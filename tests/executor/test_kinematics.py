@@ -405,3 +405,22 @@ def test_a_pick_up_sets_off_with_a_grasp_the_lines_reach_before_one_only_the_ran
     assert sorted(id(c) for c in ordered) == sorted(id(c) for c in preferred)
     reached = [kin.reached_by_lines(q) for _, q in ordered]
     assert reached[0] and reached == sorted(reached, reverse=True)
+
+
+def test_a_pick_up_followed_by_a_placement_grasps_so_that_it_can_be_set_down_there(
+    arms: dict[str, ArmKinematics],
+) -> None:
+    """A cup to go behind a tall box: held as the first grasps hold it (from the robot's side), the right hand
+    cannot lower it there; a grasp from further round can, and with the placement known it is tried first."""
+    tall = cup("tall", 0.48, 0.0, color="blue", size=(0.1, 0.1, 0.2)) | {"type": "box"}
+    scene = scene_with(cup("red", 0.6, -0.1), tall, pose="side")
+    procedures = Procedures(scene, None, arms, list)  # type: ignore[arg-type]
+    kin, snap = procedures._ready("right")
+    obj = snap.objects["red"]
+    behind = {"relation": "behind", "object": "tall"}
+    plain = list(_reached_by_lines_first(kin, procedures._grasp_plans(kin, obj)))
+    assert not procedures._suits(kin, snap, obj, TABLE_TOP_Z, plain[0], behind), "no longer a case for the order"
+    suited = list(procedures._suited_first(kin, snap, obj, TABLE_TOP_Z, iter(plain), behind))
+    assert procedures._suits(kin, snap, obj, TABLE_TOP_Z, suited[0], behind)
+    assert sorted(id(c) for c in suited) == sorted(id(c) for c in plain)  # the same candidates, one moved ahead
+    assert [c for c in plain if c is not suited[0]] == suited[1:]

@@ -1,9 +1,10 @@
-"""The torso as a way to reach, through the real sim, perception and executor, judged from ground truth.
+"""Reaching further, through the real sim, perception and executor, judged from ground truth.
 
 A cup on the table's far right corner is out of the right hand's reach with
 the torso fully up; the pick-up lowers the torso, says so, and lifts the
 cup; putting it on the plate in the middle then works from the lower torso
-or raises it again.
+or raises it again. A box to be put behind a taller one further out is
+grasped so that the hand can lower it there.
 """
 
 from __future__ import annotations
@@ -38,4 +39,31 @@ def test_a_cup_beyond_reach_is_picked_up_with_the_torso_lowered_and_put_on_the_p
     stack.settled()
     truth = {oid: msgspec.convert(obj, TruthObject) for oid, obj in stack.truth.items()}
     verdict = placed(truth, RED_CUP, "on_top_of", PLATE)
+    assert verdict.success, verdict.reason
+
+
+CUP, TALL = "obj0", "obj1"
+BEHIND_THE_TALL_BOX = {
+    "name": "behind_the_tall_box",
+    "description": "A red cup beside a tall blue box.",
+    "objects": [
+        {"id": CUP, "type": "cup", "color": "red", "size": [0.07, 0.07, 0.1], "mass": 0.12, "position": [0.6, -0.1]},
+        {"id": TALL, "type": "box", "color": "blue", "size": [0.1, 0.1, 0.2], "mass": 0.5, "position": [0.48, 0.0]},
+    ],
+}
+
+
+def test_a_cup_picked_up_to_go_behind_a_tall_box_is_grasped_so_that_it_can(stack: Stack) -> None:
+    """ "Put the red cup behind the blue box": the pick-up knows the placement that follows (held as the first
+    grasps hold it, the right hand could not lower it there)."""
+    stack.load_scene(BEHIND_THE_TALL_BOX)
+    said = stack.command(
+        "pick_up",
+        {"arm": "right", "object": stack.pid(CUP)},
+        then=[{"procedure": "place_rel", "args": {"arm": "right", "relation": "behind", "object": stack.pid(TALL)}}],
+    )
+    assert texts(said, "error") == [], f"the red cup behind the blue box: {texts(said)}"
+    stack.settled()
+    truth = {oid: msgspec.convert(obj, TruthObject) for oid, obj in stack.truth.items()}
+    verdict = placed(truth, CUP, "behind", TALL)
     assert verdict.success, verdict.reason
