@@ -808,6 +808,8 @@ class Procedures:
         relation = "on_top_of" if coming["relation"] == "above" else coming["relation"]
         on = (landmark.id,) if relation == "on_top_of" else ()
         box = Box.of(landmark)
+        # the placement's IK starts from the arm as the lift left it, as it will then
+        lift_q = kin.ik(grasp.lift, seeds=[grasp_q], check_collisions=False)
         kin.set_obstacles(snap.obstacles(skip={obj.id}))
         kin.attach(obj.id, held.box, held.tool_pose)
         kin.lines_blocked_by.clear()
@@ -817,14 +819,15 @@ class Procedures:
             return any(self._lowerable(kin, snap, held, hover, release) is not None for hover, release in free)
 
         try:
-            if lowerable(targets.place_relation(relation, box, grasp.lift, held, snap.table_z)):
-                return True
-            # as the placement does: the wider ones only when the way down ran into the landmark
-            return (
-                not on
-                and landmark.id in kin.lines_blocked_by
-                and lowerable(targets.place_relation_wider(relation, box, grasp.lift, held, snap.table_z))
-            )
+            with kin.posed(grasp_q if lift_q is None else lift_q):
+                if lowerable(targets.place_relation(relation, box, grasp.lift, held, snap.table_z)):
+                    return True
+                # as the placement does: the wider ones only when the way down ran into the landmark
+                return (
+                    not on
+                    and landmark.id in kin.lines_blocked_by
+                    and lowerable(targets.place_relation_wider(relation, box, grasp.lift, held, snap.table_z))
+                )
         finally:
             sync(kin, snap, None)
 
