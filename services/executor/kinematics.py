@@ -853,14 +853,14 @@ class ArmKinematics:
         try:
             with self._tolerating_start_contacts():
                 for i, q in enumerate(path[1:], start=1):
-                    hits = self._own_collisions(q)
+                    hits = self.own_collisions(q)
                     if hits and not touched:
                         objects = {self._pressable(pair) for pair in hits}
                         if None not in objects:
                             touched, lead = tuple(sorted(objects)), i  # type: ignore[arg-type]
                             for name in touched:
                                 acm.set_entry(name, self._gripper_links, True)
-                            hits = self._own_collisions(q)
+                            hits = self.own_collisions(q)
                     if hits:
                         log.info("%s arm: the contact move stops short of %s", self.arm, hits)
                         break
@@ -888,7 +888,7 @@ class ArmKinematics:
         clear = 1
         with self._tolerating_start_contacts():
             for q in move.path[1 : move.lead]:
-                if self._own_collisions(q):
+                if self.own_collisions(q):
                     break
                 clear += 1
         return move.path[:clear] if (clear - 1) * CONTACT_STEP >= MIN_LEAD else None
@@ -936,7 +936,7 @@ class ArmKinematics:
         """Objects (not the table) the gripper touches or nearly touches (within the padding) now."""
         return {name for pair in self.collisions(self.arm_q) if (name := self._pressable(pair)) is not None}
 
-    def _own_collisions(self, arm_q: np.ndarray) -> list[tuple[str, str]]:
+    def own_collisions(self, arm_q: np.ndarray) -> list[tuple[str, str]]:
         """Colliding pairs at ``arm_q`` that involve this arm or what it holds (not the other arm's own contacts)."""
         mine = (f"{PREFIX[self.arm]}_", HELD_PREFIX)
         return [pair for pair in self.collisions(arm_q) if any(n.startswith(mine) for n in pair)]

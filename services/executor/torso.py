@@ -98,7 +98,8 @@ def _first_pose(
     kin: ArmKinematics, snap: SceneSnapshot, held: Held | None, procedure: str, args: Mapping[str, Any]
 ) -> np.ndarray | None:
     """The arm's joints for the step's first pose at the model's present torso height (collision-free IK):
-    a pre-grasp whose grasp is reachable too, or the hover pose of a relation."""
+    a pre-grasp whose grasp is reachable too, a hover pose whose release below is reachable too, or the pose
+    of a move to an object."""
     obj = snap.objects[args["object"]]
     if procedure == "pick_up":
         for grasp in targets.grasps(obj, snap.near_edge):
@@ -112,8 +113,16 @@ def _first_pose(
             finally:
                 kin.allow_touching(obj.id, False)
         return None
-    relation = "on_top_of" if procedure == "place_rel" and args["relation"] == "above" else args["relation"]
-    found = kin.first_reachable(targets.move_relation(relation, Box.of(obj), kin.fk(), held, snap.table_z))
+    if procedure == "place_rel" and held is not None:
+        # the hover pose and, below it, the release: at the far edge the hand may get over the spot but
+        # not down to it
+        relation = "on_top_of" if args["relation"] == "above" else args["relation"]
+        for hover, release in targets.place_relation(relation, Box.of(obj), kin.fk(), held, snap.table_z):
+            hover_q = kin.ik(hover)
+            if hover_q is not None and kin.ik(release, seeds=[hover_q], check_collisions=False) is not None:
+                return hover_q
+        return None
+    found = kin.first_reachable(targets.move_relation(args["relation"], Box.of(obj), kin.fk(), held, snap.table_z))
     return None if found is None else found[1]
 
 
@@ -126,14 +135,19 @@ def _way_clear(
     posed: Mapping[str, np.ndarray],
 ) -> bool:
     """Whether both arms, as they are now or as ``posed`` (arm -> joints), with what they hold, touch nothing
-    all the way from torso height ``start`` to ``end`` (the torso carries them straight up or down)."""
+    all the way from torso height ``start`` to ``end`` (the torso carries them straight up or down).
+
+    Each arm's model answers for that arm and what it holds; the other arm
+    stands in it as posed.
+    """
     steps = max(2, int(np.ceil(abs(end - start) / CHECK_EVERY)) + 1)
     for arm, kin in arms.items():
         reach.sync(kin, snap, held.get(arm))
-        arm_q = posed.get(arm, kin.arm_q)
+        for other, other_q in posed.items():
+            kin.set_joints(dict(zip(ROBOT.arm_joint_names(other), other_q, strict=True)))
         for height in np.linspace(start, end, steps):
             kin.set_joints({ROBOT.torso_joint: float(height)})
-            if kin.collisions(arm_q):
+            if kin.own_collisions(kin.arm_q):
                 return False
     return True
 

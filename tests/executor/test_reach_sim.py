@@ -3,7 +3,8 @@
 A cup on the table's far right corner is out of the right hand's reach with
 the torso fully up; the pick-up lowers the torso, says so, and lifts the
 cup; putting it on the plate in the middle then works from the lower torso
-or raises it again. A cup is put behind a tall box in one command.
+or raises it again. A held cup is set down behind a plate far out with the
+torso lowered. A cup is put behind a tall box in one command.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ pytestmark = pytest.mark.slow
 
 RED_CUP = "obj0"
 FAR_RIGHT = [0.87, -0.44]  # x, y: beyond the right hand with the torso up (docs/architecture.md)
+FAR_PLATE = [0.78, -0.3]  # x, y: the spot behind it is beyond the right hand with the torso up
 LIFTED = 0.05  # metres above where it stood: the pick-up lifted it
 LOWERED = 0.1  # metres below the working height: the torso was lowered
 
@@ -38,6 +40,21 @@ def test_a_cup_beyond_reach_is_picked_up_with_the_torso_lowered_and_put_on_the_p
     stack.settled()
     truth = {oid: msgspec.convert(obj, TruthObject) for oid, obj in stack.truth.items()}
     verdict = placed(truth, RED_CUP, "on_top_of", PLATE)
+    assert verdict.success, verdict.reason
+
+
+def test_a_cup_is_put_behind_a_far_plate_with_the_torso_lowered(stack: Stack) -> None:
+    """The right hand brings the red cup over the spot behind a plate 78 cm out but cannot lower it there with
+    the torso up: the torso goes down and the cup is set down behind the plate."""
+    stack.load_scene("default", poses={PLATE: FAR_PLATE})
+    said = stack.command("pick_up", {"arm": "right", "object": seen(stack, RED_CUP)})
+    assert texts(said, "error") == [], f"picking up the red cup: {texts(said)}"
+    said = stack.command("place_rel", {"arm": "right", "relation": "behind", "object": seen(stack, PLATE)})
+    assert texts(said, "error") == [], f"the red cup behind the far plate: {texts(said)}"
+    assert "I lowered my torso to reach." in texts(said, "info")
+    stack.settled()
+    truth = {oid: msgspec.convert(obj, TruthObject) for oid, obj in stack.truth.items()}
+    verdict = placed(truth, RED_CUP, "behind", PLATE)
     assert verdict.success, verdict.reason
 
 

@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
-from services.executor import torso
+from services.executor import targets, torso
+from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics
+from services.executor.procedures import Procedures, _reached_by_lines_first
 from services.executor.reach import reach_map
 from services.executor.scene import Scene, measured, perceived
 from services.sim.layout import TABLE_TOP_Z, table_truth
@@ -86,3 +90,35 @@ def test_the_head_keeps_looking_at_the_table_spot_it_saw(arms: dict[str, ArmKine
     kin.set_joints({"head_tilt_joint": -0.3})
     assert torso.gaze(kin, TABLE_TOP_Z) is None  # looking above the horizon
     assert np.isfinite(spot).all()
+
+
+def test_a_held_cup_goes_behind_a_far_plate_with_the_torso_lowered(arms: dict[str, ArmKinematics]) -> None:
+    """Held up by the right hand, a cup can be brought over the spot behind a plate 78 cm out but not down
+    to it with the torso up; lowered to 0.15 m it can, the arm taking the hover pose's joints first."""
+    procedures = Procedures(at_side(cup("red", 0.55, -0.15)), None, arms, list)  # type: ignore[arg-type]
+    kin, snap = procedures._ready("right")
+    grasp, pre_q = next(_reached_by_lines_first(kin, procedures._grasp_plans(kin, snap.objects["red"])))
+    kin.allow_touching("red", True)
+    grasp_q = kin.ik(grasp.grasp, seeds=[pre_q])
+    kin.allow_touching("red", False)
+    assert grasp_q is not None
+    lift_q = kin.ik(grasp.lift, seeds=[grasp_q], check_collisions=False)
+    assert lift_q is not None
+    grasped = targets.held_in_hand("red", snap.box("red"), kin.fk(grasp_q), TABLE_TOP_Z)
+    lifted = Box(grasped.box.center + grasp.lift[:3] - grasp.grasp[:3], grasped.box.size)
+    held = replace(grasped, box=lifted, tool_pose=grasp.lift)
+    plate = cup("plate", 0.78, -0.3, color="white", size=(0.16, 0.16, 0.015)) | {"type": "plate"}
+    scene = at_side(plate)
+    scene.update_robot(
+        measured(
+            {
+                ROBOT.torso_joint: ROBOT.working_torso,
+                **ROBOT.arm_pose_map("side"),
+                **dict(zip(ROBOT.arm_joint_names("right"), lift_q, strict=True)),
+            }
+        )
+    )
+    behind = {"arm": "right", "relation": "behind", "object": "plate"}
+    reaching = torso.height_reaching(arms, scene.snapshot(), {"right": held, "left": None}, "place_rel", behind)
+    assert reaching is not None and reaching.height == pytest.approx(0.15)
+    assert reaching.arm_first is not None
