@@ -16,9 +16,12 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+import msgspec
 import numpy as np
 
+from hfpbd.manipulation_judge import Verdict, placed
 from hfpbd.tasks.observer import Stillness
+from shared.messages import TruthObject
 from tests.processes import Launcher, new_network
 
 
@@ -104,6 +107,12 @@ class Stack:
             with self._changed:
                 self._changed.wait(0.1)
                 stillness.add(self.truth_at, {oid: o["position"] for oid, o in self.truth.items()})
+
+    def judged(self, moved: str, relation: str, landmark: str | None = None) -> Verdict:
+        """Once everything is at rest, whether ``moved`` stands ``relation`` (or "down") ``landmark`` in truth."""
+        self.settled()
+        truth = {oid: msgspec.convert(obj, TruthObject) for oid, obj in self.truth.items()}
+        return placed(truth, moved, relation, landmark)
 
     def ee(self, arm: str) -> np.ndarray:
         return np.asarray(self.robot["ee"][arm], float)

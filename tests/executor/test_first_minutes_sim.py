@@ -8,12 +8,9 @@ the NLU's (procedure and arguments, the hand given explicitly).
 
 from __future__ import annotations
 
-import msgspec
 import numpy as np
 import pytest
 
-from hfpbd.manipulation_judge import placed
-from shared.messages import TruthObject
 from tests.executor.stack import Stack, texts
 
 pytestmark = pytest.mark.slow
@@ -81,9 +78,7 @@ def test_either_cup_on_the_plate_next_to_the_other_on_the_box_and_down(stack: St
         assert texts(said, "error") == [], (
             f"placing the {colour} cup {relation or 'down'}: {texts(said)}; {scene(stack)}"
         )
-        stack.settled()
-        truth = {oid: msgspec.convert(obj, TruthObject) for oid, obj in stack.truth.items()}
-        verdict = placed(truth, cup, relation or "down", landmark)
+        verdict = stack.judged(cup, relation or "down", landmark)
         assert verdict.success, verdict.reason
         assert stack.state["robot"]["grippers"][arm] == "open"
 
@@ -97,9 +92,7 @@ def test_either_cup_stacked_on_the_other_beside_the_plate(stack: Stack, colour: 
     assert texts(said, "error") == [], f"picking up the {colour} cup: {texts(said)}"
     said = stack.command("place_rel", {"arm": arm, "relation": "on_top_of", "object": seen(stack, other)})
     assert texts(said, "error") == [], f"stacking the {colour} cup: {texts(said)}; {scene(stack)}"
-    stack.settled()
-    truth = {oid: msgspec.convert(obj, TruthObject) for oid, obj in stack.truth.items()}
-    verdict = placed(truth, cup, "on_top_of", other)
+    verdict = stack.judged(cup, "on_top_of", other)
     assert verdict.success, verdict.reason
 
 
@@ -119,8 +112,6 @@ def test_a_hand_in_the_others_way_stands_aside(stack: Stack) -> None:
     said = stack.command("place_rel", {"arm": "left", "relation": "on_top_of", "object": seen(stack, BOX)})
     assert texts(said, "error") == [], f"the blue cup on the box: {texts(said)}; {scene(stack)}"
     assert "I moved my right hand aside to make room." in texts(said, "info")
-    stack.settled()
-    truth = {oid: msgspec.convert(obj, TruthObject) for oid, obj in stack.truth.items()}
     for cup, landmark in ((red, PLATE), (blue, BOX)):
-        verdict = placed(truth, cup, "on_top_of", landmark)
+        verdict = stack.judged(cup, "on_top_of", landmark)
         assert verdict.success, verdict.reason

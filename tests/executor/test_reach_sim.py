@@ -9,11 +9,8 @@ torso lowered. A cup is put behind a tall box in one command.
 
 from __future__ import annotations
 
-import msgspec
 import pytest
 
-from hfpbd.manipulation_judge import placed
-from shared.messages import TruthObject
 from shared.robot import ROBOT
 from tests.executor.stack import Stack, texts
 from tests.executor.test_first_minutes_sim import PLATE, seen
@@ -37,9 +34,7 @@ def test_a_cup_beyond_reach_is_picked_up_with_the_torso_lowered_and_put_on_the_p
     assert stack.position(RED_CUP)[2] > before[2] + LIFTED, f"the far cup was not lifted: {texts(said)}"
     said = stack.command("place_rel", {"arm": "right", "relation": "on_top_of", "object": seen(stack, PLATE)})
     assert texts(said, "error") == [], f"the far cup on the plate: {texts(said)}"
-    stack.settled()
-    truth = {oid: msgspec.convert(obj, TruthObject) for oid, obj in stack.truth.items()}
-    verdict = placed(truth, RED_CUP, "on_top_of", PLATE)
+    verdict = stack.judged(RED_CUP, "on_top_of", PLATE)
     assert verdict.success, verdict.reason
 
 
@@ -52,9 +47,7 @@ def test_a_cup_is_put_behind_a_far_plate_with_the_torso_lowered(stack: Stack) ->
     said = stack.command("place_rel", {"arm": "right", "relation": "behind", "object": seen(stack, PLATE)})
     assert texts(said, "error") == [], f"the red cup behind the far plate: {texts(said)}"
     assert "I lowered my torso to reach." in texts(said, "info")
-    stack.settled()
-    truth = {oid: msgspec.convert(obj, TruthObject) for oid, obj in stack.truth.items()}
-    verdict = placed(truth, RED_CUP, "behind", PLATE)
+    verdict = stack.judged(RED_CUP, "behind", PLATE)
     assert verdict.success, verdict.reason
 
 
@@ -79,7 +72,5 @@ def test_a_cup_picked_up_and_put_behind_a_tall_box_in_one_command(stack: Stack) 
         then=[{"procedure": "place_rel", "args": {"arm": "right", "relation": "behind", "object": stack.pid(TALL)}}],
     )
     assert texts(said, "error") == [], f"the red cup behind the blue box: {texts(said)}"
-    stack.settled()
-    truth = {oid: msgspec.convert(obj, TruthObject) for oid, obj in stack.truth.items()}
-    verdict = placed(truth, CUP, "behind", TALL)
+    verdict = stack.judged(CUP, "behind", TALL)
     assert verdict.success, verdict.reason
