@@ -98,8 +98,8 @@ def _first_pose(
     kin: ArmKinematics, snap: SceneSnapshot, held: Held | None, procedure: str, args: Mapping[str, Any]
 ) -> np.ndarray | None:
     """The arm's joints for the step's first pose at the model's present torso height (collision-free IK):
-    a pre-grasp whose grasp is reachable too, a hover pose whose release below is reachable too, or the pose
-    of a move to an object."""
+    a pre-grasp whose grasp is reachable too, a hover pose with a clear straight way down to its release, or
+    the pose of a move to an object."""
     obj = snap.objects[args["object"]]
     if procedure == "pick_up":
         for grasp in targets.grasps(obj, snap.near_edge):
@@ -114,13 +114,16 @@ def _first_pose(
                 kin.allow_touching(obj.id, False)
         return None
     if procedure == "place_rel" and held is not None:
-        # the hover pose and, below it, the release: at the far edge the hand may get over the spot but
-        # not down to it
+        # the hover pose and the straight way down from it to the release: at the far edge the hand may get
+        # over the spot but not down to it, or only with the forearm through what stands beside it
         relation = "on_top_of" if args["relation"] == "above" else args["relation"]
         for hover, release in targets.place_relation(relation, Box.of(obj), kin.fk(), held, snap.table_z):
             hover_q = kin.ik(hover)
-            if hover_q is not None and kin.ik(release, seeds=[hover_q], check_collisions=False) is not None:
-                return hover_q
+            if hover_q is None:
+                continue
+            with kin.posed(hover_q):
+                if kin.line_path(release) is not None:
+                    return hover_q
         return None
     found = kin.first_reachable(targets.move_relation(args["relation"], Box.of(obj), kin.fk(), held, snap.table_z))
     return None if found is None else found[1]

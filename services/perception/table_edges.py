@@ -24,6 +24,7 @@ BIN = 0.02  # m along a side
 MIN_POINTS = 3  # per bin
 BORDER = 2  # pixels from the image border counted as "on the border"
 UNSEEN_SHARE = 0.5  # a side with at least this share of its bins' extremes on the border was not seen to end
+INSIDE = 2 * BIN  # m: an edge this far inside where the table was seen to run is no edge
 # side -> (axis measured, axis binned along, which end: 0 = lowest, 1 = highest)
 SIDES = {"near": (0, 1, 0), "far": (0, 1, 1), "right": (1, 0, 0), "left": (1, 0, 1)}
 
@@ -51,6 +52,9 @@ def widest(seen: TableExtent | None, now: TableExtent) -> TableExtent:
     its near part, and the near edge then seems to lie where the arm's
     shadow begins (0.52 m, not 0.35 m, with a cup in each hand): a cup could
     not be put down beside the box in front. Only a new scene forgets it.
+    A side seen to end well inside where the table was seen to run is no
+    edge: with the torso lowered, an arm reaching far out hid most of the
+    table, and the rim of its shadow was taken for the left edge, 0.7 m short.
     """
     if seen is None:
         return now
@@ -58,10 +62,15 @@ def widest(seen: TableExtent | None, now: TableExtent) -> TableExtent:
         [np.minimum(seen.bounds[:, 0], now.bounds[:, 0]), np.maximum(seen.bounds[:, 1], now.bounds[:, 1])]
     )
     edges: dict[str, float] = {}
-    for side, (_, _, end) in SIDES.items():
+    for side, (axis, _, end) in SIDES.items():
         values = [view.edges[side] for view in (seen, now) if side in view.edges]
-        if values:
-            edges[side] = max(values) if end else min(values)
+        if not values:
+            continue
+        edge = max(values) if end else min(values)
+        # the table was seen running past an edge that far inside: it was the rim of a shadow (an arm
+        # reaching far out in front of a lowered camera hides most of the table), not where the top ends
+        if abs(edge - bounds[axis, end]) <= INSIDE:
+            edges[side] = edge
     return TableExtent(bounds, edges)
 
 

@@ -52,3 +52,16 @@ def test_an_edge_hidden_for_a_while_stays_where_it_was_seen() -> None:
     assert kept.edges["near"] == pytest.approx(0.45, abs=0.004)
     assert kept.bounds[0, 0] == pytest.approx(clear.bounds[0, 0])
     assert widest(None, hidden) is hidden
+
+
+def test_a_shadows_rim_well_inside_the_table_seen_is_no_edge() -> None:
+    """An arm reaching out low in front of the camera hides part of a table that runs out of view to the sides:
+    in that view a side edge seems to lie where its shadow ends, but the table was seen running on past it;
+    no side edge is kept."""
+    clear = detect(render(Scene([CUP], table_x=(0.45, 1.05)))).table_extent
+    assert set(clear.edges) == {"near", "far"}
+    arm = Box((0.75, 0.20, 0.90), (0.70, 0.34, 0.06), "grey")
+    hidden = detect(render(Scene([CUP, arm], table_x=(0.45, 1.05)))).table_extent
+    assert hidden.edges.get("right", -1.0) > -0.1, "the arm should make a false right edge in this view"
+    kept = widest(clear, hidden)
+    assert set(kept.edges) == {"near", "far"}
