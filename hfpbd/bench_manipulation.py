@@ -1,7 +1,7 @@
 """``hfpbd bench manipulation``: seeded random tables and tasks through the running services, judged from truth.
 
 Each task gets a scene of its own: 2–6 objects (every type and colour,
-4–12 cm) anywhere on the table, from the seed. The task is programmed by
+4–12 cm) anywhere over ``TABLE_AREA``, from the seed. The task is programmed by
 commands as the NLU sends them (``nlu/result``: pick up, then put on, next
 to, left or right of, in front of, behind, or down on the table, or a move
 while holding and then down) into a fresh action, judged from ``sim/truth``;
