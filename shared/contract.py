@@ -37,6 +37,11 @@ SWITCH_TARGETS = ("next", "previous")
 COLORS = ("red", "green", "blue", "yellow", "orange", "purple", "white", "black", "grey", "unknown")
 TYPES = ("cup", "box", "plate", "bowl", "unknown")
 
+# -- skills: a named action's roles, and the limits on its name ------------------------
+CARRIED, LANDMARK = "carried", "landmark"
+SKILL_ROLES = (CARRIED, LANDMARK)  # the object the action first picks up; the one it first places relative to
+SKILL_NAME_MAX_CHARS = 40
+
 # -- reachability: the keys of ``reach[arm]`` the executor publishes ---------------------
 REACH_KEYS = ("pick_up", "place", *RELATIONS, *REL_DIRECTIONS)
 
@@ -71,7 +76,10 @@ class Parameter:
     ``kind`` says how to read ``domain``: ``choice`` (one of ``domain``),
     ``arm`` (one of ``domain``, which holds ``both`` where allowed),
     ``object`` (an object id of the world), ``action`` (one of ``domain`` or
-    an action number >= 1), ``distance`` (metres within :data:`DISTANCE`).
+    an action number >= 1), ``distance`` (metres within :data:`DISTANCE`),
+    ``name`` (a skill's name: 1 to :data:`SKILL_NAME_MAX_CHARS` characters),
+    ``skill`` (a skill's name or an action number), ``roles`` (a map from
+    the roles in ``domain`` to object ids), ``objects`` (a list of object ids).
     """
 
     name: str
@@ -137,12 +145,35 @@ PROCEDURES: dict[str, Procedure] = {
         _procedure("stop", "p17", "stop", arm=False),
         _procedure("undo", None, "undo", arm=False),
         _procedure("repeat", None, "repeat", arm=False),
+        _procedure(
+            "name_action",
+            None,
+            "name",
+            Parameter("name", "name"),
+            Parameter("action", "action", optional=True),
+            arm=False,
+        ),
+        _procedure(
+            "run_skill",
+            None,
+            "do",
+            Parameter("skill", "skill"),
+            Parameter("objects", "roles", SKILL_ROLES, optional=True),
+            Parameter("each", "objects", optional=True),
+            arm=False,
+        ),
+        _procedure("place_back", None, "put back", Parameter("object", "object", optional=True)),
     )
 }
 
+# the skills additions (DESIGN.md "Skills: named actions used as verbs"): read by their own readers, since a
+# name, a role map or a list of objects is not a value the model can enumerate
+SKILL_PROCEDURES = frozenset({"name_action", "run_skill", "place_back"})
 PAPER_PROCEDURES = tuple(name for name, p in PROCEDURES.items() if p.paper is not None)
 # procedures about the programme and the conversation rather than an arm or object
-ADMIN_PROCEDURES = frozenset({"record", "create_action", "switch_action", "execute", "stop", "undo", "repeat"})
+ADMIN_PROCEDURES = frozenset(
+    {"record", "create_action", "switch_action", "execute", "stop", "undo", "repeat", "name_action"}
+)
 MOVES = frozenset({"move_abs_dest", "move_rel_dest", "move_abs_dir", "move_rel_dir"})
 PLACES = frozenset({"place_abs", "place_rel"})
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from services.nlu.world import World
-from shared.contract import ADMIN_PROCEDURES, ARMS
+from shared.contract import ADMIN_PROCEDURES, ARMS, SKILL_PROCEDURES
 from shared.contract import PROCEDURES as CONTRACT
 
 NUMBER = "#"  # stands for the action number the utterance names; filled in after inference
@@ -26,9 +26,12 @@ def _domain(kind: str, domain: tuple[str, ...]) -> tuple[Any, ...]:
     return domain
 
 
-# procedure -> (parameter -> domain) over the enumerated parameters; optional ones (distance) are read from the words
+# procedure -> (parameter -> domain) over the enumerated parameters; optional ones (distance) are read from the words.
+# The skills' procedures are not enumerated: their readers (``skills``) build them from what was said.
 PROCEDURES: dict[str, dict[str, tuple[Any, ...]]] = {
-    name: {p.name: _domain(p.kind, p.domain) for p in procedure.required} for name, procedure in CONTRACT.items()
+    name: {p.name: _domain(p.kind, p.domain) for p in procedure.required}
+    for name, procedure in CONTRACT.items()
+    if name not in SKILL_PROCEDURES
 }
 __all__ = ["ADMIN_PROCEDURES", "NUMBER", "PROCEDURES", "Command", "enumerate_commands"]
 
