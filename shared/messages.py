@@ -229,10 +229,18 @@ class Robot(msgspec.Struct, kw_only=True):
     holding: dict[str, str | None] = {}
 
 
+class Skill(msgspec.Struct, kw_only=True):
+    """A named action, usable as a verb (DESIGN.md "Skills"): the world state's ``skills`` items."""
+
+    name: str
+    action: int
+
+
 class ExecutorState(Message):
     stamp: float
     robot: Robot
     reach: dict[str, dict[str, dict[str, bool]]] = {}
+    skills: list[Skill] = []
 
 
 class SpeechAudio(Message):
