@@ -47,7 +47,10 @@ class UtteranceSplitter:
     def flush(self) -> list[np.ndarray]:
         """End of the stream: the utterance still in progress, if any."""
         if self._endpointer.in_speech:
-            tail = self._endpointer.end_stream(self._pending.tobytes())
+            # the bindings index the buffer's first sample, so an empty last frame (a stream whose
+            # length is a whole number of frames) raises; one silent sample ends the stream the same way
+            last = self._pending if len(self._pending) else np.zeros(1, dtype=np.int16)
+            tail = self._endpointer.end_stream(last.tobytes())
             if tail is not None:
                 self._speech.append(tail)
         self._pending = np.zeros(0, dtype=np.int16)

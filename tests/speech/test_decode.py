@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +14,7 @@ from services.speech import espeak
 from services.speech.audio import AudioError, read_wav, seconds, silence, write_wav
 from services.speech.bench import meaning
 from services.speech.grammar import SceneWords
+from services.speech.main import decode_files
 from services.speech.recogniser import Recogniser
 from services.speech.vad import UtteranceSplitter
 from services.speech.vocabulary import nlu_vocabulary
@@ -114,6 +116,26 @@ def test_voice_activity_splits_a_stream_into_its_utterances():
     assert len(utterances) == 2
     assert seconds(utterances[0]) == pytest.approx(seconds(first), abs=0.35)
     assert seconds(utterances[1]) == pytest.approx(seconds(second), abs=0.35)
+
+
+@pytest.mark.parametrize("extra", [0, 123], ids=["whole-frames", "part-frame"])
+def test_a_stream_that_ends_mid_speech_gives_its_utterance(extra: int):
+    said = np.concatenate([silence(0.5), espeak.synthesise("pick up the red cup", "en-us", 150)])
+    splitter = UtteranceSplitter()
+    frame = 480  # the endpointer's frame at 16 kHz
+    cut = said[: (len(said) // frame - 5) * frame + extra]  # cut off in the middle of the last word
+    assert splitter.feed(cut) == [] and splitter.in_speech
+    utterances = splitter.flush()
+    assert len(utterances) == 1 and seconds(utterances[0]) > 0.5
+
+
+def test_decoding_a_file_cut_mid_speech_prints_what_was_heard(tmp_path: Path, capsys):
+    said = np.concatenate([silence(0.5), espeak.synthesise("look at the red cup", "en-us", 150)])
+    path = tmp_path / "cut.wav"
+    write_wav(path, said[: (len(said) // 480 - 3) * 480])
+    assert decode_files([str(path)]) == 0
+    lines = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert len(lines) == 1 and lines[0]["file"] == str(path) and lines[0]["nbest"]
 
 
 def test_silence_gives_no_utterance():
