@@ -38,6 +38,8 @@ RELEASE_TAIL_S = 0.4
 # a speech/audio stream that sends nothing for this long has stopped (its sender quit or paused
 # without saying "end"): what it left half-said is decoded instead of waiting for more audio
 STREAM_IDLE_S = 1.0
+# how long WAV files given at start wait for the NLU's vocabulary before the built-in grammar decodes them
+VOCABULARY_WAIT_S = 30.0
 
 
 @dataclass
@@ -67,6 +69,9 @@ class SpeechService:
         self._say = bus.publisher(bus.keys.say)
         self._status = bus.publisher(bus.keys.speech("status"), cached=True)
         self.decoded = 0
+        self.grammar = "built-in"  # or "nlu": whose phrase list the grammar was made from
+        # set once the NLU's vocabulary is in the grammar, or known not to be coming (the NLU did not answer)
+        self.grammar_settled = threading.Event()
 
     # -- start and stop ----------------------------------------------------
     def start(self) -> None:
@@ -89,6 +94,18 @@ class SpeechService:
             self.speaker.close()
 
     def play_files(self) -> None:
+        """Decode the WAV files given at start, once the grammar is the running NLU's.
+
+        Why wait: the grammar follows the NLU's vocabulary, fetched when the NLU
+        is seen alive; a file decoded before that is heard with the built-in
+        phrase list, which may not be the NLU's.
+        """
+        if not self.settings.wav_files:
+            return
+        if not self.grammar_settled.wait(VOCABULARY_WAIT_S):
+            log.warning(
+                "no NLU vocabulary within %g s; decoding the WAV files with the built-in grammar", VOCABULARY_WAIT_S
+            )
         for path in self.settings.wav_files:
             try:
                 self.feed_file(path)
@@ -233,18 +250,22 @@ class SpeechService:
             reply = self.bus.request(self.bus.keys.nlu_query("vocabulary"), {}, timeout=10.0)
         except (BusTimeout, RemoteError) as exc:
             log.warning("could not read the NLU's vocabulary (%s); keeping the built-in one", exc)
+            self.grammar_settled.set()
             return
         phrases = reply.get("phrases")
         if not isinstance(phrases, list) or not phrases:
             log.warning("the NLU's vocabulary reply has no phrases; keeping the built-in one")
+            self.grammar_settled.set()
             return
         vocabulary = nlu_vocabulary([str(p) for p in phrases])
         self._tasks.put(lambda: self._regenerate(vocabulary))
 
     def _regenerate(self, vocabulary: SpeechVocabulary) -> None:
         self.recogniser.set_vocabulary(vocabulary)
+        self.grammar = "nlu"
         log.info("speech grammar regenerated from the NLU's vocabulary (%d words)", len(vocabulary.words()))
         self._publish_status()
+        self.grammar_settled.set()
 
     def _on_objects(self, message: Objects) -> None:
         """The grammar's object words come from the NLU's world-state reading, so the objects go in as that JSON."""
@@ -291,6 +312,7 @@ class SpeechService:
                 "trigger": self.settings.trigger,
                 "talking": self._talk is not None,
                 "grammar_words": len(self.recogniser.vocabulary.words()),
+                "grammar": self.grammar,
             }
         )
 

@@ -90,3 +90,19 @@ def test_robot_words_are_spoken(network, launcher, tmp_path: Path):
     assert len(spoken) == 1
     time.sleep(0.5)  # let espeak-ng finish writing
     assert len(read_wav(spoken[0])) / RATE > 0.8
+
+
+def test_wav_files_wait_for_the_nlu_grammar_before_decoding(network, launcher, tmp_path: Path):
+    hub = network.hub
+    heard: queue.Queue = queue.Queue()  # status and utterances in the order they arrive
+    hub.subscribe(hub.keys.speech("status"), lambda m: heard.put(("status", m)))
+    hub.subscribe(hub.keys.utterance, lambda m: heard.put(("utterance", m)))
+    path = tmp_path / "said.wav"
+    espeak.write("look at the red cup", path, "en-us", 150)
+    launcher.start("speech", "--microphone", "off", "--no-voice", "--wav", str(path))
+    launcher.start("nlu")  # only now: a file decoded without waiting would have been heard already
+    grammars = []
+    while (message := heard.get(timeout=90))[0] == "status":
+        grammars.append(message[1]["grammar"])
+    assert grammars and grammars[-1] == "nlu", grammars
+    assert message[1]["text"] == "look at the red cup"
