@@ -169,6 +169,13 @@ PROCEDURES: dict[str, Procedure] = {
 # the skills additions (DESIGN.md "Skills: named actions used as verbs"): read by their own readers, since a
 # name, a role map or a list of objects is not a value the model can enumerate
 SKILL_PROCEDURES = frozenset({"name_action", "run_skill", "place_back"})
+# names a skill may not take (DESIGN.md: "a name that is also a word of the command space is refused"): the
+# procedures' own verbs and the commonest other words for them, so that a taught name never shadows a command
+RESERVED_SKILL_NAMES = frozenset(
+    {p.verb for p in PROCEDURES.values()}
+    | {"put", "grab", "take", "lift", "drop", "go", "run", "play", "point", "look", "turn", "raise", "lower"}
+    | {"again", "help", "yes", "no", "cancel", "it", "this", "that"}
+)
 PAPER_PROCEDURES = tuple(name for name, p in PROCEDURES.items() if p.paper is not None)
 # procedures about the programme and the conversation rather than an arm or object
 ADMIN_PROCEDURES = frozenset(

@@ -60,6 +60,13 @@ _SAME_WITH = re.compile(
     r"(?:with|to|for|on|using) (?P<rest>.+)"
 )
 _HAND_SAID = re.compile(r"(?:the |your |my )?(?P<hand>other|right|left) (?:hand|arm|gripper)")
+# replies to "Did you mean: ...?"
+_YES = re.compile(
+    r"(?:(?:yes|yeah|yep|yup|sure|correct|right|exactly|ok|okay|please|go ahead|do it|that s right|that is right|"
+    r"i did|i do|affirmative)(?: please| robot| do it| go ahead)?)+"
+)
+_NO = re.compile(r"(?:no|nope|wrong|no thanks|no thank you|not that|negative|don t|do not|cancel)(?: robot)?")
+_NO_BUT = re.compile(r"(?:no|nope|wrong)(?: i said| i meant| i mean)? (?P<rest>.+)")
 _OTHER = re.compile(r"(?:(?:no|nope|not that one|wrong|please) )*(?:the )?other(?: one)?(?: please)?")
 
 
@@ -88,6 +95,10 @@ class Dialogue:
         result: Result | None = questions.answer(model, text, self._history(model))
         if result is not None:
             return result  # a question, even one asked while a question is pending
+        if self.pending is not None and self.pending.clarify.confirms is not None:
+            confirmed = self._confirmed(model, text, self.pending.clarify.confirms)
+            if confirmed is not None:
+                return confirmed
         if self.pending is not None:
             settled = self._settle(model, text) or self._completed(model, text)
             if settled is not None:
@@ -191,6 +202,24 @@ class Dialogue:
         found = model.parse(said, self._history(model), among=among, focus=["object", *([slot] if slot else [])])
         return found if isinstance(found, CommandResult) else None
 
+    def _confirmed(self, model: Model, text: str, heard: CommandResult) -> Result | None:
+        """The reply to "Did you mean: ...?": yes runs what was heard, no drops it, "no, <command>" corrects it.
+
+        Anything else is a new utterance (None): the question is dropped, so
+        the doubtful command can only ever run on a yes.
+        """
+        words = " ".join(_WORD.findall(text.lower()))
+        self.pending = None
+        if _YES.fullmatch(words):
+            self._remember(heard, model)
+            return heard
+        if _NO.fullmatch(words):
+            return Answer("help", "All right, I won't do that. What should I do?")
+        correction = _NO_BUT.match(words)
+        if correction is not None:
+            return self.understand(model, correction["rest"])
+        return None
+
     def _settle(self, model: Model, text: str) -> Result | None:
         """ "cancel" drops the pending question; "no, the other one" takes the other of two candidates."""
         words = " ".join(_WORD.findall(text.lower()))
@@ -224,8 +253,9 @@ class Dialogue:
                 candidates,
                 self.pending.clarify.labels,
             )
+        confirms = self.pending.clarify.confirms
         command = candidates[choice]
-        result = CommandResult(command, 1.0, model.describe_command(command), {}, 0.0)
+        result = confirms or CommandResult(command, 1.0, model.describe_command(command), {}, 0.0)
         self._remember(result, model)
         return result
 

@@ -14,7 +14,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from services.nlu import compound, hands, modifiers, pairs, pushing, questions, relational, sayings, stacking
+from services.nlu import compound, hands, meant, modifiers, pairs, pushing, questions, relational, sayings, stacking
 from services.nlu.commands import NUMBER, PROCEDURES, Command
 from services.nlu.language import Index, Match
 from services.nlu.lexicon import OBJECT_SLOTS
@@ -69,7 +69,13 @@ class Model:
         problem = _too_long(text)
         if problem is not None:
             return Clarify([], problem)
-        history = history or self.default_history
+        refused = meant.before_reading(text, replying=among is not None)
+        if refused is not None:
+            return refused
+        return meant.after_reading(self, text, self._read(text, history or self.default_history, among, focus))
+
+    def _read(self, text: str, history: History, among: list[Command] | None, focus: list[str] | None) -> Result:
+        """Understand ``text``: a question, one command, or several in a row."""
         if among is None:
             reply = questions.answer(self, text, history)
             if reply is not None:
@@ -180,18 +186,19 @@ class Model:
         if isinstance(decided, Clarify):
             # "pick up the banana": the question back says which word was not understood, not only what is seen
             return replace(decided, question=f"{_unknown_words(utterance)}. {decided.question}")
-        if not isinstance(decided, CommandResult) or "object" in decided.phrases or decided.then:
+        if not isinstance(decided, CommandResult):
             return decided
         command = decided.command
-        if command.arg("object"):
+        named = "object" in decided.phrases or bool(decided.then)
+        if command.arg("object") and not named:
             # the object was named only by a word not understood: the one object in view may not be the one meant
             name = self.scene.describe(self.world.index_of(str(command.arg("object")))).text
             question = f"{_unknown_words(utterance)}. Which object do you mean: {name}?"
             return Clarify(["object"], question, [command], [decided.text], decided.score)
-        if _UNKNOWN_THING.search(" ".join(_said_unknown(text, utterance))):
+        if not named and _UNKNOWN_THING.search(" ".join(_said_unknown(text, utterance))):
             # "move the banana towards me": not a move of the hand alone
             return Clarify([], f'{_unknown_words(utterance)}. Please name the object another way, like "the red cup".')
-        return decided
+        return meant.confirmation(decided, f"{_unknown_words(utterance)}.")
 
     def referent(self, history: History) -> int | None:
         """What "it" means: the object in a hand (the last used hand's first), else the last object referred to."""
@@ -264,10 +271,9 @@ class Model:
             text = f"{command_text(switch, self.scene)}, then {command_text(command, self.scene, phrases)}"
             return CommandResult(switch, confidence, text, {}, score, (command,))
         try:
-            commands = tuple(_set_down_on(c) for c in hands.situate(self, command, match, history, "arm" in phrases))
+            commands = hands.situate(self, command, match, history, "arm" in phrases)
         except hands.Refusal as refusal:
             return Clarify([], str(refusal))
-        command = _set_down_on(command)
         if commands[0] != command:  # a pick-up first: the user's words are about the step after it
             texts = [command_text(commands[0], self.scene)]
             texts += [command_text(c, self.scene, phrases) for c in commands[1:]]
@@ -293,18 +299,6 @@ class Model:
 
     def describe_command(self, command: Command, phrases: dict[str, str] | None = None) -> str:
         return command_text(command, self.scene, phrases)
-
-
-def _set_down_on(command: Command) -> Command:
-    """A place "above" a landmark ("put it on top", "move the cup to the plate") is a place on top of it.
-
-    The hand hovers above a landmark, but what it lets go of comes to rest
-    on it: the executor sets it down on the top either way, and one meaning
-    has one command.
-    """
-    if command.procedure == "place_rel" and command.arg("relation") == "above":
-        return command.with_arg("relation", "on_top_of")
-    return command
 
 
 def _after(missing: str | None, question: str) -> str:

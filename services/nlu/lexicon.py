@@ -209,9 +209,9 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
         ((verb(_procs("stop")),),),
     ),
     # arms
-    (("right hand", "right arm", "right gripper", "your right"), ((option("arm", "right", W.arm),),)),
-    (("left hand", "left arm", "left gripper", "your left"), ((option("arm", "left", W.arm),),)),
-    (("hand", "arm", "gripper", "claw"), ((option("arm", "*", W.generic_arm),),)),
+    (("right hand", "right arm", "right gripper", "right wrist", "your right"), ((option("arm", "right", W.arm),),)),
+    (("left hand", "left arm", "left gripper", "left wrist", "your left"), ((option("arm", "left", W.arm),),)),
+    (("hand", "arm", "gripper", "claw", "wrist"), ((option("arm", "*", W.generic_arm),),)),
     # places
     (
         ("side", "to the side", "aside", "out of the way", "sideways", "to your side"),
@@ -435,7 +435,7 @@ PLURAL_TYPE_WORDS: dict[str, str] = {
 
 FILLERS = frozenset(
     "please now could can would will you your my the a an robot kindly just then and ok okay hey with of at "
-    "i want like me is for so use using hmm um uh well also let us lets s its mind hello hi".split()
+    "i want like me is for so use using hmm um uh well also let us lets s d its mind hello hi oops".split()
 )
 
 NUMBER_WORDS: dict[str, int] = {

@@ -50,6 +50,8 @@ class Clarify:
     score: float = float("-inf")
     # words a reply completes: "push the plate", asked which way, read again with "to the left" after it
     completes: str = ""
+    # "Did you mean: ...?": the command heard, run on "yes", dropped on "no", replaced by any other command
+    confirms: CommandResult | None = None
 
     def to_json(self) -> dict[str, Any]:
         return {

@@ -22,7 +22,7 @@ from services.nlu.nbest import NOT_MADE_OUT, most_plausible
 from services.nlu.templates import sentence_templates
 from services.nlu.world import COLORS, TYPES, WorldError, parse_world
 from shared.bus import Bus
-from shared.messages import ExecutorState, Objects, PerceivedObject, Robot, Utterance
+from shared.messages import ExecutorState, Objects, PerceivedObject, Robot, Skill, Utterance
 from shared.service import run_service, wait_until_stopped
 
 log = logging.getLogger("hfpbd.nlu")
@@ -43,6 +43,7 @@ class LiveWorld:
         self.objects: list[PerceivedObject] = []
         self.robot = Robot()
         self.reach: dict[str, dict[str, dict[str, bool]]] = {}
+        self.skills: list[Skill] = []
         self.dialogue = Dialogue()
         self._model: Model | None = None
 
@@ -59,13 +60,14 @@ class LiveWorld:
     def on_executor(self, message: ExecutorState) -> None:
         robot = message.robot
         try:
-            parse_world({"objects": [], "robot": {**_robot_fields(robot), "last_object": None}})
+            robot_fields = {**_robot_fields(robot), "last_object": None}
+            parse_world({"objects": [], "robot": robot_fields, "skills": _skill_fields(message.skills)})
         except WorldError as exc:
             log.warning("ignoring executor/state: %s", exc)
             return
         with self.lock:
             moved = (robot.last_arm, robot.last_object) != (self.robot.last_arm, self.robot.last_object)
-            self.robot, self.reach = robot, message.reach
+            self.robot, self.reach, self.skills = robot, message.reach, message.skills
             if moved:
                 self.dialogue.observe_robot()  # the robot's own account of history is newer
             self._model = None
@@ -78,7 +80,7 @@ class LiveWorld:
                 {**fields, "reach": self.reach[fields["id"]]} if fields["id"] in self.reach else fields
                 for fields in objects
             ]
-        return {"objects": objects, "robot": _robot_fields(self.robot)}
+        return {"objects": objects, "robot": _robot_fields(self.robot), "skills": _skill_fields(self.skills)}
 
     def model(self) -> Model:
         """The model of the current world (built lazily, once per change). Call with the lock held."""
@@ -100,6 +102,11 @@ def _object_fields(item: PerceivedObject) -> dict[str, Any]:
         "type": item.type if item.type in TYPES else "unknown",
         "held_by": item.held_by,
     }
+
+
+def _skill_fields(skills: list[Skill]) -> list[dict[str, Any]]:
+    """The world state's ``skills``: the executor's named actions."""
+    return [msgspec.to_builtins(skill) for skill in skills]
 
 
 def _robot_fields(robot: Robot) -> dict[str, Any]:

@@ -86,6 +86,9 @@ class Decision:
     max_candidates: int = 8  # candidates listed in a clarification
     typo_edits_short: int = 1  # edits (incl. swapped letters) tolerated in a word of up to 5 letters
     typo_edits_long: int = 2  # ... and in a longer word
+    # a single command chosen with less of the probability mass than this is asked about ("Did you mean: ...?");
+    # below every command of the corpus read right
+    confirm_below: float = 0.05
 
 
 PRIOR = PriorWeights()

@@ -12,12 +12,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from shared.contract import ARMS, COLORS, GRIPPER_STATES, TYPES
+from shared.contract import ARMS, COLORS, GRIPPER_STATES, SKILL_NAME_MAX_CHARS, TYPES
 
 __all__ = [
     "ARMS",
     "COLORS",
     "GRIPPER_STATES",
+    "Skill",
     "TYPES",
     "World",
     "WorldError",
@@ -63,9 +64,18 @@ class RobotState:
 
 
 @dataclass(frozen=True)
+class Skill:
+    """A named action: its name is a verb the user may say ("serve the blue cup")."""
+
+    name: str
+    action: int
+
+
+@dataclass(frozen=True)
 class World:
     objects: tuple[WorldObject, ...] = ()
     robot: RobotState = RobotState()
+    skills: tuple[Skill, ...] = ()
 
     def index_of(self, object_id: str) -> int:
         for i, obj in enumerate(self.objects):
@@ -110,12 +120,31 @@ def parse_world(data: Any, *, strict: bool = True) -> World:
     if duplicates:
         raise WorldError(f"duplicate object id(s): {', '.join(duplicates)}")
     robot = _parse_robot(data.get("robot", {}))
+    skills = _parse_skills(data.get("skills", []))
     if robot.last_object is not None and robot.last_object not in ids:
         if strict:
             known = ", ".join(ids) or "none"
             raise WorldError(f"robot.last_object {robot.last_object!r} is not one of the objects ({known})")
         robot = RobotState(**{**robot.__dict__, "last_object": None})
-    return World(objects, robot)
+    return World(objects, robot, skills)
+
+
+def _parse_skills(raw: Any) -> tuple[Skill, ...]:
+    if raw is None:
+        return ()
+    if not isinstance(raw, list):
+        raise WorldError(f"world 'skills' must be a list, got {_kind(raw)}")
+    skills = []
+    for index, item in enumerate(raw):
+        if not isinstance(item, dict):
+            raise WorldError(f"skills[{index}] must be an object, got {_kind(item)}")
+        name, action = item.get("name"), item.get("action")
+        if not isinstance(name, str) or not name.strip() or len(name) > SKILL_NAME_MAX_CHARS:
+            raise WorldError(f"skills[{index}].name must be 1 to {SKILL_NAME_MAX_CHARS} characters")
+        if isinstance(action, bool) or not isinstance(action, int) or action < 1:
+            raise WorldError(f"skills[{index}].action must be an action number (1 or more), got {action!r}")
+        skills.append(Skill(" ".join(name.lower().split()), action))
+    return tuple(skills)
 
 
 def _parse_object(item: Any, index: int) -> WorldObject:

@@ -257,7 +257,7 @@ def test_holding_turns_put_into_place_and_empty_hand_into_move() -> None:
         ("on the blue cup", "on_top_of"),
         ("in blue", "on_top_of"),
         ("next to the blue cup", "next_to"),
-        ("above blue", "on_top_of"),
+        ("above blue", "above"),
     ],
 )
 def test_holding_hand_turns_a_bare_destination_into_place(utterance: str, relation: str) -> None:
@@ -426,5 +426,8 @@ def test_an_object_named_by_an_unknown_word_is_asked_about_saying_the_word() -> 
     assert isinstance(one, Clarify) and one.params == ["object"]
     assert one.question == "I don't know the word 'banana'. Which object do you mean: the cup?"
     assert [dict(c.args) for c in one.candidates] == [{"arm": "right", "object": "obj0"}]
-    # a word not understood beside the object's own words changes nothing
-    assert command("please pick up the cup quicklyy", world(obj("obj0", "red", "cup", 0.6, -0.1)))["object"] == "obj0"
+    # a word not understood beside the object's own words may change what was meant: asked, never run
+    doubtful = parse("please pick up the cup quicklyy", world(obj("obj0", "red", "cup", 0.6, -0.1)))
+    assert isinstance(doubtful, Clarify) and doubtful.confirms is not None
+    assert doubtful.question == "I don't know the word 'quicklyy'. Did you mean: pick up the cup with your right hand?"
+    assert dict(doubtful.confirms.command.args) == {"arm": "right", "object": "obj0"}
