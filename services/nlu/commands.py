@@ -50,10 +50,23 @@ class Command:
         return default
 
     def as_dict(self) -> dict[str, Any]:
-        return {"procedure": self.procedure, "args": dict(self.args)}
+        return {"procedure": self.procedure, "args": self.plain_args()}
+
+    def plain_args(self) -> dict[str, Any]:
+        """The arguments as the wire carries them: a role map (kept as pairs, to stay hashable) as a map,
+        a list of objects as a list."""
+        return {name: _plain(value) for name, value in self.args}
 
     def with_arg(self, name: str, value: Any) -> Command:
         return Command(self.procedure, tuple((k, value if k == name else v) for k, v in self.args))
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, tuple):
+        if all(isinstance(item, tuple) and len(item) == 2 for item in value):
+            return {key: item for key, item in value}
+        return list(value)
+    return value
 
 
 def enumerate_commands(world: World) -> list[Command]:

@@ -19,10 +19,11 @@ from services.nlu.hands import NAMING_SLOTS
 from services.nlu.infer import Answer, Clarify, CommandResult, Model, Result
 from services.nlu.lexicon import OBJECT_SLOTS, REFERRING_SLOTS
 from services.nlu.prior import History
+from services.nlu.skills import rebinds
 from services.nlu.tokens import read, slots_said
 from services.nlu.unsupported import unsupported
 from services.nlu.weights import LANGUAGE
-from shared.contract import ARMS
+from shared.contract import ARMS, SKILL_PROCEDURES
 
 _WORD = re.compile(r"[a-z]+")
 _CANCEL = re.compile(
@@ -124,9 +125,13 @@ class Dialogue:
             and unsupported(text) is None  # "pour it into the cup" is no bare object after a pick-up
         ):
             result = self._elliptic(model, text, self.last) or result
-        elif self._only_names_an_object(text) and (
-            isinstance(result, CommandResult)
-            or (isinstance(result, Clarify) and result.candidates and not result.params)
+        elif (
+            not _runs_a_skill(result)
+            and self._only_names_an_object(text)
+            and (
+                isinstance(result, CommandResult)
+                or (isinstance(result, Clarify) and result.candidates and not result.params)
+            )
         ):
             return self._what_to_do_with(model, text)
         self._remember(result, model)
@@ -150,6 +155,8 @@ class Dialogue:
         """ "Do the same with the blue cup", "again with the other hand": the last command on that object, or by
         the other hand (the last move in a direction, else the last command that takes an object)."""
         words = " ".join(_WORD.findall(text.lower()))
+        if rebinds(words):
+            return None  # "do it again with the blue cup": the action again, with that object (a skill's run)
         found = _SAME_WITH.fullmatch(words)
         last = self.last or self.last_move
         if found is None or last is None or self.pending is not None:
@@ -288,6 +295,11 @@ class Dialogue:
             if command.procedure not in ADMIN_PROCEDURES:
                 self.history = self._history(model).after(command, world)
             world = after(world, command)
+
+
+def _runs_a_skill(result: Result) -> bool:
+    """A skill used on objects ("serve the blue cup"): its objects are its arguments, not a bare noun phrase."""
+    return isinstance(result, CommandResult) and result.command.procedure in SKILL_PROCEDURES
 
 
 def _acknowledged(text: str) -> Answer | None:

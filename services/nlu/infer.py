@@ -22,6 +22,7 @@ from services.nlu.phrasing import command_text, not_seen, parameter_question, re
 from services.nlu.prior import History, history_scores, side_scores, situation_scores
 from services.nlu.refexp import Scene
 from services.nlu.results import Answer, Clarify, CommandResult, Result
+from services.nlu.skills import read_skill
 from services.nlu.tokens import Term, Utterance, read, slots_said
 from services.nlu.unsupported import unsupported
 from services.nlu.weights import DECISION, LANGUAGE
@@ -77,6 +78,9 @@ class Model:
     def _read(self, text: str, history: History, among: list[Command] | None, focus: list[str] | None) -> Result:
         """Understand ``text``: a question, one command, or several in a row."""
         if among is None:
+            skill = read_skill(self, text, history)
+            if skill is not None:
+                return skill
             reply = questions.answer(self, text, history)
             if reply is not None:
                 return reply

@@ -35,6 +35,7 @@ if TYPE_CHECKING:
 # characters and shapes of code and markup, never of a spoken or typed command: tags, braces, calls, assignments
 _CODE = re.compile(r"[<>{}\[\]\\|=;`@#$^~_*]|[a-z_]\w*\s*\(|://")
 _WORD = re.compile(r"[a-z]+")
+_TOKEN = re.compile(r"[a-z0-9]+")
 _DIGITS = re.compile(r"\d")
 # three numbers in a row: counting ("one two three testing"), not an amount ("twenty five millimetres")
 _COUNTING = re.compile(r"(?:\b(?:\d+|" + "|".join(NUMBER_WORDS) + r")\b\W*){3,}")
@@ -47,8 +48,9 @@ _NO_SUCH_HAND = re.compile(
 )
 # words that name an object, as opposed to "it": said to a verb that takes no object, they would be dropped
 _OBJECT_NAMING = frozenset({"color", "type", "label", "refer"})
-# verbs of the programme that take no object; "stop" is never questioned, whatever else was said
-_NO_OBJECT = ADMIN_PROCEDURES - {"stop"}
+# verbs of the programme that take no object; "stop" is never questioned, whatever else was said, and a name
+# may use any words ("call this action red cup stacking")
+_NO_OBJECT = ADMIN_PROCEDURES - {"stop", "name_action"}
 
 NOT_LANGUAGE = (
     'That looks like code or markup, not a command, so I did nothing. Say what I should do, like "pick up the red cup".'
@@ -79,7 +81,7 @@ def before_reading(text: str, replying: bool) -> Clarify | None:
         return Clarify([], NUMBER_ALONE)
     if _COUNTING.search(lowered):
         return Clarify([], COUNTING)
-    if _NO_SUCH_HAND.search(" ".join(words)):
+    if _NO_SUCH_HAND.search(" ".join(_TOKEN.findall(lowered))):
         return Clarify(["arm"], NO_SUCH_HAND)
     return None
 

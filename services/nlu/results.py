@@ -31,7 +31,7 @@ class CommandResult:
         out = {
             "kind": "command",
             "procedure": self.command.procedure,
-            "args": dict(self.command.args),
+            "args": self.command.plain_args(),
             "confidence": round(self.confidence, 4),
             "text": self.text,
             "phrases": self.phrases,

@@ -18,6 +18,8 @@ CATEGORIES = {
     "typos",
     "bad_input",
     "conversation",
+    "not_meant",
+    "skills",
 }
 FLOOR = 0.97
 

@@ -1,0 +1,223 @@
+"""Skills: naming an action, using a name as a verb, doing an action again on other objects, putting things back.
+
+Why a reader of its own: a skill's name is the user's word, not the
+lexicon's, so the model cannot score it ("serve the blue cup" would read as
+an unknown word); and its arguments (a name, a map of roles, a list of
+objects) are not values the model enumerates. The reader recognises the
+sentence shapes of DESIGN.md "Skills" and grounds the objects they name
+through the model itself (as "look at <phrase>" would be read), so a skill's
+objects are named as freely as any command's, and an object that cannot be
+told apart is asked about, never guessed.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+from services.nlu.commands import Command
+from services.nlu.prior import History
+from services.nlu.results import Clarify, CommandResult, Result
+from services.nlu.tokens import read, slots_said
+from shared.contract import CARRIED, LANDMARK, RESERVED_SKILL_NAMES, SKILL_NAME_MAX_CHARS
+
+if TYPE_CHECKING:
+    from services.nlu.infer import Model
+
+_WORDS = re.compile(r"[a-z0-9']+")
+_POLITE = re.compile(r"^(?:(?:please|now|ok|okay|and|then|robot|so|right) )*")
+_NUMBER = r"(?:number )?(?P<number>\d+)"
+_NAMING = (
+    re.compile(
+        rf"^(?:call|name|label) (?:this|that|the|my|the current|this current)? ?(?:action|program|skill|task)"
+        rf"(?: {_NUMBER})? (?:as |to |is )?(?P<name>.+)$"
+    ),
+    re.compile(rf"^rename (?:action|program|skill|task) {_NUMBER} (?:to|as) (?P<name>.+)$"),
+    re.compile(r"^(?:save|remember|store|keep) (?:this|it|that)(?: action)? as (?P<name>.+)$"),
+    re.compile(r"^(?:this|that) is how (?:you|to|we|i) (?P<name>.+?)(?: (?:a|an|the|some|any|things?|objects?)\b.*)?$"),
+)
+# "do it again with the blue cup", "execute it with ...", "repeat the action for ...", "do that for every cup"
+_REBINDING = re.compile(
+    r"^(?:do|run|execute|repeat|play|perform|redo)"
+    rf" (?:it|that|this|the action|this action|the same action|action {_NUMBER})?(?: again)?"
+    r" ?(?:with|for|on|using|to) (?P<rest>.+)$"
+)
+_HAND = re.compile(
+    r"\b(?:hand|arm|gripper)s?\b"
+)  # "do that again with the other hand": the last command, not the action
+_EACH = re.compile(r"^(?:each|every|all)(?: of)?(?: the)? (?P<what>.+)$")
+_LANDMARK = re.compile(
+    r"^(?P<carried>.+?) (?:on top of|onto|on|into|in|to|next to|beside|behind|in front of|near|by|over|above)"
+    r" (?P<landmark>.+)$"
+)
+_PUT_BACK = re.compile(
+    r"^(?:put|place|set|bring|return) (?P<what>.+? )?back"
+    r"(?: (?:where (?:it|they) (?:was|were|came from|stood|belongs?)|to where (?:it|they) (?:was|were|came from|stood)"
+    r"|in (?:its|their) place|to (?:its|their) (?:place|spot)|again))?$"
+)
+_RETURN = re.compile(r"^return (?P<what>.+?) to (?:where (?:it|they) (?:was|were)|(?:its|their) (?:place|spot))$")
+_EVERYTHING = re.compile(r"^(?:everything|all|all of (?:it|them)|them all|all the \w+|every \w+|each \w+)$")
+_ANAPHOR = re.compile(r"^(?:it|that|this|that one|this one)$")
+_NAMING_WORDS = frozenset({"color", "type", "label", "generic", "refer", "anaphor"})
+
+
+def read_skill(model: Model, text: str, history: History) -> Result | None:
+    """The skills command ``text`` asks for (or the question back); None when it is no skills sentence."""
+    said = _POLITE.sub("", " ".join(_WORDS.findall(text.lower().replace("-", " "))))
+    for pattern in _NAMING:
+        found = pattern.match(said)
+        if found is not None:
+            return _naming(model, found["name"], found.groupdict().get("number"))
+    rebinding = rebinds(said)
+    if rebinding is not None:
+        number = rebinding["number"]
+        action = int(number) if number else model.world.robot.action or 1
+        return _using(model, action, f"do action {action} with", rebinding["rest"], history)
+    named = _named_skill(model, said)
+    if named is not None:
+        name, rest = named
+        return _using(model, name, name, rest, history)
+    back = _PUT_BACK.match(said) or _RETURN.match(said)
+    if back is not None:
+        return _putting_back(model, (back["what"] or "it").strip(), history)
+    return None
+
+
+def rebinds(said: str) -> re.Match[str] | None:
+    """ "Do it again with the blue cup": the action again with other objects (not "... with the other hand")."""
+    found = _REBINDING.match(said)
+    return found if found is not None and not _HAND.search(found["rest"]) else None
+
+
+def _naming(model: Model, raw: str, number: str | None) -> Result:
+    name = " ".join(raw.strip(" '\"").split())
+    action = int(number) if number else None
+    if not name:
+        return Clarify([], 'What should the action be called? Say, for example, "call this action serve".')
+    if len(name) > SKILL_NAME_MAX_CHARS:
+        return Clarify([], f"That name is too long: please give one of at most {SKILL_NAME_MAX_CHARS} characters.")
+    if name in RESERVED_SKILL_NAMES or name.isdigit():
+        return Clarify([], f'I can\'t call an action "{name}": that is already a command. Please choose another name.')
+    target = action or model.world.robot.action
+    taken = next((s for s in model.world.skills if s.name == name and s.action != target), None)
+    if taken is not None:
+        return Clarify([], f'Action {taken.action} is already called "{name}". Please choose another name.')
+    args: tuple[tuple[str, object], ...] = (("name", name),) + ((("action", action),) if action else ())
+    which = f"action {action}" if action else "this action"
+    return CommandResult(Command("name_action", args), 1.0, f'call {which} "{name}"', {}, 0.0)
+
+
+def _named_skill(model: Model, said: str) -> tuple[str, str] | None:
+    """The taught name ``said`` starts with (the longest, as "serve twice" over "serve"), and the words after it."""
+    for skill in sorted(model.world.skills, key=lambda s: -len(s.name)):
+        found = re.match(
+            rf"^(?:(?:do|run|use|perform) (?:the )?(?:skill )?)?{re.escape(skill.name)}(?: (?P<rest>.*))?$", said
+        )
+        if found is not None:
+            return skill.name, found["rest"] or ""
+    return None
+
+
+def _using(model: Model, skill: str | int, words: str, rest: str, history: History) -> Result:
+    """``run_skill`` with the objects ``rest`` names bound to their roles, or the question about one.
+
+    ``words`` start the sentence said back: the skill's name ("serve"), or
+    "do action 2 with" for an action used by its number.
+    """
+    rest = rest.strip()
+    base: tuple[tuple[str, object], ...] = (("skill", skill),)
+    if not rest:
+        return CommandResult(Command("run_skill", base), 1.0, words.removesuffix(" with"), {}, 0.0)
+    each = _EACH.match(rest)
+    if each is not None:
+        members = _all_of(model, each["what"])
+        if not members:
+            return Clarify([], f"I don't see any {each['what']}.")
+        names = _listed([model.scene.describe(model.world.index_of(m)).text for m in members])
+        command = Command("run_skill", base + (("each", tuple(members)),))
+        return CommandResult(command, 1.0, f"{words} {names}, one at a time", {}, 0.0)
+    split = _LANDMARK.match(rest)
+    if split is not None and _names_an_object(split["landmark"]):
+        carried = _one_object(model, split["carried"], history)
+        landmark = _one_object(model, split["landmark"], history)
+    else:
+        carried, landmark = _one_object(model, rest, history), None
+    for found in (carried, landmark):
+        if isinstance(found, Clarify):
+            return found
+    roles = ((CARRIED, carried),) + (((LANDMARK, landmark),) if isinstance(landmark, str) else ())
+    text = f"{words} {model.scene.describe(model.world.index_of(str(carried))).text}"
+    if isinstance(landmark, str):
+        text += f", relative to {model.scene.describe(model.world.index_of(landmark)).text}"
+    return CommandResult(Command("run_skill", base + (("objects", roles),)), 1.0, text, {}, 0.0)
+
+
+def _putting_back(model: Model, what: str, history: History) -> Result:
+    """``place_back`` of the held object (a pick-up first when the object named is on the table)."""
+    if _EVERYTHING.match(what):
+        return Clarify([], 'I put things back one at a time: say which, like "put the red cup back".')
+    held = {obj.held_by: obj.id for obj in model.world.objects if obj.held_by is not None}
+    if _ANAPHOR.match(what):
+        if not held:
+            referent = model.referent(history)
+            if referent is None:
+                return Clarify([], 'Which object should I put back? Say, for example, "put the red cup back".')
+            return _picked_then_back(model, model.world.ids[referent], history)
+        arm = history.last_arm if history.last_arm in held else next(iter(held))
+        return _back(model, str(arm), held[arm])
+    found = _one_object(model, what, history)
+    if isinstance(found, Clarify):
+        return found
+    holder = next((arm for arm, obj in held.items() if obj == found), None)
+    return _back(model, holder, found) if holder is not None else _picked_then_back(model, found, history)
+
+
+def _back(model: Model, arm: str, object_id: str) -> CommandResult:
+    command = Command("place_back", (("arm", arm), ("object", object_id)))
+    name = model.scene.describe(model.world.index_of(object_id)).text
+    return CommandResult(command, 1.0, f"put {name} back where it was", {}, 0.0)
+
+
+def _picked_then_back(model: Model, object_id: str, history: History) -> Result:
+    """Pick the object up with the hand the model chooses for it, then put it back."""
+    name = model.scene.describe(model.world.index_of(object_id)).text
+    picked = model.parse_step(f"pick up {name}", history)
+    if not isinstance(picked, CommandResult) or picked.command.arg("object") != object_id:
+        return Clarify([], f"I can't pick up {name} to put it back.")
+    back = _back(model, str(picked.command.arg("arm")), object_id)
+    return replace(picked, text=f"{picked.text}, then {back.text}", then=(back.command,))
+
+
+def _one_object(model: Model, phrase: str, history: History) -> str | Clarify:
+    """The object ``phrase`` names, read as the model reads "look at <phrase>"; the question back when unsure."""
+    looked = model.parse_step(f"look at {phrase}", history)
+    if isinstance(looked, CommandResult) and looked.command.procedure == "look_at":
+        return str(looked.command.arg("object"))
+    if isinstance(looked, Clarify) and looked.candidates and looked.params == ["object"]:
+        return Clarify([], looked.question)
+    return Clarify([], f'I couldn\'t tell which object you mean by "{phrase}". Please name it another way.')
+
+
+def _all_of(model: Model, phrase: str) -> list[str]:
+    """Every object the colour and kind words of ``phrase`` fit, leftmost first (the robot's left)."""
+    terms = read(phrase).terms
+    colours = {m.value for t in terms for r in t.readings for m in r if m.slot == "color"}
+    kinds = {m.value for t in terms for r in t.readings for m in r if m.slot == "type"}
+    fitting = [
+        obj
+        for obj in model.world.objects
+        if obj.held_by is None and (not colours or obj.color in colours) and (not kinds or obj.type in kinds)
+    ]
+    if not colours and not kinds:
+        return []
+    return [obj.id for obj in sorted(fitting, key=lambda o: -o.position[1])]
+
+
+def _names_an_object(phrase: str) -> bool:
+    """Whether ``phrase`` names an object ("the box", "it"), not a place ("the left")."""
+    return bool(slots_said(read(phrase).terms) & _NAMING_WORDS)
+
+
+def _listed(names: list[str]) -> str:
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
