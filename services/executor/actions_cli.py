@@ -16,6 +16,7 @@ from datetime import datetime
 from typing import Any
 
 from services.executor.grounding import describe_kind
+from services.executor.skills import give_name
 from services.executor.store import (
     DEFAULT_NAMESPACE,
     ActionStore,
@@ -39,7 +40,7 @@ def apply_action_op(store: ActionStore, request: dict[str, Any]) -> dict[str, An
         name = request.get("name")
         if not isinstance(name, str):
             raise StoreError("rename needs a name")
-        store.rename(number, name)
+        give_name(store, number, name)
         return {"ok": True, "number": number, "name": name.strip()}
     if op == "delete":
         store.delete(number)

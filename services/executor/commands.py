@@ -3,7 +3,8 @@
 The table is the design notes' procedure contract, with its conversation
 additions: ``undo`` and ``repeat``, ``arm: "both"`` for the procedures that
 can use both hands at once, an optional ``distance`` on the directional
-moves, and ``then`` (further steps of the same utterance). A command that
+moves, ``then`` (further steps of the same utterance), and the skills
+procedures (``name_action``, ``run_skill``, ``place_back``). A command that
 names an unknown procedure, lacks a parameter or gives a value outside its
 domain is refused with a sentence that says which, so a bad message from any
 sender never reaches the robot. A compound is checked whole before its first
@@ -100,6 +101,8 @@ def check(procedure: Any, args: Any) -> dict[str, Any]:
         args = {}
     if not isinstance(args, dict):
         raise CommandError(f"The parameters of {procedure} must be a map, not {type(args).__name__}.")
+    if procedure in contract.SKILL_PROCEDURES:
+        return _skill_args(contract.PROCEDURES[procedure], args)
     spec = PROCEDURES[procedure]
     out: dict[str, Any] = {}
     for name, domain in spec.items():
@@ -124,6 +127,104 @@ def check(procedure: Any, args: Any) -> dict[str, Any]:
     if args.get("distance") is not None:
         out["distance"] = _distance(procedure, args["distance"])
     return out
+
+
+def _skill_args(procedure: contract.Procedure, args: dict[str, Any]) -> dict[str, Any]:
+    """The arguments of ``name_action``, ``run_skill`` or ``place_back`` (DESIGN.md "Skills"), each checked.
+
+    Their values are names, role maps and lists of objects, which the
+    table of choices above cannot state; an optional parameter given as
+    null counts as absent, as ``distance`` does.
+    """
+    verb = procedure.name.replace("_", " ")
+    out: dict[str, Any] = {}
+    for param in procedure.params:
+        value = args.get(param.name)
+        if value is None:
+            if not param.optional:
+                raise CommandError(f"{verb.capitalize()} needs {_a(param.name)} {param.name}.")
+            continue
+        out[param.name] = _SKILL_VALUES[param.kind](verb, param, value)
+    if "distance" in args and args["distance"] is not None:
+        raise CommandError(f"{verb.capitalize()} doesn't take a distance.")
+    return out
+
+
+def _arm_value(verb: str, param: contract.Parameter, value: Any) -> str:
+    if value not in param.domain:
+        if value == BOTH:
+            raise CommandError(f"I can't {verb} with both hands at once; tell me which hand to use.")
+        raise CommandError(f"{value!r} is not an arm I know; I know {', '.join(param.domain)}.")
+    return str(value)
+
+
+def _object_value(verb: str, param: contract.Parameter, value: Any) -> str:
+    if not isinstance(value, str) or not value:
+        raise CommandError(f"The object of {verb} must be an object id such as 'obj0'.")
+    return value
+
+
+def _name_value(verb: str, param: contract.Parameter, value: Any) -> str:
+    """A skill's name: the words given, spaces tidied, 1 to ``SKILL_NAME_MAX_CHARS`` characters."""
+    if not isinstance(value, str) or not value.strip():
+        raise CommandError("An action's name must be some words, such as 'serve'.")
+    name = " ".join(value.split())
+    if len(name) > contract.SKILL_NAME_MAX_CHARS:
+        raise CommandError(
+            f"An action's name can be at most {contract.SKILL_NAME_MAX_CHARS} characters long, not {len(name)}."
+        )
+    return name
+
+
+def _action_value(verb: str, param: contract.Parameter, value: Any) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise CommandError(f"The action to {verb} must be an action number (1 or more), not {value!r}.")
+    return value
+
+
+def _skill_value(verb: str, param: contract.Parameter, value: Any) -> str | int:
+    """A skill: its name, or an action number."""
+    if isinstance(value, int) and not isinstance(value, bool):
+        return _action_value(verb, param, value)
+    if isinstance(value, str) and value.strip():
+        return " ".join(value.split())
+    raise CommandError(f"The skill to run must be an action's name or number, not {value!r}.")
+
+
+def _roles_value(verb: str, param: contract.Parameter, value: Any) -> dict[str, str]:
+    """The objects a skill runs with, by role (``carried``, ``landmark``)."""
+    if not isinstance(value, dict) or not value:
+        raise CommandError(
+            f"The objects of a skill must be a map from {' or '.join(param.domain)} to an object, not {value!r}."
+        )
+    for role, object_id in value.items():
+        if role not in param.domain:
+            raise CommandError(f"{role!r} is not a role of a skill's objects; they are {', '.join(param.domain)}.")
+        if not isinstance(object_id, str) or not object_id:
+            raise CommandError(f"The {role} object of a skill must be an object id such as 'obj0'.")
+    return dict(value)
+
+
+def _objects_value(verb: str, param: contract.Parameter, value: Any) -> list[str]:
+    """The objects a skill runs on one after the other: a non-empty list of distinct object ids."""
+    if not isinstance(value, list) or not value:
+        raise CommandError("The objects to run a skill on one by one must be a list of at least one object.")
+    if not all(isinstance(v, str) and v for v in value):
+        raise CommandError("Each object to run a skill on must be an object id such as 'obj0'.")
+    if len(set(value)) != len(value):
+        raise CommandError("The objects to run a skill on one by one name the same object twice.")
+    return list(value)
+
+
+_SKILL_VALUES = {
+    "arm": _arm_value,
+    "object": _object_value,
+    "name": _name_value,
+    "action": _action_value,
+    "skill": _skill_value,
+    "roles": _roles_value,
+    "objects": _objects_value,
+}
 
 
 # verbs for refusing "both" (the procedures that take one hand only)

@@ -40,22 +40,24 @@ from typing import Any, TypeVar
 import msgspec
 import numpy as np
 
-from services.executor import torso, wording
+from services.executor import effects, skills, torso, wording
 from services.executor.actions_control import apply as apply_actions_request
 from services.executor.actions_control import step_words
 from services.executor.commands import ADMIN, BOTH, RECORDED, CommandError, Step, check, check_compound
-from services.executor.grounding import Regrounding, reground
+from services.executor.grounding import Regrounding, descriptor, reground
 from services.executor.interrupted import InProgress, interrupted_sentence
 from services.executor.kinematics import ArmKinematics, joint_names
+from services.executor.origins import Origins
 from services.executor.procedures import Procedures, StepFailed
 from services.executor.reach import reach_map
 from services.executor.referring import refer
 from services.executor.robot import SimRobot, Stopped
-from services.executor.scene import ARMS, Scene
+from services.executor.scene import ARMS, Scene, SceneSnapshot
+from services.executor.skills import SkillError
 from services.executor.store import ActionStore, StoreError
 from services.executor.undo import before_state, reverse
 from shared.bus import Bus, BusTimeout, RemoteError
-from shared.contract import PLACES
+from shared.contract import CARRIED, PLACES
 from shared.messages import NluResult, Objects, PerceivedObject, SimState, Table
 from shared.robot import ROBOT
 
@@ -69,6 +71,7 @@ ADMIN_DOING = {
     "create_action": "creating an action",
     "switch_action": "switching to another action",
     "undo": "undoing the last step",
+    "name_action": "naming an action",
     "repeat": "repeating the last command",
 }
 
@@ -103,6 +106,7 @@ class Executor:
         self._reach: dict[str, Any] = {}
         self._can_move: dict[str, dict[str, bool]] = {arm: {} for arm in ARMS}
         self._reach_stale = threading.Event()
+        self.origins = Origins()  # where objects stood before the robot moved them, for "put it back"
         self._grippers: dict[str, str] = {}
         self._closing = threading.Event()
         self._perception_losses = 0  # times perception's token vanished: one that died while asked is no mystery
@@ -263,6 +267,8 @@ class Executor:
             self._step(procedure, args, _context(steps[0], utterance), keep=False)
         elif procedure == "undo":
             self._undo()
+        elif procedure == "name_action":
+            self._name(args)
         elif procedure == "repeat":
             if self._last_command is None:
                 self.say("There is nothing to repeat yet: tell me what to do first.", "error")
@@ -295,7 +301,10 @@ class Executor:
                 context["part"] = {"step": number, "of": len(steps)}
             after = steps[number] if number < len(steps) else None
             coming = _coming(step.procedure, step.args, after.procedure, after.args) if after else None
-            if not self._step(step.procedure, step.args, context, keep=True, failure_note=note, coming=coming):
+            if step.procedure == "run_skill":
+                if not self._run_skill(step, context, failure_note=note):
+                    return
+            elif not self._step(step.procedure, step.args, context, keep=True, failure_note=note, coming=coming):
                 return
 
     def _doing(self, steps: list[Step]) -> str:
@@ -305,6 +314,8 @@ class Executor:
             return f"executing action {first.args.get('action') or self.store.current}"
         if first.procedure in ADMIN:
             return ADMIN_DOING.get(first.procedure, first.procedure.replace("_", " "))
+        if first.procedure == "run_skill":
+            return f"running {_skill_words(first.args['skill'])}"
         return _listed([self._gerund(step) for step in steps])
 
     def _gerund(self, step: Step) -> str:
@@ -357,12 +368,24 @@ class Executor:
                 self.say("There is no previous action.", "error")
                 return
             target = current - 1
-        try:
-            self.store.switch(target)
-        except StoreError as exc:
-            self.say(wording.sentence(str(exc)), "error")
+        if not 1 <= target <= count:
+            self.say(f"There is no action {target}; {skills.listing(self.store)}.", "error")
             return
+        self.store.switch(target)
         self.say(f"Switched to action {target}.", "info")
+
+    def _name(self, args: dict[str, Any]) -> None:
+        """Give an action (``args.action``, else the current one) a name it can be used by, as a verb."""
+        number = args.get("action") or self.store.current
+        if number == 0:
+            self.say("There is no action to name yet; teach me some steps first.", "error")
+            return
+        try:
+            skills.give_name(self.store, number, args["name"])
+        except SkillError as exc:
+            self.say(str(exc), "error")
+            return
+        self.say(f"Action {number} is now called \u201c{args['name']}\u201d.", "info")
 
     # -- one step ------------------------------------------------------------------------------
 
@@ -404,10 +427,16 @@ class Executor:
             self.say(f"{text} {failure_note}" if failure_note else text, "error")
             return False
 
+        extra: dict[str, Any] = {}
+        back: str | None = None  # the object a place_back puts back
         try:
             self.procedures.precheck(procedure, args)
+            if procedure == "place_back":
+                back, extra = self._origin(args, snap)
         except StepFailed as exc:
             return failed(str(exc))
+        if procedure == "place_back":  # the held object is the hand's: an id would not be found again on replay
+            args = {"arm": args["arm"]}
         before = before_state(snap, self.procedures) if keep and procedure in RECORDED else None
         held_words = self.procedures.held_description(args["arm"], snap) if "arm" in args else None
         if procedure != "record":
@@ -416,7 +445,7 @@ class Executor:
                     procedure, args, context.get("phrases"), lambda oid: refer(snap.objects, oid), held=held_words
                 )
             )
-        kwargs = dict(args)
+        kwargs = {**args, **extra}
         if preferred is not None and procedure == "move_rel_dest":
             kwargs["preferred"] = preferred
         if coming is not None:
@@ -430,6 +459,10 @@ class Executor:
             return failed(str(exc))
         if done.message:
             self.say(done.message, "info")
+        if procedure == "pick_up":
+            self.origins.picked(snap.objects[args["object"]], self.scene.snapshot().objects)
+        elif back is not None:
+            self.origins.returned(back)
         if before is not None:
             step = {
                 "procedure": procedure,
@@ -460,52 +493,294 @@ class Executor:
         if number == 0:
             self.say("There is no action to execute yet; teach me some steps first.", "error")
             return
-        steps = self.store.get(number)["steps"]
-        if not steps:
+        if not self.store.get(number)["steps"]:
             self.say(f"Action {number} has no steps yet.", "error")
             return
-        with self._lock:
-            self._executing = True
-            self._progress = {"step": 0, "of": len(steps)}
-        self.publish_state()
-        self.say(f"Executing action {number}.", "narration")
-        if not self._step("record", {}, {}, keep=False):
-            self.say(f"Stopped action {number} before its first step.", "error")
-            return
-        snap = self.scene.snapshot()
-        matched = reground([s["landmark"] for s in steps[start - 1 :] if s.get("landmark")], snap.standing_objects())
-        if matched.missing:  # find every landmark before moving at all: no half-done action
-            self.say(f"{next(iter(matched.missing.values()))} I can't run action {number}.", "error")
-            return
-        for i, step in enumerate(steps, start=1):
-            if i < start:
-                continue
-            if self.cancel.is_set():
-                self.say(f"Stopped action {number} at step {i} of {len(steps)}.", "info")
-                return
+        self._replay(number, f"action {number}", start, announce=f"Executing action {number}.")
+
+    def _replay(
+        self,
+        number: int,
+        name: str,
+        start: int = 1,
+        *,
+        announce: str,
+        bound: dict[str, str] | None = None,
+        chain: tuple[int, ...] = (),
+    ) -> bool:
+        """Replay action ``number`` (called ``name`` when speaking) from step ``start``; False when it stopped.
+
+        ``bound``: role -> the object the action runs with in that role (a
+        skill used with other objects); its other objects are found again by
+        how they were remembered. ``chain``: the actions whose steps called
+        this one (a skill inside an action), which look at the table only
+        once and keep their own progress. Nothing moves unless every stored
+        step passes the command check and every object is found; each
+        pick-up and placement is checked afterwards from a fresh look, and
+        the replay stops, saying what differs, when its effect does not hold.
+        """
+        if (why := skills.unrunnable(self.store, number, start, chain)) is not None:
+            self.say(f"{why} I won't run {name}.", "error")
+            return False
+        steps = self.store.get(number)["steps"]
+        if not chain:
             with self._lock:
-                self._progress = {"step": i, "of": len(steps)}
+                self._executing = True
+                self._progress = {"step": 0, "of": len(steps)}
             self.publish_state()
-            args = dict(step["args"])
-            landmark = step.get("landmark")
-            if landmark and "object" in args:
-                found = self._reground(landmark, matched)
-                if found is None:
-                    self.say(matched.missing[landmark["id"]] + f" Stopped action {number} at step {i}.", "error")
-                    return
-                args["object"] = found
-            context = {
-                "phrases": step.get("phrases", {}),
-                "text": step.get("text", ""),
-                "utterance": step.get("utterance", ""),
-            }
-            preferred = step.get("relative_pose") if step["procedure"] == "move_rel_dest" else None
-            coming = self._coming_in_replay(step, steps[i] if i < len(steps) else None, matched)
-            if not self._step(step["procedure"], args, context, keep=False, preferred=preferred, coming=coming):
-                if not self.cancel.is_set():
-                    self.say(f"Action {number} stopped at step {i} of {len(steps)}.", "error")
-                return
-        self.say(f"Completed action {number}.", "narration")
+        self.say(announce, "narration")
+        if not chain and not self._step("record", {}, {}, keep=False):
+            self.say(f"Stopped {name} before its first step.", "error")
+            return False
+        matched = self._ground(steps, start, bound or {})
+        if matched.missing:  # find every landmark before moving at all: no half-done action
+            self.say(f"{next(iter(matched.missing.values()))} I can't run {name}.", "error")
+            return False
+        for i in range(start, len(steps) + 1):
+            if self.cancel.is_set():
+                self.say(f"Stopped {name} at step {i} of {len(steps)}.", "info")
+                return False
+            if not chain:
+                with self._lock:
+                    self._progress = {"step": i, "of": len(steps)}
+                self.publish_state()
+            if not self._replay_step(name, steps, i, matched, (*chain, number)):
+                return False
+        self.say(f"Completed {name}.", "narration")
+        return True
+
+    def _ground(self, steps: list[dict[str, Any]], start: int, bound: dict[str, str]) -> Regrounding:
+        """The objects of an action's steps from ``start`` as seen now: those ``bound`` by role, the rest found
+        again by how they were remembered (an assignment over all of them, the bound ones left out)."""
+        snap = self.scene.snapshot()
+        taught = skills.roles(steps)
+        fixed = {taught[role]["id"]: oid for role, oid in bound.items() if role in taught}
+        remembered = [d for step in steps[start - 1 :] for d in skills.step_landmarks(step) if d["id"] not in fixed]
+        matched = reground(remembered, [o for o in snap.standing_objects() if o.id not in fixed.values()])
+        matched.mapping.update(fixed)
+        matched.described.update({taught_id: descriptor(snap.objects[oid]) for taught_id, oid in fixed.items()})
+        return matched
+
+    def _replay_step(
+        self, name: str, steps: list[dict[str, Any]], i: int, matched: Regrounding, chain: tuple[int, ...]
+    ) -> bool:
+        """Run stored step ``i`` with its objects as found now, then check its effect; False when the replay ends."""
+        step = steps[i - 1]
+        if step["procedure"] == "run_skill":
+            return self._replay_call(step, matched, chain)
+        args = dict(step["args"])
+        landmark = step.get("landmark")
+        if landmark and "object" in args:
+            found = self._reground(landmark, matched)
+            if found is None:
+                self.say(matched.missing[landmark["id"]] + f" Stopped {name} at step {i}.", "error")
+                return False
+            args["object"] = found
+        context = {
+            "phrases": step.get("phrases", {}),
+            "text": step.get("text", ""),
+            "utterance": step.get("utterance", ""),
+        }
+        preferred = step.get("relative_pose") if step["procedure"] == "move_rel_dest" else None
+        coming = self._coming_in_replay(step, steps[i] if i < len(steps) else None, matched)
+        snap = self.scene.snapshot()
+        moved = self._moved_by(step["procedure"], args, snap)
+        if not self._step(step["procedure"], args, context, keep=False, preferred=preferred, coming=coming):
+            if not self.cancel.is_set():
+                self.say(f"{_capital(name)} stopped at step {i} of {len(steps)}.", "error")
+            return False
+        problem = self._effect_problem(step["procedure"], args, moved, set(snap.objects))
+        if problem is None:
+            return True
+        rest = f"; I won't go on with \u201c{step_words(steps[i])}\u201d" if i < len(steps) else ""
+        self.say(f"{problem} I stopped {name} after step {i} of {len(steps)}{rest}.", "error")
+        return False
+
+    def _moved_by(self, procedure: str, args: dict[str, Any], snap: SceneSnapshot) -> PerceivedObject | None:
+        """The object a step moves, as seen before it: the one picked up, or the one its hand holds."""
+        if procedure == "pick_up":
+            return snap.objects.get(args["object"])
+        if procedure in effects.CHECKED and args.get("arm") in ARMS:
+            held = self.procedures.held()[args["arm"]]
+            if held is not None:
+                return snap.objects.get(held.object_id, held.seen_as)
+        return None
+
+    def _effect_problem(
+        self, procedure: str, args: dict[str, Any], moved: PerceivedObject | None, before: set[str]
+    ) -> str | None:
+        """What differs, seen afresh, from the effect a replayed step was taught to have (None: it holds)."""
+        if procedure not in effects.CHECKED or moved is None:
+            return None
+        try:
+            self._record_objects()
+        except StepFailed as exc:
+            return f"I couldn't check that step: {str(exc)[:1].lower()}{str(exc)[1:]}"
+        return effects.judge(procedure, args, moved, before, self.scene.snapshot())
+
+    # -- skills --------------------------------------------------------------------------------------
+    def _run_skill(self, step: Step, context: dict[str, Any], failure_note: str | None = None) -> bool:
+        """``run_skill``: an action run by name or number with the objects said, once or once per object.
+
+        While another action is being taught, the call is recorded in it as
+        one step (so skills build on skills), unless the skill runs that very
+        action (then it is a replay with other objects, "execute it with the
+        blue cup"). Refusals name what is missing; nothing moves then.
+        """
+        args = step.args
+        try:
+            number = skills.find(self.store, args["skill"])
+            runs = self._skill_runs(number, args)
+        except SkillError as exc:
+            self.say(f"{exc} {failure_note}" if failure_note else str(exc), "error")
+            return False
+        current = self.store.current
+        record = not skills.calls(self.store, number, current)
+        before = before_state(self.scene.snapshot(), self.procedures) if record else None
+        seen = self.scene.snapshot().objects
+        remembered = {oid: descriptor(seen[oid]) for run in runs for oid in run.values()}
+        if not self._skill_sequence(number, runs, ()):
+            return False
+        if before is not None:
+            each = args.get("each") or []
+            self.store.append_step(
+                {
+                    "procedure": "run_skill",
+                    "args": args,
+                    "bound": {role: remembered[oid] for role, oid in runs[0].items() if not (each and role == CARRIED)},
+                    "each_seen": [remembered[oid] for oid in each],
+                    "phrases": context.get("phrases", {}),
+                    "text": context.get("text", ""),
+                    "utterance": context.get("utterance", ""),
+                    "before": before,
+                }
+            )
+        elif current != number:
+            self.say(
+                f"I didn't add it to action {current} as a step: {skills.called(self.store, number)} "
+                f"runs action {current} itself.",
+                "info",
+            )
+        return True
+
+    def _skill_runs(self, number: int, args: dict[str, Any]) -> list[dict[str, str]]:
+        """Role -> object id for each run of skill ``number`` (one per object of ``each``), every role bound.
+
+        A role not said keeps the object the skill was taught with, found
+        again as a replay finds it; :class:`SkillError` when an object said is
+        not in view, the skill has no such role, or it has no steps.
+        """
+        steps = self.store.get(number)["steps"]
+        name = skills.called(self.store, number)
+        if not steps:
+            raise SkillError(f"{_capital(name)} has no steps yet.")
+        snap = self.scene.snapshot()
+        said = dict(args.get("objects") or {})
+        each = list(args.get("each") or [])
+        for oid in [*said.values(), *each]:
+            if oid not in snap.objects:
+                raise SkillError(f"I can't see {refer({}, oid, (snap.remembered or {}).get(oid))} on the table now.")
+        taught = skills.roles(steps)
+        for role in [*said, *([CARRIED] if each else [])]:
+            if role not in taught:
+                raise SkillError(_no_role(name, role))
+        if each and CARRIED in said:
+            raise SkillError("Tell me either the one object to carry or the objects to do it for one by one, not both.")
+        runs = [{**said, CARRIED: oid} for oid in each] if each else [said]
+        return [self._all_roles(taught, run, snap) for run in runs]
+
+    @staticmethod
+    def _all_roles(taught: dict[str, dict[str, Any]], said: dict[str, str], snap: SceneSnapshot) -> dict[str, str]:
+        """``said`` with every other role of the skill bound to the object it was taught with, as seen now."""
+        rest = {role: desc for role, desc in taught.items() if role not in said}
+        found = reground(list(rest.values()), [o for o in snap.standing_objects() if o.id not in said.values()])
+        if found.missing:
+            raise SkillError(next(iter(found.missing.values())))
+        return {**said, **{role: found.mapping[desc["id"]] for role, desc in rest.items()}}
+
+    def _skill_sequence(self, number: int, runs: list[dict[str, str]], chain: tuple[int, ...]) -> bool:
+        """Run skill ``number`` once per role binding, the order said first; the first failure ends the rest."""
+        name = skills.called(self.store, number)
+        snap = self.scene.snapshot()
+        seen_as = {oid: descriptor(snap.objects[oid]) for run in runs for oid in run.values() if oid in snap.objects}
+
+        def words(run: dict[str, str]) -> str:
+            return _listed([refer(snap.objects, oid) for oid in run.values()])
+
+        if len(runs) > 1:
+            carried = [refer(snap.objects, run[CARRIED]) for run in runs]
+            self.say(f"I'll run {name} with {carried[0]}, then {', then '.join(carried[1:])}.", "narration")
+        for k, run in enumerate(runs):
+            announce = f"Running {name} with {words(run)}." if run else f"Running {name}."
+            now = self._seen_again(run, seen_as)
+            if now is None:
+                self.say(f"I can't find {words(run)} on the table any more, so I can't run {name}.", "error")
+            if now is None or not self._replay(number, name, announce=announce, bound=now, chain=chain):
+                if len(runs) > 1:
+                    done = [refer(snap.objects, r[CARRIED]) for r in runs[:k]]
+                    left = [refer(snap.objects, r[CARRIED]) for r in runs[k:]]
+                    did = f"I ran {name} with {_listed(done)}; " if done else ""
+                    self.say(f"{did}I didn't finish it with {_listed(left)}.", "error")
+                return False
+        return True
+
+    def _seen_again(self, run: dict[str, str], seen_as: dict[str, dict[str, Any]]) -> dict[str, str] | None:
+        """A run's objects as seen now: an object perception gave a new id (a hand hid it) found by its looks."""
+        snap = self.scene.snapshot()
+        gone = {role: oid for role, oid in run.items() if oid not in snap.objects}
+        kept = {role: oid for role, oid in run.items() if role not in gone}
+        found = reground(
+            [seen_as[oid] for oid in gone.values()],
+            [o for o in snap.standing_objects() if o.id not in kept.values()],
+        )
+        if found.missing:
+            return None
+        return {**kept, **{role: found.mapping[oid] for role, oid in gone.items()}}
+
+    def _replay_call(self, step: dict[str, Any], matched: Regrounding, chain: tuple[int, ...]) -> bool:
+        """A stored step that calls a skill: its objects found as the replay's others are, then the skill run."""
+        number = skills.find(self.store, step["args"]["skill"])  # checked before the replay began
+        bound: dict[str, str] = {}
+        for role, desc in (step.get("bound") or {}).items():
+            found = self._reground(desc, matched)
+            if found is None:
+                self.say(f"{matched.missing[desc['id']]} I can't run {skills.called(self.store, number)}.", "error")
+                return False
+            bound[role] = found
+        each = []
+        for desc in step.get("each_seen") or []:
+            found = self._reground(desc, matched)
+            if found is None:
+                self.say(f"{matched.missing[desc['id']]} I can't run {skills.called(self.store, number)}.", "error")
+                return False
+            each.append(found)
+        runs = [{**bound, CARRIED: oid} for oid in each] if each else [bound]
+        return self._skill_sequence(number, runs, chain)
+
+    def _origin(self, args: dict[str, Any], snap: SceneSnapshot) -> tuple[str, dict[str, Any]]:
+        """For ``place_back``: the held object (it must be the one named, if one is) and where it stood."""
+        arm = args["arm"]
+        held = self.procedures.held()[arm]
+        if held is None:  # the precheck refuses an empty hand first
+            raise StepFailed(wording.not_holding(arm, "put back"))
+        named = args.get("object")
+        if named is not None and named != held.object_id and snap.objects[named].held_by != arm:
+            raise StepFailed(
+                wording.sentence(
+                    f"My {arm} hand is holding {refer(snap.objects, held.object_id, held.seen_as)}, "
+                    f"not {refer(snap.objects, named)}"
+                )
+            )
+        spot = self.origins.spot(held.object_id)
+        if spot is None:
+            words = refer(snap.objects, held.object_id, held.seen_as)
+            raise StepFailed(
+                wording.sentence(
+                    f"I haven't moved {words} from anywhere else since I started, so I don't know where it was "
+                    "before; tell me where to put it"
+                )
+            )
+        return held.object_id, {"center": spot.tolist()}
 
     def _coming_in_replay(
         self, step: dict[str, Any], after: dict[str, Any] | None, matched: Regrounding
@@ -530,7 +805,8 @@ class Executor:
         if current in snap.objects:
             return current
         taken = {v for k, v in matched.mapping.items() if k != landmark["id"]}
-        again = reground([landmark], [o for o in snap.standing_objects() if o.id not in taken])
+        seen_as = {**matched.described.get(landmark["id"], landmark), "id": landmark["id"]}
+        again = reground([seen_as], [o for o in snap.standing_objects() if o.id not in taken])
         if landmark["id"] in again.mapping:
             matched.mapping[landmark["id"]] = again.mapping[landmark["id"]]
             return again.mapping[landmark["id"]]
@@ -639,7 +915,8 @@ class Executor:
                 "holding": {arm: (h.object_id if h else None) for arm, h in self.procedures.held().items()},
             }
             reach = {oid: per_arm for oid, per_arm in self._reach.items() if oid in snap.objects}
-        return {"stamp": time.time(), "robot": robot, "reach": reach}
+        named = msgspec.to_builtins(skills.skills(self.store))
+        return {"stamp": time.time(), "robot": robot, "reach": reach, "skills": named}
 
     def publish_state(self) -> None:
         """Publish the situated state; serialised so that states go out in the order they were taken."""
@@ -678,3 +955,20 @@ def _context(step: Step, utterance: str) -> dict[str, Any]:
 def _listed(words: list[str]) -> str:
     """ "a", "a and b", "a, b and c"."""
     return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} and {words[-1]}"
+
+
+def _skill_words(skill: str | int) -> str:
+    """ "action 2", or a name in quotes: how a ``run_skill`` command's skill is spoken of before it is found."""
+    return f"action {skill}" if isinstance(skill, int) else f"\u201c{skill}\u201d"
+
+
+def _no_role(name: str, role: str) -> str:
+    """Why a skill cannot take an object in ``role``: it never picked anything up, or placed relative to anything."""
+    if role == CARRIED:
+        return f"{_capital(name)} never picks anything up, so I can't do it with another object to carry."
+    return f"{_capital(name)} never places anything relative to another object, so I can't give it one."
+
+
+def _capital(text: str) -> str:
+    """``text`` with its first letter a capital, to begin a sentence with an action's name."""
+    return text[:1].upper() + text[1:]

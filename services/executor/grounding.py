@@ -14,6 +14,7 @@ objects.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -75,10 +76,15 @@ def cost(desc: dict[str, Any], obj: PerceivedObject) -> float:
 
 @dataclass
 class Regrounding:
-    """Result of matching: remembered id -> current id, and a message per landmark that found nothing."""
+    """Result of matching: remembered id -> current id, and a message per landmark that found nothing.
+
+    ``described``: for a remembered object bound to another one (a skill used
+    with other objects), how that other one looks, to find it again by.
+    """
 
     mapping: dict[str, str]
     missing: dict[str, str]
+    described: dict[str, dict[str, Any]] = dataclasses.field(default_factory=dict)
 
 
 def reground(descriptors: list[dict[str, Any]], objects: list[PerceivedObject]) -> Regrounding:

@@ -246,6 +246,8 @@ class Procedures:
         held = self.held()
         if procedure in ("place_abs", "place_rel"):
             self._holding(arm, snap)
+        elif procedure == "place_back":
+            self._holding(arm, snap, "put back")
         elif procedure == "pick_up":
             if held[arm] is not None or gripper == "holding":
                 what = refer(snap.objects, held[arm].object_id, held[arm].seen_as) if held[arm] else "something"
@@ -1348,6 +1350,14 @@ class Procedures:
             self._go(arm, descent)
             return self._release(arm, held)
         raise StepFailed(f"I can't reach the place where {refer(snap.objects, held.object_id, held.seen_as)} stood.")
+
+    def place_back(self, arm: str, center: list[float]) -> Done:
+        """``place_back``: the held object set down where it stood before the robot moved it.
+
+        The executor remembers where that was (``origins``) and passes it as
+        ``center``; the release is the one that takes back a pick-up.
+        """
+        return self.put_back(arm, np.asarray(center, float))
 
     def _lowerable(
         self, kin: ArmKinematics, snap: SceneSnapshot, held: Held, hover: np.ndarray, release: np.ndarray

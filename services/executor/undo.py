@@ -16,7 +16,8 @@ after a restart. Reversals, by procedure:
   can), then the arm returns;
 * open closes again, close opens again (letting go of what it caught);
   an open that let go of an object picks it up again;
-* a look turns the head back.
+* a look turns the head back;
+* a step that ran a skill is only taken out of the action: its motions stay.
 
 What cannot be reversed raises :class:`StepFailed` with the sentence to say.
 """
@@ -71,7 +72,7 @@ def reverse(step: dict[str, Any], procedures: Procedures) -> None:
     elif procedure == "pick_up":
         procedures.put_back(arm, np.asarray(step["landmark"]["position"], float))
         procedures.return_to(back)
-    elif procedure in ("place_abs", "place_rel"):
+    elif procedure in ("place_abs", "place_rel", "place_back"):
         _pick_again(procedures, arm, before["holding"].get(arm))
         procedures.return_to(back)
     elif procedure == "open":
@@ -83,6 +84,8 @@ def reverse(step: dict[str, Any], procedures: Procedures) -> None:
             procedures.close(BOTH if len(closed) == 2 else closed[0])
     elif procedure == "close":
         procedures.open(arm)
+    elif procedure == "run_skill":
+        raise StepFailed("A skill's motions can't be taken back one by one, so everything stays where it is now.")
     elif procedure == "look_at":
         try:
             procedures.robot.turn_head(*before["head"])

@@ -122,6 +122,9 @@ def narration(
     if procedure == "place_rel":
         thing = held or "what I'm holding"
         return sentence(f"{verb} {thing} {relation} {obj} with {hand}")
+    if procedure == "place_back":
+        head, _, particle = verb.partition(" ")
+        return sentence(f"{head} {held or 'what I am holding'} {particle or 'back'} where it was with {hand}")
     if procedure == "look_at":
         return sentence(f"{verb} {obj}")
     if procedure == "rotate":

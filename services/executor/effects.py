@@ -1,0 +1,150 @@
+"""Whether a replayed step did what it was taught to do, judged from what perception sees after it.
+
+A replay that goes on after a step silently went wrong (a cup that slipped
+off the plate, the other red cup in the hand) ends with "Completed" and a
+table nobody asked for. So after each replayed pick-up and placement the
+executor takes a fresh look and asks here whether the step's effect holds:
+after a pick-up the object is in that hand; after a placement it stands
+upright, out of the hand, on the table or in its relation to the landmark
+(on top: over the landmark's outline; beside: on that side, close to it).
+The answer is the sentence that says what differs, or None.
+
+The thresholds are perception's, not the placement's: an object's box as
+seen may be off by a centimetre or two and a landmark partly hidden by the
+hand above it, so only differences a person would see count.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from services.executor import wording
+from services.executor.geometry import Box
+from services.executor.grounding import REJECT, cost
+from services.executor.referring import refer
+from services.executor.scene import SceneSnapshot
+from shared.contract import VALUE_WORDS
+from shared.messages import PerceivedObject
+
+CHECKED = frozenset({"pick_up", "place_abs", "place_rel", "place_back"})
+TIPPED_SLACK = 0.01  # metres by which a tall object's height must beat its width to count as standing up
+OVER_MARGIN = 0.02  # metres outside a landmark's outline an object on top of it may seem to stand
+BESIDE_MAX = 0.15  # metres, edge to edge: farther than this is not beside any more
+BESIDE_OVERLAP = 0.03  # metres the two boxes as seen may overlap and still be side by side
+ALONG_SLACK = 0.06  # metres past the landmark's side an object beside it may stand along that side
+SAME_PLACE = 0.03  # metres: an object seen this close to where it stood has not been moved
+# each side relation's outward direction, base frame (+x away from the robot, +y to its left): axis, sign
+SIDE_AXIS = {"left_of": 1, "right_of": 1, "behind": 0, "in_front_of": 0}
+SIDE_SIGN = {"left_of": 1.0, "right_of": -1.0, "behind": 1.0, "in_front_of": -1.0}
+SIDE_OF = {"next_to": ("left_of", "right_of"), "near": ("left_of", "right_of", "behind", "in_front_of")}
+
+
+def judge(
+    procedure: str, args: dict[str, Any], moved: PerceivedObject | None, before: set[str], snap: SceneSnapshot
+) -> str | None:
+    """What differs from the effect ``procedure`` was taught to have (None: it holds).
+
+    ``moved``: the object the step moves, as seen before it (the one picked
+    up, or the one the hand held before a placement); ``before``: the ids
+    seen before the step; ``snap``: what is seen after it.
+    """
+    if procedure not in CHECKED or moved is None:
+        return None
+    arm = args["arm"]
+    words = refer(snap.objects, moved.id, moved)
+    if procedure == "pick_up":
+        return _in_hand(arm, moved, words, snap)
+    now = _found_again(moved, before, snap)
+    if now is None:
+        return wording.sentence(f"I can't see {words} any more after putting it down")
+    if now.held_by is not None:
+        return wording.sentence(f"{words} is still in my {now.held_by} hand")
+    if _tipped(moved, now):
+        return wording.sentence(f"{words} has tipped over")
+    if not snap.supported(now.id):
+        return wording.sentence(f"{words} is not standing on anything I can see")
+    if procedure == "place_rel":
+        landmark = snap.objects.get(args["object"])
+        if landmark is None:
+            return wording.sentence(f"I can't see what I put {words} {VALUE_WORDS[args['relation']]} any more")
+        return _in_relation(now, args["relation"], landmark, words, refer(snap.objects, landmark.id))
+    return None
+
+
+def _in_hand(arm: str, wanted: PerceivedObject, words: str, snap: SceneSnapshot) -> str | None:
+    """After a pick-up: ``wanted`` (or an object that looks just like it, renamed) is in ``arm``'s hand."""
+    if snap.gripper_state(arm) != "holding":
+        return wording.sentence(f"My {arm} hand is empty after picking up {words}")
+    in_hand = snap.held_by(arm)
+    if in_hand is None:
+        still = snap.objects.get(wanted.id)
+        if still is not None and snap.supported(still.id) and _same_place(wanted, still):
+            return wording.sentence(f"{words} is still standing where it was, so my {arm} hand holds something else")
+        return None
+    if in_hand == wanted.id:
+        return None
+    renamed = snap.objects.get(wanted.id) is None or snap.objects[wanted.id].visible is False
+    if renamed and cost(_desc(wanted), snap.objects[in_hand]) < REJECT:
+        return None
+    return wording.sentence(f"My {arm} hand is holding {refer(snap.objects, in_hand)}, not {words}")
+
+
+def _in_relation(
+    moved: PerceivedObject, relation: str, landmark: PerceivedObject, words: str, where: str
+) -> str | None:
+    """``moved`` stands ``relation`` ``landmark`` as seen: over its outline (on top), or close to that side."""
+    box, base = Box.of(moved), Box.of(landmark)
+    said = VALUE_WORDS[relation]
+    if relation in ("on_top_of", "above"):
+        off = np.maximum(np.abs(box.center[:2] - base.center[:2]) - base.half[:2], 0.0)
+        if np.any(off > OVER_MARGIN):
+            return wording.sentence(
+                f"{words} is not {said} {where}: it stands {round(100 * float(np.linalg.norm(off)))} cm off its edge"
+            )
+        return None
+    gaps = {side: _gap(box, base, side) for side in SIDE_OF.get(relation, (relation,))}
+    side = max(gaps, key=lambda s: gaps[s])
+    gap = gaps[side]
+    axis = 1 - SIDE_AXIS[side]
+    along = abs(box.center[axis] - base.center[axis]) - base.half[axis] - box.half[axis]
+    if gap < -BESIDE_OVERLAP or along > ALONG_SLACK:
+        return wording.sentence(f"{words} is not {said} {where}")
+    if gap > BESIDE_MAX:
+        return wording.sentence(f"{words} is {round(100 * gap)} cm from {where}, too far to be {said} it")
+    return None
+
+
+def _gap(box: Box, base: Box, side: str) -> float:
+    """Edge-to-edge distance from ``base`` out to ``box`` on ``side`` (negative: ``box`` is not out there)."""
+    axis = SIDE_AXIS[side]
+    return float(SIDE_SIGN[side] * (box.center[axis] - base.center[axis]) - base.half[axis] - box.half[axis])
+
+
+def _found_again(moved: PerceivedObject, before: set[str], snap: SceneSnapshot) -> PerceivedObject | None:
+    """``moved`` as seen now: by its id, else (perception renamed it) the nearest new object that looks like it."""
+    if moved.id in snap.objects:
+        return snap.objects[moved.id]
+    alike = [o for o in snap.objects.values() if o.id not in before and cost(_desc(moved), o) < REJECT]
+    if not alike:
+        return None
+    there = np.asarray(moved.position, float)
+    return min(alike, key=lambda o: float(np.linalg.norm(np.asarray(o.position, float)[:2] - there[:2])))
+
+
+def _tipped(before: PerceivedObject, now: PerceivedObject) -> bool:
+    """Whether an object that stood taller than wide (a cup) now lies wider than tall: on its side."""
+    return _upright(before) and float(max(now.size[:2])) > float(now.size[2]) + TIPPED_SLACK
+
+
+def _upright(obj: PerceivedObject) -> bool:
+    return float(obj.size[2]) > float(max(obj.size[:2])) + TIPPED_SLACK
+
+
+def _same_place(before: PerceivedObject, now: PerceivedObject) -> bool:
+    return float(np.linalg.norm(np.asarray(now.position, float) - np.asarray(before.position, float))) < SAME_PLACE
+
+
+def _desc(obj: PerceivedObject) -> dict[str, Any]:
+    return {"color": obj.color, "type": obj.type, "size": list(obj.size)}

@@ -1,0 +1,218 @@
+"""The executor's handling of the skills commands where nothing has to move: naming, switching, refusals.
+
+The executor runs here on a bus that only records what is published and
+answers no request: a command that would reach the simulator or perception
+shows up as a request, so "nothing moved" is checked, not assumed.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from services.executor.commands import Step, check
+from services.executor.executor import Executor
+from services.executor.geometry import Box
+from services.executor.procedures import StepFailed
+from services.executor.referring import refer
+from services.executor.store import ActionStore
+from services.executor.targets import Held
+from shared.bus import BusTimeout
+from shared.keys import Keys
+from shared.messages import ExecutorState, typed
+from tests.executor.test_skills import BLUE, PLATE_0, RED, SERVE
+
+
+class RecordingBus:
+    """Enough of :class:`shared.bus.Bus` for an executor that is not started: it keeps what is published."""
+
+    def __init__(self) -> None:
+        self.keys = Keys("skills-test")
+        self.published: list[tuple[str, Any]] = []
+        self.requests: list[str] = []
+
+    def subscribe(self, *args: Any, **kwargs: Any) -> None:
+        pass
+
+    def watch_alive(self, *args: Any) -> None:
+        pass
+
+    def publisher(self, key: str, **kwargs: Any) -> RecordingBus.Publisher:
+        return RecordingBus.Publisher(self, key)
+
+    def publish(self, key: str, message: Any) -> None:
+        self.published.append((key, message))
+
+    def request(self, key: str, *args: Any, **kwargs: Any) -> Any:
+        self.requests.append(key)
+        raise BusTimeout(f"nothing answers {key} here")
+
+    def alive_services(self, timeout: float = 0.0) -> set[str]:
+        return set()
+
+    class Publisher:
+        def __init__(self, bus: RecordingBus, key: str) -> None:
+            self.bus, self.key = bus, key
+
+        def put(self, message: Any) -> None:
+            self.bus.publish(self.key, message)
+
+    def said(self) -> list[tuple[str, str]]:
+        return [(m["kind"], m["text"]) for k, m in self.published if k == self.keys.say]
+
+    def states(self) -> list[dict[str, Any]]:
+        return [m for k, m in self.published if k == self.keys.executor_state]
+
+
+@pytest.fixture
+def robot(tmp_path: Path) -> tuple[Executor, RecordingBus]:
+    """An executor whose threads are never started: commands run on the test's thread."""
+    bus = RecordingBus()
+    executor = Executor(bus, ActionStore(tmp_path))  # type: ignore[arg-type]
+    executor.scene.update_objects([RED, BLUE, PLATE_0])
+    return executor, bus
+
+
+def command(executor: Executor, procedure: str, args: dict[str, Any]) -> None:
+    """Run one checked command on the calling thread, as the command worker would."""
+    executor._run_command([Step(procedure, check(procedure, args), {}, "")], "")
+
+
+def taught(executor: Executor, *names: str | None) -> None:
+    """Actions with the serve steps, named ``names`` (None: left unnamed)."""
+    for name in names:
+        number = executor.store.create()
+        for step in SERVE:
+            executor.store.append_step(step)
+        if name:
+            executor.store.rename(number, name)
+
+
+def test_naming_the_current_action_is_said_persisted_and_published(robot: tuple[Executor, RecordingBus]) -> None:
+    executor, bus = robot
+    taught(executor, None, None)
+    command(executor, "name_action", {"name": "serve"})
+    command(executor, "name_action", {"name": "tidy up", "action": 1})
+    assert bus.said() == [
+        ("info", "Action 2 is now called \u201cserve\u201d."),
+        ("info", "Action 1 is now called \u201ctidy up\u201d."),
+    ]
+    assert [(a["name"], a["number"]) for a in executor.store.summaries()] == [("tidy up", 1), ("serve", 2)]
+    executor.publish_state()
+    state = typed("executor_state", bus.states()[-1])
+    assert isinstance(state, ExecutorState)
+    assert [(s.name, s.action) for s in state.skills] == [("tidy up", 1), ("serve", 2)]
+
+
+@pytest.mark.parametrize(
+    "args, sentence",
+    [
+        ({"name": "serve", "action": 1}, "Action 2 is already called \u201cserve\u201d"),
+        ({"name": "pick up"}, "\u201cpick up\u201d is already one of my commands"),
+        ({"name": "wave", "action": 7}, "There is no action 7 to name; the actions are 1 and 2 (\u201cserve\u201d)."),
+    ],
+)
+def test_a_name_that_cannot_be_given_is_refused_with_the_reason(
+    robot: tuple[Executor, RecordingBus], args: dict[str, Any], sentence: str
+) -> None:
+    executor, bus = robot
+    taught(executor, None, "serve")
+    command(executor, "name_action", args)
+    assert len(bus.said()) == 1 and bus.said()[0][0] == "error" and sentence in bus.said()[0][1]
+    assert [a["name"] for a in executor.store.summaries()] == [None, "serve"]
+
+
+def test_naming_with_no_action_says_so(robot: tuple[Executor, RecordingBus]) -> None:
+    executor, bus = robot
+    command(executor, "name_action", {"name": "serve"})
+    assert bus.said() == [("error", "There is no action to name yet; teach me some steps first.")]
+
+
+def test_a_switch_to_an_action_that_does_not_exist_lists_the_actions(robot: tuple[Executor, RecordingBus]) -> None:
+    executor, bus = robot
+    taught(executor, "serve", None)
+    command(executor, "switch_action", {"target": 99})
+    assert bus.said() == [("error", "There is no action 99; the actions are 1 (\u201cserve\u201d) and 2.")]
+    assert executor.store.current == 2
+
+
+def test_a_stored_step_that_fails_the_check_stops_a_replay_before_anything_moves(
+    robot: tuple[Executor, RecordingBus],
+) -> None:
+    executor, bus = robot
+    taught(executor, None)
+    executor.store.append_step({"procedure": "place_rel", "args": {"arm": "right", "relation": "under", "object": "x"}})
+    command(executor, "execute", {})
+    assert bus.said() == [
+        (
+            "error",
+            "Step 3 of action 1 is not a step I can run: 'under' is not a relation I know; I know above, next_to, "
+            "left_of, right_of, in_front_of, behind, on_top_of, near. I won't run action 1.",
+        )
+    ]
+    assert bus.requests == []  # not even a look at the table
+
+
+@pytest.mark.parametrize(
+    "args, sentence",
+    [
+        (
+            {"skill": "fetch"},
+            "I don't know an action called \u201cfetch\u201d; the actions with names are \u201cserve\u201d.",
+        ),
+        ({"skill": 4}, "There is no action 4; the actions are 1 (\u201cserve\u201d) and 2."),
+        ({"skill": 2, "objects": {"carried": "obj1"}}, "Action 2 has no steps yet."),
+        (
+            {"skill": "serve", "objects": {"carried": "obj9"}},
+            "I can't see that object on the table now.",
+        ),
+        (
+            {"skill": "serve", "objects": {"carried": "obj1"}, "each": ["obj0", "obj1"]},
+            "Tell me either the one object to carry or the objects to do it for one by one, not both.",
+        ),
+    ],
+)
+def test_a_skill_that_cannot_run_is_refused_before_anything_moves(
+    robot: tuple[Executor, RecordingBus], args: dict[str, Any], sentence: str
+) -> None:
+    executor, bus = robot
+    taught(executor, "serve")
+    executor.store.create()
+    command(executor, "run_skill", args)
+    assert bus.said() == [("error", sentence)]
+    assert bus.requests == []
+    assert executor.store.step_counts() == [2, 0]  # nothing recorded
+
+
+def test_a_skill_without_a_landmark_refuses_one(robot: tuple[Executor, RecordingBus]) -> None:
+    executor, bus = robot
+    number = executor.store.create()
+    executor.store.append_step(SERVE[0])
+    executor.store.rename(number, "lift")
+    command(executor, "run_skill", {"skill": "lift", "objects": {"landmark": "obj2"}})
+    assert bus.said() == [
+        ("error", "\u201clift\u201d never places anything relative to another object, so I can't give it one.")
+    ]
+
+
+def test_putting_back_is_refused_for_an_empty_hand_and_an_object_never_moved(
+    robot: tuple[Executor, RecordingBus],
+) -> None:
+    executor, bus = robot
+    command(executor, "place_back", {"arm": "left"})
+    assert bus.said() == [("error", "My left hand isn't holding anything to put back.")]
+    snap = executor.scene.snapshot()
+    executor.procedures._set_held("right", Held("obj0", Box.of(RED), np.zeros(7), seen_as=RED))
+    with pytest.raises(StepFailed) as caught:
+        executor._origin({"arm": "right"}, snap)
+    assert str(caught.value) == (
+        f"I haven't moved {refer(snap.objects, 'obj0')} from anywhere else since I started, so I don't know "
+        "where it was before; tell me where to put it."
+    )
+    with pytest.raises(StepFailed, match="My right hand is holding .*, not "):
+        executor._origin({"arm": "right", "object": "obj1"}, snap)
+    executor.origins.picked(RED, snap.objects)
+    assert executor._origin({"arm": "right", "object": "obj0"}, snap) == ("obj0", {"center": list(RED.position)})
