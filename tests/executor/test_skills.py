@@ -21,6 +21,8 @@ from services.executor.table import parse_table
 from shared import messages
 from shared.messages import Gripper, NluResult, PerceivedObject, SimState, typed
 
+pytestmark = pytest.mark.unit
+
 TABLE_Z = 0.75
 
 

@@ -25,6 +25,8 @@ from shared.keys import Keys
 from shared.messages import ExecutorState, typed
 from tests.executor.test_skills import BLUE, PLATE_0, RED, SERVE
 
+pytestmark = pytest.mark.unit
+
 
 class RecordingBus:
     """Enough of :class:`shared.bus.Bus` for an executor that is not started: it keeps what is published."""

@@ -88,6 +88,17 @@ async def test_rename_is_saved_in_the_store(tmp_path: Path) -> None:
 
 
 @pytest.mark.asyncio
+async def test_a_name_taken_or_meaning_a_command_is_refused_with_the_reason(tmp_path: Path) -> None:
+    async with actions_screen(tmp_path, "actrenameno") as (app, pilot, store, _runs):
+        await pilot.press("down", "r", *"Stack the cups", "enter")
+        await until(pilot, lambda: "rename failed" in note(app), what="the refusal")
+        assert "Action 1 is already called \u201cstack the cups\u201d" in note(app)
+        await pilot.press("r", *"pick up", "enter")
+        await until(pilot, lambda: "one of my commands" in note(app), what="the second refusal")
+        assert store.get(2)["name"] is None
+
+
+@pytest.mark.asyncio
 async def test_delete_needs_the_key_twice(tmp_path: Path) -> None:
     async with actions_screen(tmp_path, "actdelete") as (app, pilot, store, _runs):
         await pilot.press("d")
