@@ -53,11 +53,17 @@ BLUE = obj("obj1", "blue", "cup", 0.55, -0.10, CUP)
 PLATE_0 = obj("obj2", "white", "plate", 0.60, 0.25, PLATE)
 
 SERVE = [
-    {"procedure": "pick_up", "args": {"arm": "right", "object": "obj0"}, "landmark": desc(RED)},
+    {
+        "procedure": "pick_up",
+        "args": {"arm": "right", "object": "obj0"},
+        "landmark": desc(RED),
+        "utterance": "pick up the red cup",
+    },
     {
         "procedure": "place_rel",
         "args": {"arm": "right", "relation": "on_top_of", "object": "obj2"},
         "landmark": desc(PLATE_0),
+        "utterance": "put it on the plate",
     },
 ]
 

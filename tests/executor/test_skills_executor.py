@@ -20,12 +20,16 @@ from services.executor.procedures import StepFailed
 from services.executor.referring import refer
 from services.executor.store import ActionStore
 from services.executor.targets import Held
+from shared import messages
 from shared.bus import BusTimeout
 from shared.keys import Keys
-from shared.messages import ExecutorState, typed
-from tests.executor.test_skills import BLUE, PLATE_0, RED, SERVE
+from shared.messages import ExecutorState, PerceivedObject, typed
+from tests.executor.test_skills import BLUE, CUP, PLATE_0, RED, SERVE, TABLE_Z, desc
 
 pytestmark = pytest.mark.unit
+
+
+TABLE = messages.Table(height=TABLE_Z, extent=messages.TableExtent(x=(0.3, 1.1), y=(-0.6, 0.6)))
 
 
 class RecordingBus:
@@ -74,7 +78,7 @@ def robot(tmp_path: Path) -> tuple[Executor, RecordingBus]:
     """An executor whose threads are never started: commands run on the test's thread."""
     bus = RecordingBus()
     executor = Executor(bus, ActionStore(tmp_path))  # type: ignore[arg-type]
-    executor.scene.update_objects([RED, BLUE, PLATE_0])
+    executor.scene.update_objects([RED, BLUE, PLATE_0], TABLE)
     return executor, bus
 
 
@@ -218,3 +222,121 @@ def test_putting_back_is_refused_for_an_empty_hand_and_an_object_never_moved(
         executor._origin({"arm": "right", "object": "obj1"}, snap)
     executor.origins.picked(RED, snap.objects)
     assert executor._origin({"arm": "right", "object": "obj0"}, snap) == ("obj0", {"center": list(RED.position)})
+
+
+def replaying(executor: Executor, monkeypatch: pytest.MonkeyPatch, ran: list[tuple[str, dict[str, Any]]]) -> None:
+    """Steps "run" by noting them (the arms stay), and a fresh look sees the scene as it is set in the test."""
+
+    def step(procedure: str, args: dict[str, Any], *rest: Any, **kwargs: Any) -> bool:
+        ran.append((procedure, args))
+        return True
+
+    monkeypatch.setattr(executor, "_step", step)
+    monkeypatch.setattr(executor, "_record_objects", lambda: list(executor.scene.snapshot().objects.values()))
+
+
+def test_a_replayed_step_whose_effect_does_not_hold_stops_the_replay_saying_what_differs(
+    robot: tuple[Executor, RecordingBus], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    executor, bus = robot
+    taught(executor, None)
+    ran: list[tuple[str, dict[str, Any]]] = []
+    replaying(executor, monkeypatch, ran)
+    command(executor, "execute", {})  # the hand "picked up" the cup but holds nothing
+    snap = executor.scene.snapshot()
+    assert [p for p, _ in ran] == ["record", "pick_up"]  # the placement after it never ran
+    assert bus.said()[-1] == (
+        "error",
+        f"My right hand is empty after picking up {refer(snap.objects, 'obj0')}. I stopped action 1 after step 1 of 2;"
+        " I won't go on with \u201cput it on the plate\u201d.",
+    )
+
+
+def test_a_skill_runs_with_the_objects_said_and_is_recorded_in_another_action_as_one_step(
+    robot: tuple[Executor, RecordingBus], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    executor, bus = robot
+    taught(executor, "serve")
+    executor.store.create()
+    runs: list[tuple[int, dict[str, str] | None]] = []
+
+    def replay(number: int, name: str, start: int = 1, **kwargs: Any) -> bool:
+        runs.append((number, kwargs.get("bound")))
+        return True
+
+    monkeypatch.setattr(executor, "_replay", replay)
+    executor._run_command(
+        [Step("run_skill", {"skill": "serve", "objects": {"carried": "obj1"}}, {}, "serve the blue cup")],
+        "serve the blue cup",
+    )
+    assert runs == [(1, {"carried": "obj1", "landmark": "obj2"})]  # the landmark it was taught with, found again
+    step = executor.store.get(2)["steps"][0]
+    assert step["procedure"] == "run_skill" and step["args"] == {"skill": "serve", "objects": {"carried": "obj1"}}
+    assert step["bound"]["carried"]["color"] == "blue" and step["bound"]["landmark"]["type"] == "plate"
+    assert step["utterance"] == "serve the blue cup"
+
+    executor.store.switch(1)  # "execute it with the blue cup" while on the skill itself: a replay, not a step
+    command(executor, "run_skill", {"skill": 1, "objects": {"carried": "obj1"}})
+    assert executor.store.step_counts() == [2, 1] and bus.said() == []
+
+
+def test_each_object_gets_its_own_run_in_the_order_said_and_the_first_failure_ends_the_rest(
+    robot: tuple[Executor, RecordingBus], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    executor, bus = robot
+    taught(executor, "serve")
+    runs: list[dict[str, str]] = []
+
+    def replay(number: int, name: str, start: int = 1, **kwargs: Any) -> bool:
+        runs.append(kwargs["bound"])
+        return len(runs) < 2  # the second run fails (it says why itself)
+
+    monkeypatch.setattr(executor, "_replay", replay)
+    third = PerceivedObject(id="obj3", color="green", type="cup", position=(0.45, 0.0, 0.80), size=CUP)
+    executor.scene.update_objects([RED, BLUE, PLATE_0, third])
+    snap = executor.scene.snapshot()
+    command(executor, "run_skill", {"skill": "serve", "each": ["obj1", "obj0", "obj3"]})
+    assert [run["carried"] for run in runs] == ["obj1", "obj0"]
+    blue, red, green = (refer(snap.objects, oid) for oid in ("obj1", "obj0", "obj3"))
+    assert bus.said()[0] == ("narration", f"I'll run \u201cserve\u201d with {blue}, then {red}, then {green}.")
+    assert bus.said()[-1] == (
+        "error",
+        f"I ran \u201cserve\u201d with {blue}; I didn't finish it with {red} and {green}.",
+    )
+
+
+def test_an_action_that_calls_a_skill_replays_it_with_the_objects_it_was_called_with(
+    robot: tuple[Executor, RecordingBus], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    executor, bus = robot
+    taught(executor, "serve")
+    blue = {"id": "old1", "color": "blue", "type": "cup", "size": list(CUP), "position": [0.5, 0.0, 0.8]}
+    plate = {**desc(PLATE_0), "id": "old2"}
+    executor.store.create()
+    executor.store.append_step(
+        {"procedure": "run_skill", "args": {"skill": "serve"}, "bound": {"carried": blue, "landmark": plate}}
+    )
+    ran: list[tuple[str, dict[str, Any]]] = []
+    replaying(executor, monkeypatch, ran)
+    monkeypatch.setattr(executor, "_effect_problem", lambda *args: None)
+    command(executor, "execute", {})
+    assert [(p, a.get("object")) for p, a in ran] == [("record", None), ("pick_up", "obj1"), ("place_rel", "obj2")]
+    assert bus.said()[-1] == ("narration", "Completed action 2.")
+
+
+def test_a_skill_that_runs_the_action_being_taught_is_run_but_not_recorded_in_it(
+    robot: tuple[Executor, RecordingBus], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    executor, bus = robot
+    taught(executor, "serve")
+    executor.store.create()  # action 2, being taught
+    wrapper = executor.store.create()
+    executor.store.append_step({"procedure": "run_skill", "args": {"skill": 2}, "bound": {}})
+    executor.store.rename(wrapper, "wrap")
+    executor.store.switch(2)
+    monkeypatch.setattr(executor, "_replay", lambda *args, **kwargs: True)
+    command(executor, "run_skill", {"skill": "wrap"})
+    assert executor.store.step_counts() == [2, 0, 1]
+    assert bus.said() == [
+        ("info", "I didn't add it to action 2 as a step: \u201cwrap\u201d runs action 2 itself."),
+    ]
