@@ -13,6 +13,7 @@ BENCHMARKS: dict[str, str] = {
     "perception": "hfpbd.bench_perception",
     "executor": "hfpbd.bench_executor",
     "manipulation": "hfpbd.bench_manipulation",
+    "skills": "hfpbd.bench_skills",
     "tasks": "hfpbd.tasks.bench",
     "speech": "services.speech.bench",
     "fuzz": "hfpbd.fuzz",

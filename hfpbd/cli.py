@@ -20,7 +20,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "tui": ("tui.main", "terminal user interface for the programming dialog"),
     "speech": ("services.speech.main", "spoken commands in, spoken feedback out"),
     "up": ("hfpbd.launcher", "start every service on this machine and supervise them"),
-    "bench": ("hfpbd.bench", "benchmarks: bus, nlu, sim, perception, executor, tasks, speech, fuzz"),
+    "bench": (
+        "hfpbd.bench",
+        "benchmarks: bus, nlu, sim, perception, executor, manipulation, skills, tasks, speech, fuzz",
+    ),
     "secure": ("hfpbd.secure", "certificates for secure remote operation ('hfpbd secure init DIR')"),
 }
 

@@ -27,6 +27,14 @@ the first that fails ends the job with a sentence naming it. ``undo`` takes
 back the current action's last step (``services/executor/undo.py``) and
 ``repeat`` runs the last robot command again; both are jobs of the worker
 like any other, so they are refused while something runs.
+
+Named actions are skills (``skills``): ``name_action`` names one,
+``run_skill`` replays one with its objects re-bound by role (once, or once
+per object), and is recorded as one step of the action being taught;
+``place_back`` sets the held object down where it stood before the robot
+first moved it (``origins``). A replay checks each pick-up and placement
+from a fresh look (``effects``) and stops, saying what differs, when its
+effect does not hold.
 """
 
 from __future__ import annotations
