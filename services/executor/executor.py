@@ -376,10 +376,11 @@ class Executor:
                 self.say("There is no previous action.", "error")
                 return
             target = current - 1
-        if not 1 <= target <= count:
+        try:
+            self.store.switch(target)
+        except StoreError:  # no such action (or deleted just now, from the actions screen)
             self.say(f"There is no action {target}; {skills.listing(self.store)}.", "error")
             return
-        self.store.switch(target)
         self.say(f"Switched to action {target}.", "info")
 
     def _name(self, args: dict[str, Any]) -> None:
