@@ -601,8 +601,14 @@ class Executor:
         problem = self._effect_problem(step["procedure"], args, moved, set(snap.objects))
         if problem is None:
             return True
-        rest = f"; I won't go on with \u201c{step_words(steps[i])}\u201d" if i < len(steps) else ""
-        self.say(f"{problem} I stopped {name} after step {i} of {len(steps)}{rest}.", "error")
+        if i < len(steps):
+            words = step_words(steps[i])
+            self.say(
+                f"{problem} I stopped {name} after step {i} of {len(steps)}; I won't go on with \u201c{words}\u201d.",
+                "error",
+            )
+        else:
+            self.say(f"{problem} So {name} did not end as it was taught.", "error")
         return False
 
     def _moved_by(self, procedure: str, args: dict[str, Any], snap: SceneSnapshot) -> PerceivedObject | None:

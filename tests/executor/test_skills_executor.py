@@ -340,3 +340,22 @@ def test_a_skill_that_runs_the_action_being_taught_is_run_but_not_recorded_in_it
     assert bus.said() == [
         ("info", "I didn't add it to action 2 as a step: \u201cwrap\u201d runs action 2 itself."),
     ]
+
+
+def test_a_last_step_whose_effect_does_not_hold_is_reported_instead_of_completed(
+    robot: tuple[Executor, RecordingBus], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    executor, bus = robot
+    taught(executor, None)
+    ran: list[tuple[str, dict[str, Any]]] = []
+    replaying(executor, monkeypatch, ran)
+    held = RED  # the hand holds the red cup before the placement ...
+    executor.procedures._set_held("right", Held("obj0", Box.of(held), np.zeros(7), seen_as=held))
+    executor._replay_step("action 1", executor.store.get(1)["steps"], 2, executor._ground(SERVE, 2, {}), (1,))
+    snap = executor.scene.snapshot()  # ... and sees it standing where it stood, off the plate
+    assert ran == [("place_rel", {"arm": "right", "relation": "on_top_of", "object": "obj2"})]
+    kind, text = bus.said()[-1]
+    assert kind == "error" and text.startswith(f"{refer(snap.objects, 'obj0')[:1].upper()}")
+    assert f"is not on top of {refer(snap.objects, 'obj2')}" in text
+    assert text.endswith("So action 1 did not end as it was taught.")
+    assert not any("Completed" in t for _, t in bus.said())
