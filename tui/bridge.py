@@ -60,8 +60,11 @@ class Bridge:
             keys.executor_state, self._on_executor_state, schema="executor_state", latest_only=True, history=True
         )
         bus.subscribe(keys.sim_state, self._on_sim_state, schema="sim_state", latest_only=True)
-        bus.watch_alive(lambda service, alive: self._app.post_message(events.Presence(service, alive)))
+        bus.watch_alive(self._on_presence)
         self._app.post_message(events.BusConnected())
+
+    def _on_presence(self, service: str, alive: bool) -> None:
+        self._app.post_message(events.Presence(service, alive))
 
     def watch_camera(self) -> None:
         """Start receiving the head camera (first time it is shown only: frames are megabytes each)."""

@@ -23,11 +23,12 @@ from textual.widget import Widget
 from textual.widgets import Static
 from textual_image import widget as image_widgets
 from textual_image._terminal import get_cell_size  # the cell size textual-image itself scales with
+from textual_image.widget._base import Image as ImageWidget  # the base every drawing's widget class shares
 
 from tui.camera import Label, Picture
 
 # one class per choice of ``hfpbd tui --camera-drawing`` (tui.main.DRAWINGS names them without importing this)
-DRAWINGS: dict[str, type[image_widgets.Image]] = {
+DRAWINGS: dict[str, type[ImageWidget]] = {
     "auto": image_widgets.Image,
     "sixel": image_widgets.SixelImage,
     "tgp": image_widgets.TGPImage,
@@ -36,7 +37,7 @@ DRAWINGS: dict[str, type[image_widgets.Image]] = {
 WAITING = "waiting for the head camera's picture (sim/cloud) — is the simulator running?"
 
 
-def image_class(drawing: str) -> type[image_widgets.Image]:
+def image_class(drawing: str) -> type[ImageWidget]:
     """The widget class for a drawing method; "auto" off a terminal (tests, pipes) means half-blocks.
 
     textual-image's own choice off a terminal is grey Unicode blocks, which
@@ -50,7 +51,7 @@ def image_class(drawing: str) -> type[image_widgets.Image]:
     return chosen
 
 
-def pixels_per_cell(kind: type[image_widgets.Image]) -> tuple[int, int]:
+def pixels_per_cell(kind: type[ImageWidget]) -> tuple[int, int]:
     """Image pixels one cell shows: two stacked for half-blocks, the cell's own pixels for graphics."""
     if issubclass(kind, image_widgets.HalfcellImage):
         return (1, 2)

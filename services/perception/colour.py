@@ -50,7 +50,8 @@ def colour_word(rgb: np.ndarray) -> ColourEstimate:
         return ColourEstimate("unknown", 0.0, (0, 0, 0))
     hsv = _hsv(rgb)
     classes = _classes(hsv)
-    mean_rgb = tuple(int(round(c)) for c in rgb.reshape(-1, 3).mean(axis=0))
+    red, green, blue = (int(round(c)) for c in rgb.reshape(-1, 3).mean(axis=0))
+    mean_rgb = (red, green, blue)
     chromatic = classes != ACHROMATIC_CLASS
     if chromatic.mean() >= 0.4:
         votes = np.bincount(classes[chromatic], minlength=len(CHROMATIC))

@@ -205,11 +205,11 @@ def render_map(
     shade = 0.45 + 0.55 * np.clip(np.abs(normal @ light), 0.0, 1.0)
     rgb = np.clip(colour * shade[:, None], 0, 255)
     rgb[~hit] = 0
-    shape = (camera.height, camera.width, 3)
+    image_shape = (camera.height, camera.width, 3)
     return {
         "stamp": 0.0,
-        "xyz": xyz.reshape(shape).astype(np.float32),
-        "rgb": rgb.reshape(shape).astype(np.uint8),
+        "xyz": xyz.reshape(image_shape).astype(np.float32),
+        "rgb": rgb.reshape(image_shape).astype(np.uint8),
         "camera_pose": camera.pose(),
         "width": camera.width,
         "height": camera.height,

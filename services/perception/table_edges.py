@@ -86,7 +86,7 @@ def table_extent(
     """
     mask = np.zeros(image_shape, np.uint8)
     mask.flat[on_table] = 1
-    rim = np.flatnonzero(mask > cv2.erode(mask, np.ones((3, 3), np.uint8), borderValue=0))
+    rim = np.flatnonzero(mask > cv2.erode(mask, np.ones((3, 3), np.uint8), borderValue=(0,)))
     xy = xyz[rim, :2].astype(float)
     rows, columns = np.divmod(rim, image_shape[1])
     low, high = outline.min(axis=0) - BIN, outline.max(axis=0) + BIN

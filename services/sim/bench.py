@@ -80,7 +80,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"{'scene':<20} {'camera':>8} {'RTF':>6} {'render ms':>10} {'p95':>6} {'cloud ms':>9} "
         f"{'physics ms/s':>13} {'max cloud Hz':>13}"
     )
-    worst = {}
+    worst: dict[tuple[int, int], float] = {}
     for width, height in RESOLUTIONS:
         world = SimWorld(width=width, height=height)
         world.capture()  # shader compilation is a one-off start-up cost, not a per-frame one

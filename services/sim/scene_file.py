@@ -136,6 +136,11 @@ def parse_scene(document: Any, source: str = "scene", default_name: str = "scene
     )
 
 
+def _triple(numbers: list[float]) -> tuple[float, float, float]:
+    """Three numbers already checked by :func:`_numbers`, as the fixed-length tuple a spec holds."""
+    return numbers[0], numbers[1], numbers[2]
+
+
 def _numbers(value: Any, count: int | tuple[int, ...], where: str) -> list[float]:
     counts = (count,) if isinstance(count, int) else count
     if not isinstance(value, (list, tuple)) or len(value) not in counts:
@@ -160,8 +165,8 @@ def _parse_object(item: Any, index: int, source: str) -> ObjectSpec:
     color = item.get("color")
     if color not in COLOURS:
         raise SceneError(f"{where}: color must be one of {', '.join(COLOURS)}, got {color!r}")
-    rgb = tuple(_numbers(item["rgb"], 3, f"{where}.rgb")) if "rgb" in item else COLOURS[color]
-    size = tuple(_numbers(item.get("size"), 3, f"{where}.size"))
+    rgb = _triple(_numbers(item["rgb"], 3, f"{where}.rgb")) if "rgb" in item else COLOURS[color]
+    size = _triple(_numbers(item.get("size"), 3, f"{where}.size"))
     if min(size) <= 0.0 or max(size) > 1.0:
         raise SceneError(f"{where}: size must be between 0 and 1 m per axis, got {list(size)}")
     mass = float(item.get("mass", 0.1))
@@ -180,7 +185,7 @@ def _parse_object(item: Any, index: int, source: str) -> ObjectSpec:
         rgb,
         size,
         mass,
-        tuple(xyz),
+        _triple(xyz),
         float(item.get("yaw", 0.0)),
         friction,
         bool(item.get("open_top", False)),
@@ -195,7 +200,7 @@ def with_positions(scene: SceneSpec, positions: dict[str, Any]) -> SceneSpec:
         xyz = _numbers(value, (2, 3), f"poses.{object_id}")
         if len(xyz) == 2:
             xyz.append(TABLE_TOP_Z + spec.size[2] / 2)
-        moved[object_id] = tuple(xyz)
+        moved[object_id] = _triple(xyz)
     return replace(scene, objects=tuple(replace(s, position=moved.get(s.id, s.position)) for s in scene.objects))
 
 

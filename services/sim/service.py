@@ -254,7 +254,8 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
         """Start one arm's motion (on the simulation thread)."""
         motion_id = world.new_motion_id()
         if isinstance(goal, tuple):
-            runner.replaced(world.follow_waypoints(side, names, *goal, motion_id, contact), motion_id)
+            times, points = goal
+            runner.replaced(world.follow_waypoints(side, names, times, points, motion_id, contact), motion_id)
         else:
             runner.replaced(world.move_joints(side, names, goal, motion_id), motion_id)
         return motion_id

@@ -117,7 +117,7 @@ class SimWorld:
         self.joints = self._joint_info()
         self.links = {link.name: link for link in self.robot.get_links()}
         self.camera = self._mount_camera(width, height)
-        self.overview = None
+        self.overview: sapien.render.RenderCameraComponent | None = None
         self._in_flight: PictureInFlight | None = None
         self.objects: dict[str, sapien.Entity] = {}
         self.specs: dict[str, ObjectSpec] = {}
