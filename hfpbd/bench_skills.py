@@ -147,7 +147,7 @@ def _use(driver: Driver, rng: np.random.Generator, skill: Skill, name: str) -> O
     truth = driver.watch.settled()
     moved = float(np.linalg.norm(np.asarray(truth[carried].position, float) - start)) > MOVED
     if errors:
-        return Outcome(skill.kind, "achieved", "reported" if moved else "refused", errors[-1])
+        return Outcome(skill.kind, "achieved", "reported" if moved else "refused", " ".join(errors))
     verdict = _judge(driver, skill, carried, landmark, start)
     return Outcome(skill.kind, "achieved", "achieved" if verdict.success else "silent", verdict.reason)
 
