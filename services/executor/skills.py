@@ -97,6 +97,8 @@ def skills(store: ActionStore) -> list[Skill]:
 def find(store: ActionStore, skill: str | int) -> int:
     """The action number of ``skill`` (a name, compared as :func:`_key` does, or a number)."""
     count = store.count()
+    if isinstance(skill, str) and skill.strip().isdigit():  # no name is all digits (``name_refusal``)
+        skill = int(skill)
     if isinstance(skill, int):
         if 1 <= skill <= count:
             return skill

@@ -227,6 +227,7 @@ def test_the_actions_screen_and_command_line_rename_keeps_the_same_rules(tmp_pat
 def test_a_skill_is_found_by_name_or_number_and_an_unknown_one_lists_the_names(tmp_path: Path) -> None:
     store = store_with(tmp_path, ("serve", SERVE), (None, SERVE), ("tidy up", SERVE))
     assert skills.find(store, "Serve") == 1 and skills.find(store, "tidy up") == 3 and skills.find(store, 2) == 2
+    assert skills.find(store, " 2 ") == 2
     with pytest.raises(SkillError) as caught:
         skills.find(store, "fetch")
     assert str(caught.value) == (
