@@ -709,8 +709,10 @@ class Executor:
         """``said`` with every other role of the skill bound to the object it was taught with, as seen now."""
         rest = {role: desc for role, desc in taught.items() if role not in said}
         found = reground(list(rest.values()), [o for o in snap.standing_objects() if o.id not in said.values()])
-        if found.missing:
-            raise SkillError(next(iter(found.missing.values())))
+        for role, desc in rest.items():
+            if desc["id"] in found.missing:
+                instead = "to carry instead" if role == CARRIED else "to use in its place"
+                raise SkillError(f"{found.missing[desc['id']]} Tell me which object {instead}.")
         return {**said, **{role: found.mapping[desc["id"]] for role, desc in rest.items()}}
 
     def _skill_sequence(self, number: int, runs: list[dict[str, str]], chain: tuple[int, ...]) -> bool:

@@ -359,3 +359,13 @@ def test_a_last_step_whose_effect_does_not_hold_is_reported_instead_of_completed
     assert f"is not on top of {refer(snap.objects, 'obj2')}" in text
     assert text.endswith("So action 1 did not end as it was taught.")
     assert not any("Completed" in t for _, t in bus.said())
+
+
+def test_a_role_not_said_whose_taught_object_is_gone_asks_for_one(robot: tuple[Executor, RecordingBus]) -> None:
+    executor, bus = robot
+    taught(executor, "serve")
+    executor.scene.update_objects([RED, BLUE], TABLE)  # no plate on this table
+    command(executor, "run_skill", {"skill": "serve", "objects": {"carried": "obj1"}})
+    kind, text = bus.said()[-1]
+    assert kind == "error" and text.startswith("There is no white plate on the table any more")
+    assert text.endswith("Tell me which object to use in its place.") and bus.requests == []
