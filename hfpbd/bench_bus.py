@@ -26,6 +26,7 @@ import zenoh
 from shared.bus import Bus
 from shared.codec import decode, encode
 from shared.config import SessionOptions, free_port, loopback_options, zenoh_config
+from shared.messages import Cloud, Ping, Request
 from shared.stats import markdown_table, percentiles_ms
 
 PINGS = 2000
@@ -59,14 +60,14 @@ def _bus_peer(options: SessionOptions, namespace: str) -> None:
         pong = bus.publisher(f"{prefix}/pong")
         clouds = bus.publisher(bus.keys.cloud, large=True)
         start = threading.Event()
-        bus.subscribe(f"{prefix}/ping", lambda m: pong.put({"i": m["i"]}))
+        bus.subscribe(f"{prefix}/ping", lambda m: pong.put(Ping(i=m.i)), schema="ping")
         bus.subscribe(f"{prefix}/go", lambda m: start.set())
         bus.declare_alive("bench-peer")
         start.wait()
         message = _cloud(np.random.default_rng(0))
         for i in range(CLOUDS):
             message["stamp"] = float(i)
-            clouds.put(message)
+            clouds.put(Cloud(**message))
         time.sleep(5)
 
 
@@ -130,7 +131,7 @@ def _measure(impl: str) -> tuple[list[float], float]:
                 ping = bus.publisher(f"{prefix}/ping")
                 bus.subscribe(f"{prefix}/pong", pongs.put)
                 bus.subscribe(bus.keys.cloud, on_cloud)
-                send = lambda i: ping.put({"i": i})  # noqa: E731
+                send = lambda i: ping.put(Ping(i=i))  # noqa: E731
             else:
                 session = bus.session
                 raw_ping = session.declare_publisher(f"{prefix}/ping")
@@ -157,7 +158,7 @@ def _measure(impl: str) -> tuple[list[float], float]:
                 send(i)
                 pongs.get(timeout=10)
                 rtts.append(time.perf_counter() - started)
-            bus.publish(f"{prefix}/go", {})
+            bus.publish(f"{prefix}/go", Request())
             if not done.wait(120):
                 raise RuntimeError(f"only {len(arrivals)} of {CLOUDS} clouds arrived")
             rate = (len(arrivals) - 1) / (arrivals[-1] - arrivals[0])

@@ -36,6 +36,7 @@ from services.sim.scene_file import COLOURS
 from shared.bus import Bus
 from shared.config import free_port, loopback_options
 from shared.contract import other_arm
+from shared.messages import NluResult
 
 TABLE_AREA = ((0.42, 0.78), (-0.42, 0.42))  # metres: x, y where the random objects stand
 GAP = 0.04  # metres between two objects' outlines
@@ -181,14 +182,9 @@ class Driver:
         self.watch.watch_motion(since)
         self.bus.publish(
             self.bus.keys.nlu_result,
-            {
-                "kind": "command",
-                "procedure": procedure,
-                "args": args or {},
-                "phrases": {},
-                "text": procedure,
-                "utterance": procedure,
-            },
+            NluResult(
+                kind="command", procedure=procedure, args=args or {}, phrases={}, text=procedure, utterance=procedure
+            ),
         )
         self.watch.wait_for(
             lambda: (

@@ -40,6 +40,7 @@ from shared.bus import Bus
 from shared.config import DEFAULT_NAMESPACE, SessionOptions, add_security_arguments
 from shared.denials import unfiltered_stdout
 from shared.logs import setup_logging
+from shared.messages import Say, SayKind
 from shared.security import SecurityError, endpoint_host, is_loopback
 from shared.service import ALREADY_RUNNING, LOOK_S
 from shared.signals import stop_on
@@ -191,12 +192,12 @@ class Supervisor:
             argv += ["--scene", self.args.scene]
         return argv
 
-    def _say(self, bus: Bus, text: str, kind: str) -> None:
+    def _say(self, bus: Bus, text: str, kind: SayKind) -> None:
         if kind == "error":
             log.warning(text)
         else:
             log.info(text)
-        bus.publish(bus.keys.say, {"text": text, "kind": kind})
+        bus.publish(bus.keys.say, Say(text=text, kind=kind))
 
     def check(self, bus: Bus) -> None:
         """Restart the services that stopped (called from the main thread: children die with their starter)."""

@@ -27,6 +27,7 @@ from shared.config import SessionOptions, enforces_access_control, zenoh_config
 from shared.denials import log_access_denials
 from shared.keys import Keys
 from shared.messages import TYPES, typed
+from shared.messages import Message as Typed
 
 log = logging.getLogger("hfpbd.bus")
 
@@ -43,13 +44,13 @@ class RemoteError(RuntimeError):
 
 
 class Publisher:
-    """Publishes message maps on one key."""
+    """Publishes typed messages (``shared.messages``) on one key."""
 
     def __init__(self, raw: Any, key: str) -> None:
         self._raw = raw
         self.key = key
 
-    def put(self, message: Message) -> None:
+    def put(self, message: Typed) -> None:
         self._raw.put(encode(message))
 
     def undeclare(self) -> None:
@@ -177,7 +178,7 @@ class Bus:
             raw = self.session.declare_publisher(key, congestion_control=congestion)
         return Publisher(self._keep(raw), key)
 
-    def publish(self, key: str, message: Message) -> None:
+    def publish(self, key: str, message: Typed) -> None:
         """Publish once without declaring a publisher (dialog lines, events)."""
         self.session.put(key, encode(message))
 

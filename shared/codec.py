@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 import msgpack
+import msgspec
 import numpy as np
 
 SCHEMA_VERSION = 1
@@ -33,6 +34,8 @@ def _pack_default(value: Any) -> Any:
         return value.item()
     if isinstance(value, (tuple, set, frozenset)):
         return list(value)
+    if isinstance(value, msgspec.Struct):
+        return _fields(value)
     raise TypeError(f"cannot encode {type(value).__name__} in a message")
 
 
@@ -53,8 +56,16 @@ def _unpack_hook(obj: dict) -> Any:
     return obj
 
 
-def encode(message: dict[str, Any]) -> bytes:
-    """Encode a message map, stamping the schema version ``v`` if absent."""
+def _fields(message: msgspec.Struct) -> dict[str, Any]:
+    """A typed message's fields as the map the wire carries; a field left unset (None) is not sent."""
+    values = ((name, getattr(message, name)) for name in message.__struct_fields__)
+    return {name: value for name, value in values if value is not None}
+
+
+def encode(message: dict[str, Any] | msgspec.Struct) -> bytes:
+    """Encode a message (a typed one, or a map), stamping the schema version ``v`` if absent."""
+    if isinstance(message, msgspec.Struct):
+        message = _fields(message)
     if "v" not in message:
         message = {"v": SCHEMA_VERSION, **message}
     return msgpack.packb(message, default=_pack_default, use_bin_type=True)

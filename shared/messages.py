@@ -260,11 +260,18 @@ class Request(Message):
     pass
 
 
+class Ping(Message):
+    """The bus benchmark's round-trip message."""
+
+    i: int
+
+
 class Reply(Message):
     ok: bool
 
 
 TYPES: dict[str, type[Message]] = {
+    "ping": Ping,
     "utterance": Utterance,
     "say": Say,
     "cloud": Cloud,

@@ -16,7 +16,7 @@ from textual.message import Message
 
 from shared.bus import Bus, BusTimeout, RemoteError
 from shared.config import SessionOptions
-from shared.messages import Cloud, ExecutorState, NluResult, Objects, Say, SimState
+from shared.messages import Cloud, ExecutorState, NluResult, Objects, Say, SimState, Utterance
 from tui import events
 
 # A cheap, side-effect-free request per service, timed for the status bar.
@@ -106,10 +106,7 @@ class Bridge:
     def say(self, text: str, choice: int | None = None) -> None:
         """Publish an utterance; ``choice`` answers the pending clarification by index."""
         bus = self._bus()
-        message: dict[str, Any] = {"text": text, "source": "tui"}
-        if choice is not None:
-            message["choice"] = choice
-        bus.publish(bus.keys.utterance, message)
+        bus.publish(bus.keys.utterance, Utterance(text=text, source="tui", choice=choice))
 
     def command(self, procedure: str, args: dict[str, Any] | None = None, timeout: float = 3.0) -> str:
         """Ask the executor to run a direct command; returns its message."""

@@ -26,6 +26,7 @@ import numpy as np
 from hfpbd.tasks.judge import Truth, Verdict, judge
 from hfpbd.tasks.observer import Observer, WaitTimeout
 from hfpbd.tasks.scripts import Expected, Task, Utterance, word_count
+from shared import messages
 from shared.bus import Bus, BusTimeout, RemoteError
 from shared.messages import CommandStep, NluResult
 
@@ -211,7 +212,7 @@ class TaskRunner:
         busy_before = self.watch.busy_states
         sent = time.time()
         self.watch.watch_motion(sent)
-        self.bus.publish(self.bus.keys.utterance, {"text": step.text, "source": "script"})
+        self.bus.publish(self.bus.keys.utterance, messages.Utterance(text=step.text, source="script"))
         try:
             result = self.watch.wait_for(
                 lambda: self._result_for(step.text, sent), NLU_TIMEOUT, f"the NLU to understand {step.text!r}"

@@ -22,7 +22,7 @@ from services.nlu.nbest import NOT_MADE_OUT, most_plausible
 from services.nlu.templates import sentence_templates
 from services.nlu.world import COLORS, TYPES, WorldError, parse_world
 from shared.bus import Bus
-from shared.messages import ExecutorState, Objects, PerceivedObject, Robot, Skill, Utterance
+from shared.messages import ExecutorState, NluResult, Objects, PerceivedObject, Robot, Say, Skill, Utterance
 from shared.service import run_service, wait_until_stopped
 
 log = logging.getLogger("hfpbd.nlu")
@@ -142,19 +142,17 @@ class NluService:
         self._publish(result, text)
 
     def _publish(self, result: Result, text: str) -> None:
-        self.results.put({**result.to_json(), "utterance": text})
+        self.results.put(msgspec.convert({**result.to_json(), "utterance": text}, NluResult))
         if isinstance(result, Clarify):
-            self.bus.publish(
-                self.bus.keys.say, {"text": result.question, "kind": "clarify", "candidates": result.labels}
-            )
+            self.bus.publish(self.bus.keys.say, Say(text=result.question, kind="clarify", candidates=result.labels))
         elif isinstance(result, Answer):
             # the topic marks the spoken copy as this answer's: the screen shows it from here, so it
             # shows once whichever of the two messages arrives first
-            self.bus.publish(self.bus.keys.say, {"text": result.text, "kind": "info", "topic": result.topic})
+            self.bus.publish(self.bus.keys.say, Say(text=result.text, kind="info", topic=result.topic))
         log.info("%r -> %s", text, result.to_json())
 
     def _say_error(self, text: str) -> None:
-        self.bus.publish(self.bus.keys.say, {"text": text, "kind": "error"})
+        self.bus.publish(self.bus.keys.say, Say(text=text, kind="error"))
 
     # -- queryables ---------------------------------------------------------
     def _model_for(self, request: dict[str, Any]) -> tuple[Model, Dialogue | None]:

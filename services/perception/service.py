@@ -39,7 +39,7 @@ from services.perception.table_edges import TableExtent, widest
 from services.perception.tracking import Tracker, TrackSettings
 from shared.bus import Bus
 from shared.codec import MessageError
-from shared.messages import Cloud, SimState, typed
+from shared.messages import Cloud, SimState, as_received, typed
 
 log = logging.getLogger("hfpbd.perception")
 
@@ -175,7 +175,7 @@ class PerceptionService:
         message = {"stamp": float(stamp), "objects": self._objects, "status": status}
         if self._table is not None:
             message["table"] = self._table
-        self._publisher.put(message)
+        self._publisher.put(as_received("objects", message))
         with self._changed:
             number = self._frames[-1].number + 1 if self._frames else 1
             rendered = float(sim_time) if sim_time is not None else None

@@ -43,6 +43,7 @@ from services.sim.scene_file import (
 )
 from services.sim.world import ARMS, Capture, PictureInFlight, SimWorld
 from shared.bus import Bus
+from shared.messages import Cloud, SimEvent, as_received
 
 log = logging.getLogger("hfpbd.sim")
 
@@ -190,16 +191,10 @@ class SimRunner:
 
     # -- publishing ------------------------------------------------------------------
     def publish_event(self, motion_id: str, status: str, message: str) -> None:
-        self.bus.publish(
-            self.bus.keys.sim_events,
-            {
-                "motion_id": motion_id,
-                "status": status,
-                "message": message,
-                "sim_time": self.world.sim_time,
-                "stamp": time.time(),
-            },
+        event = SimEvent(
+            motion_id=motion_id, status=status, message=message, sim_time=self.world.sim_time, stamp=time.time()
         )
+        self.bus.publish(self.bus.keys.sim_events, event)
 
     def replaced(self, old: Motion | None, new_id: str) -> None:
         if old is not None:
@@ -215,17 +210,11 @@ class SimRunner:
         self.rtf = self._measure_rtf()
         state = self.world.state()
         state.update(stamp=time.time(), rtf=self.rtf, paused=self.paused)
-        self._state_pub.put(state)
+        self._state_pub.put(as_received("sim_state", state))
 
     def publish_truth(self) -> None:
-        self._truth_pub.put(
-            {
-                "stamp": time.time(),
-                "sim_time": self.world.sim_time,
-                "scene": self.world.scene_name,
-                "objects": self.world.truth(),
-            }
-        )
+        truth = {"stamp": time.time(), "sim_time": self.world.sim_time, "scene": self.world.scene_name}
+        self._truth_pub.put(as_received("truth", {**truth, "objects": self.world.truth()}))
 
     def _offer_frame(self, frame: Capture | None) -> None:
         """Hand a frame to the cloud thread, replacing one it has not started on (newest wins)."""
@@ -238,7 +227,7 @@ class SimRunner:
     def _publish_clouds(self) -> None:
         while (frame := self._frames.get()) is not None:
             try:
-                self._cloud_pub.put(cloud_message(frame, time.time()))
+                self._cloud_pub.put(Cloud(**cloud_message(frame, time.time())))
                 self.clouds_published += 1
             except Exception:
                 log.exception("publishing a point cloud failed")
