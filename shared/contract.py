@@ -9,6 +9,7 @@ strings), with no bus and no numerical library, so any layer can import it.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal, get_args
 
 # -- arms and grippers ------------------------------------------------------
 ARMS = ("right", "left")
@@ -65,8 +66,10 @@ DISTANCE_PROCEDURES = frozenset({"move_abs_dir", "move_rel_dir"})
 
 # -- other fields of a result -------------------------------------------------
 THEN = "then"  # a command's list of further {"procedure", "args"} to run after it
-ANSWER_TOPICS = ("scene", "object", "holding", "actions", "help")
-RESULT_KINDS = ("command", "clarify", "answer")
+AnswerTopic = Literal["scene", "object", "holding", "actions", "help"]
+ResultKind = Literal["command", "clarify", "answer"]
+ANSWER_TOPICS: tuple[str, ...] = get_args(AnswerTopic)
+RESULT_KINDS: tuple[str, ...] = get_args(ResultKind)
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ import msgspec
 import numpy as np
 
 from shared.codec import MessageError, decode, encode
+from shared.contract import AnswerTopic, ResultKind
 
 Vector3 = tuple[float, float, float]
 Pose = tuple[float, float, float, float, float, float, float]  # x, y, z, qw, qx, qy, qz
@@ -53,7 +54,9 @@ class Say(Message):
     text: str
     kind: SayKind
     candidates: list[str] | None = None
-    topic: str | None = None  # set on the NLU's spoken copy of an answer: the screen shows it once, as an answer
+    topic: AnswerTopic | None = (
+        None  # set on the NLU's spoken copy of an answer: the screen shows it once, as an answer
+    )
 
 
 class Cloud(Message):
@@ -192,9 +195,14 @@ class CommandStep(msgspec.Struct, kw_only=True):
 
 
 class NluResult(Message):
-    """A command (``procedure``, ``args``, maybe ``then``), a clarification or an answer, for ``utterance``."""
+    """A command (``procedure``, ``args``, maybe ``then``), a clarification or an answer, for ``utterance``.
 
-    kind: str
+    ``kind`` and ``topic`` are the contract's enumerations, checked at the
+    door; ``procedure`` stays a string so that an unknown one reaches the
+    executor, which refuses it with a sentence the user hears.
+    """
+
+    kind: ResultKind
     utterance: str
     procedure: str | None = None
     args: dict[str, Any] | None = None
@@ -205,7 +213,7 @@ class NluResult(Message):
     params: list[str] | None = None
     question: str | None = None
     candidates: list[CommandStep] | None = None
-    topic: str | None = None
+    topic: AnswerTopic | None = None
 
 
 class Progress(msgspec.Struct, kw_only=True):

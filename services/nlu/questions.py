@@ -10,7 +10,7 @@ objects by their referring expressions (never by their ids).
 from __future__ import annotations
 
 import re
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 from services.nlu import relational, relations_asked
 from services.nlu.lexicon import NUMBER_WORDS
@@ -19,7 +19,7 @@ from services.nlu.relations_asked import RELATION_WORDS
 from services.nlu.results import Answer
 from services.nlu.tokens import Term, canonical, read, slots_said
 from services.nlu.weights import MARGINS
-from shared.contract import ARMS
+from shared.contract import ARMS, AnswerTopic
 
 if TYPE_CHECKING:
     from services.nlu.infer import Model
@@ -134,7 +134,7 @@ def answer(model: Model, text: str, history: History) -> Answer | None:
         return None
     topic, found = found_any
     if topic == "object":
-        return Answer(topic, _where(model, found["phrase"]))
+        return Answer("object", _where(model, found["phrase"]))
     if topic == "which":  # "which cup is closest to you": where that one is
         return Answer("object", _where(model, _about_me(found["phrase"])))
     if topic == "related":  # "is the red cup on the plate"
@@ -148,12 +148,13 @@ def answer(model: Model, text: str, history: History) -> Answer | None:
     if topic == "count":  # "how many cups are there"
         return Answer("object", _count(model, found["phrase"]))
     if topic == "actions":
-        return Answer(topic, _actions(model, found.groupdict().get("number")))
+        return Answer("actions", _actions(model, found.groupdict().get("number")))
     if topic == "saved" and lowered.startswith("stop") and model.world.robot.executing:
         return None  # "stop recording" while an action runs: a stop first of all
     if topic == "saved":  # "done", "save it": nothing to do, the steps are kept as they are made
         return Answer("actions", _saved(model))
-    return Answer(topic, {"help": _help, "holding": _holding, "scene": _scene}[topic](model))
+    plain = cast(AnswerTopic, topic)  # the patterns left are named by the contract's topics themselves
+    return Answer(plain, {"help": _help, "holding": _holding, "scene": _scene}[topic](model))
 
 
 def _match(lowered: str) -> tuple[str, re.Match[str]] | None:

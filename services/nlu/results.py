@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from services.nlu.commands import Command
-from shared.contract import THEN
+from shared.contract import THEN, AnswerTopic
 
 
 @dataclass
@@ -66,7 +66,7 @@ class Clarify:
 class Answer:
     """A question answered from the world state: nothing moves, nothing is recorded."""
 
-    topic: str
+    topic: AnswerTopic
     text: str
     score: float = 0.0  # ranks with commands' scores among speech hypotheses: below any understood command
 
