@@ -47,7 +47,9 @@ from shared.signals import stop_on
 
 log = logging.getLogger("hfpbd.up")
 
-BACKGROUND_SERVICES = ("sim", "perception", "nlu", "executor")
+# every service `hfpbd up` runs unless told otherwise: speech among them, so the robot listens from the first
+# command (the speech service says once, plainly, when there is no microphone, and works from the audio stream)
+SERVICES = ("sim", "perception", "nlu", "executor", "speech")
 MAX_RESTARTS = 5
 DEFAULT_PORT = 7447
 LOCK_NAME = "up.lock"
@@ -100,7 +102,7 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--no-restart", action="store_true", help="report a crashed service but do not restart it")
     parser.add_argument(
         "--services",
-        default=",".join(BACKGROUND_SERVICES),
+        default=",".join(SERVICES),
         help="comma-separated services to run here, when others run elsewhere (default: %(default)s)",
     )
     add_security_arguments(parser, default_identity=None)
@@ -116,11 +118,9 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
 
 def _service_list(raw: str) -> list[str]:
     names = [name.strip() for name in raw.split(",") if name.strip()]
-    unknown = sorted(set(names) - set(BACKGROUND_SERVICES) - {"speech"})
+    unknown = sorted(set(names) - set(SERVICES))
     if unknown:
-        raise SystemExit(
-            f"hfpbd up: unknown service(s) {', '.join(unknown)}; choose from {', '.join(BACKGROUND_SERVICES)}, speech"
-        )
+        raise SystemExit(f"hfpbd up: unknown service(s) {', '.join(unknown)}; choose from {', '.join(SERVICES)}")
     return names
 
 
