@@ -32,7 +32,7 @@ from shared.messages import Cloud, Robot
 from tui import events
 from tui.action_panel import ActionPanel
 from tui.actions_screen import ActionsScreen
-from tui.bridge import PROBES, Bridge
+from tui.bridge import PROBES, Bridge, Poster
 from tui.camera import compose as compose_picture
 from tui.camera_view import CameraView
 from tui.clarify import ClarifyPrompt
@@ -90,10 +90,16 @@ class PbdApp(App[None]):
     ]
 
     def __init__(
-        self, options: SessionOptions, *, probe_seconds: float | None = 2.0, camera_drawing: str = "auto"
+        self,
+        options: SessionOptions,
+        *,
+        probe_seconds: float | None = 2.0,
+        camera_drawing: str = "auto",
+        bridge: Callable[[SessionOptions, Poster], Bridge] = Bridge,
     ) -> None:
         """``probe_seconds`` is how often latencies are measured (None: never); ``camera_drawing`` is
-        how pictures are drawn (``tui.camera_view.DRAWINGS``: a graphics protocol or half-blocks)."""
+        how pictures are drawn (``tui.camera_view.DRAWINGS``: a graphics protocol or half-blocks);
+        ``bridge`` makes the app's link to the bus, so that whoever drives the app can choose it."""
         super().__init__()
         self.camera_drawing = camera_drawing
         self._cloud: Cloud | None = None  # newest camera frame not yet composed
@@ -102,7 +108,7 @@ class PbdApp(App[None]):
         self._pictures = 0
         self._actions_seen: tuple[Any, ...] = ()
         self.options = options
-        self.bridge = Bridge(options, self)
+        self.bridge = bridge(options, self)
         self.world = WorldView()
         self.probe_seconds = probe_seconds
         self.sub_title = f"robot {options.namespace!r}"

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import asyncio
+import functools
 import json
 import tempfile
-import time
+import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -16,15 +18,63 @@ from services.executor.actions_control import apply
 from services.executor.store import ActionStore, atomic_write_text
 from shared.bus import Bus, Publisher
 from shared.config import SessionOptions
+from tests.waiting import eventually, subscribed
+from tui.app import PbdApp
+from tui.bridge import Bridge, Poster
 
 
-async def until(pilot: Pilot, condition: Callable[[], bool], timeout: float = 15.0, what: str = "") -> None:
-    """Let the app run until ``condition()`` holds; fail with ``what`` after ``timeout``."""
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what or condition}")
-        await pilot.pause(0.05)
+async def until(pilot: Pilot, condition: Callable[[], Any], timeout: float = 15.0, what: str = "") -> None:
+    """Let the app run until ``condition()`` holds; fail with ``what`` after ``timeout``.
+
+    The condition is checked on the app's own loop, once its pending messages
+    have run, so it reads the app between two of its steps, never in the middle of one.
+    """
+    loop = asyncio.get_running_loop()
+
+    async def settled() -> Any:
+        await pilot.pause()
+        return condition()
+
+    def check() -> Any:
+        return asyncio.run_coroutine_threadsafe(settled(), loop).result()
+
+    await asyncio.to_thread(eventually, check, timeout, what)
+
+
+class HubBridge(Bridge):
+    """The app's bridge on a test's network: it reports itself open once the hub reaches every subscription.
+
+    A line the hub publishes right after would otherwise be routed before the
+    UI's subscription is known there, and be lost.
+    """
+
+    def __init__(self, options: SessionOptions, app: Poster, hub: Bus) -> None:
+        super().__init__(options, app)
+        self._hub = hub
+        self.ready = threading.Event()
+
+    def open(self) -> None:
+        super().open()
+        keys = self._hub.keys
+        for key in (keys.say, keys.nlu_result, keys.objects, keys.executor_state, keys.sim_state):
+            subscribed(self._hub, key)
+        self.ready.set()
+
+    def watch_camera(self) -> None:
+        super().watch_camera()
+        subscribed(self._hub, self._hub.keys.cloud)
+
+
+def hub_bridge(hub: Bus) -> Callable[[SessionOptions, Poster], HubBridge]:
+    """What ``PbdApp(bridge=...)`` takes: the app's bridge, checked from ``hub``."""
+    return functools.partial(HubBridge, hub=hub)
+
+
+async def connected(pilot: Pilot, app: PbdApp) -> None:
+    """Wait until the app is on the bus and, when its bridge is a ``HubBridge``, the hub reaches it."""
+    await until(pilot, lambda: app.bridge.connected, what="the UI's session")
+    if isinstance(app.bridge, HubBridge):
+        await until(pilot, app.bridge.ready.is_set, what="the UI's subscriptions at the hub")
 
 
 OBJECTS: list[dict[str, Any]] = [

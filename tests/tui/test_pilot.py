@@ -16,7 +16,7 @@ import pytest
 from shared.bus import Bus
 from shared.config import loopback_options
 from tests.processes import Network, free_port
-from tests.tui.helpers import DESCRIPTIONS, OBJECTS, REACH, ROBOT, SIM_STATE, until
+from tests.tui.helpers import DESCRIPTIONS, OBJECTS, REACH, ROBOT, SIM_STATE, connected, hub_bridge, until
 from tui.action_panel import ActionPanel
 from tui.app import PbdApp
 from tui.clarify import ClarifyPrompt
@@ -58,15 +58,11 @@ def status(app: PbdApp) -> StatusBar:
     return app.query_one(StatusBar)
 
 
-async def connected(app: PbdApp, pilot: Any) -> None:
-    await until(pilot, lambda: app.bridge.connected, what="the UI's session")
-
-
 async def test_without_services_the_ui_says_what_cannot_work_and_connects_when_they_appear() -> None:
     namespace, port = "tnoservice" + str(free_port()), free_port()
     app = PbdApp(loopback_options(namespace, port, listen=False), probe_seconds=None)
     async with app.run_test(size=SIZE) as pilot:
-        await connected(app, pilot)
+        await connected(pilot, app)
         summary = status(app).summary()
         for service in ("sim", "perception", "nlu", "executor"):
             assert f"○ {service}" in summary
@@ -89,9 +85,9 @@ async def test_without_services_the_ui_says_what_cannot_work_and_connects_when_t
 
 async def test_a_typed_command_is_published_and_shown(network: Network) -> None:
     heard = collect(network.hub, network.hub.keys.utterance)
-    app = PbdApp(network.client_options, probe_seconds=None)
+    app = PbdApp(network.client_options, probe_seconds=None, bridge=hub_bridge(network.hub))
     async with app.run_test(size=SIZE) as pilot:
-        await connected(app, pilot)
+        await connected(pilot, app)
         await pilot.press(*"move your right hand up", "enter")
         message = heard.get(timeout=10)
         assert message["text"] == "move your right hand up"
@@ -103,10 +99,9 @@ async def test_a_typed_command_is_published_and_shown(network: Network) -> None:
 
 @pytest.mark.parametrize("kind", ["narration", "error", "info", "clarify"])
 async def test_what_the_robot_says_appears_with_its_kind(network: Network, kind: str) -> None:
-    app = PbdApp(network.client_options, probe_seconds=None)
+    app = PbdApp(network.client_options, probe_seconds=None, bridge=hub_bridge(network.hub))
     async with app.run_test(size=SIZE) as pilot:
-        await connected(app, pilot)
-        await pilot.pause(0.5)  # let the subscription reach the hub
+        await connected(pilot, app)
         network.hub.publish(network.hub.keys.say, {"text": f"a {kind} line", "kind": kind})
         await until(pilot, lambda: conversation(app).texts(kind), what=f"the {kind} line")
         assert conversation(app).texts(kind) == [f"a {kind} line"]
@@ -115,10 +110,9 @@ async def test_what_the_robot_says_appears_with_its_kind(network: Network, kind:
 
 
 async def test_a_malformed_say_message_is_dropped_and_counted(network: Network) -> None:
-    app = PbdApp(network.client_options, probe_seconds=None)
+    app = PbdApp(network.client_options, probe_seconds=None, bridge=hub_bridge(network.hub))
     async with app.run_test(size=SIZE) as pilot:
-        await connected(app, pilot)
-        await pilot.pause(0.5)
+        await connected(pilot, app)
         network.hub.publish(network.hub.keys.say, {"text": "shouting", "kind": "shout"})
         network.hub.publish(network.hub.keys.say, {"text": "after the bad one", "kind": "info"})
         await until(pilot, lambda: conversation(app).texts("info"), what="the good line")
@@ -130,8 +124,7 @@ CANDIDATES = ["the red cup", "the blue cup", "the tallest cup"]
 
 
 async def _ask(app: PbdApp, pilot: Any, network: Network) -> None:
-    await connected(app, pilot)
-    await pilot.pause(0.5)
+    await connected(pilot, app)
     network.hub.publish(
         network.hub.keys.say, {"text": "Which object do you mean?", "kind": "clarify", "candidates": CANDIDATES}
     )
@@ -153,7 +146,7 @@ async def _by_mouse(pilot: Any, app: PbdApp) -> None:
 @pytest.mark.parametrize("answer", [_by_number, _by_arrows, _by_mouse], ids=["number", "arrows", "mouse"])
 async def test_a_clarification_is_answered_by_choosing_from_the_list(network: Network, answer: Any) -> None:
     heard = collect(network.hub, network.hub.keys.utterance)
-    app = PbdApp(network.client_options, probe_seconds=None)
+    app = PbdApp(network.client_options, probe_seconds=None, bridge=hub_bridge(network.hub))
     async with app.run_test(size=SIZE) as pilot:
         await _ask(app, pilot, network)
         await answer(pilot, app)
@@ -171,7 +164,7 @@ async def test_a_clarification_is_answered_by_choosing_from_the_list(network: Ne
 
 async def test_a_clarification_can_be_answered_in_words(network: Network) -> None:
     heard = collect(network.hub, network.hub.keys.utterance)
-    app = PbdApp(network.client_options, probe_seconds=None)
+    app = PbdApp(network.client_options, probe_seconds=None, bridge=hub_bridge(network.hub))
     async with app.run_test(size=SIZE) as pilot:
         await _ask(app, pilot, network)
         await pilot.press(*"the tallest one", "enter")
@@ -183,7 +176,7 @@ async def test_a_clarification_can_be_answered_in_words(network: Network) -> Non
 
 async def test_a_number_without_such_an_answer_is_refused_and_nothing_is_sent(network: Network) -> None:
     heard = collect(network.hub, network.hub.keys.utterance)
-    app = PbdApp(network.client_options, probe_seconds=None)
+    app = PbdApp(network.client_options, probe_seconds=None, bridge=hub_bridge(network.hub))
     async with app.run_test(size=SIZE) as pilot:
         await _ask(app, pilot, network)
         await pilot.press("7", "enter")
@@ -201,9 +194,9 @@ async def test_world_panel_shows_objects_with_names_reach_and_the_referred_objec
     objects.put({"stamp": time.time(), "objects": OBJECTS})
     state = hub.publisher(hub.keys.executor_state, cached=True)
     state.put({"stamp": time.time(), "robot": ROBOT, "reach": REACH})
-    app = PbdApp(network.client_options, probe_seconds=None)
+    app = PbdApp(network.client_options, probe_seconds=None, bridge=hub_bridge(network.hub))
     async with app.run_test(size=SIZE) as pilot:
-        await connected(app, pilot)
+        await connected(pilot, app)
         await until(pilot, lambda: app.world.descriptions == DESCRIPTIONS, what="referring expressions")
         await until(pilot, lambda: app.world.reach == REACH, what="reach")
         table = app.query_one(ObjectTable)
@@ -222,7 +215,7 @@ async def test_world_panel_shows_objects_with_names_reach_and_the_referred_objec
             },
         )
         await until(pilot, lambda: app.world.highlighted == "obj1", what="the highlight")
-        await pilot.pause(0.1)
+        await until(pilot, lambda: str(table.get_row("obj1")[0]) == "▶", what="the highlighted row")
         assert str(table.get_row("obj1")[0]) == "▶"
         assert str(table.get_row("obj0")[0]) == ""
         canvas = app.query_one(TableCanvas).render().plain
@@ -231,10 +224,9 @@ async def test_world_panel_shows_objects_with_names_reach_and_the_referred_objec
 
 
 async def test_canvas_draws_both_grippers_from_sim_state(network: Network) -> None:
-    app = PbdApp(network.client_options, probe_seconds=None)
+    app = PbdApp(network.client_options, probe_seconds=None, bridge=hub_bridge(network.hub))
     async with app.run_test(size=SIZE) as pilot:
-        await connected(app, pilot)
-        await pilot.pause(0.5)
+        await connected(pilot, app)
         network.hub.publish(network.hub.keys.sim_state, {"stamp": time.time(), **SIM_STATE})
         await until(pilot, lambda: app.world.ee, what="sim state")
         picture = app.query_one(TableCanvas).render().plain.splitlines()
@@ -246,10 +238,9 @@ async def test_canvas_draws_both_grippers_from_sim_state(network: Network) -> No
 
 async def test_robot_and_action_panels_follow_the_executor(network: Network) -> None:
     state = network.hub.publisher(network.hub.keys.executor_state, cached=True)
-    app = PbdApp(network.client_options, probe_seconds=None)
+    app = PbdApp(network.client_options, probe_seconds=None, bridge=hub_bridge(network.hub))
     async with app.run_test(size=SIZE) as pilot:
-        await connected(app, pilot)
-        await pilot.pause(0.5)
+        await connected(pilot, app)
         running = {
             **ROBOT,
             "executing": True,
@@ -258,9 +249,9 @@ async def test_robot_and_action_panels_follow_the_executor(network: Network) -> 
         }
         state.put({"stamp": time.time(), "robot": running, "reach": REACH})
         await until(pilot, lambda: app.world.robot is not None and app.world.robot.executing, what="executing state")
-        await pilot.pause(0.1)
-        robot = app.query_one(RobotPanel).fields
         panel = app.query_one(ActionPanel)
+        await until(pilot, lambda: panel.query_one("#action-progress").display, what="the action's progress")
+        robot = app.query_one(RobotPanel).fields
         steps = str(panel.query_one("#action-steps").render())
         assert "▶ 2. pick it up" in steps
         assert "action 1 of 1" in str(panel.query_one("#action-title").render())
@@ -285,9 +276,9 @@ async def test_keys_send_direct_commands_even_while_typing(
     network: Network, key: str, procedure: str, args: dict[str, Any]
 ) -> None:
     requests = serve_recording(network.hub, network.hub.keys.executor_control("command"), {"ok": True, "message": "ok"})
-    app = PbdApp(network.client_options, probe_seconds=None)
+    app = PbdApp(network.client_options, probe_seconds=None, bridge=hub_bridge(network.hub))
     async with app.run_test(size=SIZE) as pilot:
-        await connected(app, pilot)
+        await connected(pilot, app)
         await pilot.press(*"pick it", key)
         request = requests.get(timeout=10)
         assert request["procedure"] == procedure
@@ -297,18 +288,18 @@ async def test_keys_send_direct_commands_even_while_typing(
 
 async def test_stop_reaches_the_arms_directly_when_the_executor_is_gone(network: Network) -> None:
     stops = serve_recording(network.hub, network.hub.keys.sim_control("stop"), {"ok": True})
-    app = PbdApp(network.client_options, probe_seconds=None)
+    app = PbdApp(network.client_options, probe_seconds=None, bridge=hub_bridge(network.hub))
     async with app.run_test(size=SIZE) as pilot:
-        await connected(app, pilot)
+        await connected(pilot, app)
         await pilot.press("escape")
         assert stops.get(timeout=10) == {"v": 1}
         await until(pilot, lambda: any("directly" in t for t in conversation(app).texts("info")), what="stop report")
 
 
 async def test_a_key_without_an_executor_explains_why_nothing_happened(network: Network) -> None:
-    app = PbdApp(network.client_options, probe_seconds=None)
+    app = PbdApp(network.client_options, probe_seconds=None, bridge=hub_bridge(network.hub))
     async with app.run_test(size=SIZE) as pilot:
-        await connected(app, pilot)
+        await connected(pilot, app)
         await pilot.press("f5")
         await until(pilot, lambda: conversation(app).texts("error"), timeout=10, what="the error line")
         assert conversation(app).texts("error") == ["execute failed: the executor did not answer (is it running?)"]
@@ -319,9 +310,9 @@ async def test_executor_errors_are_shown_with_their_reason(network: Network) -> 
         raise ValueError("there is no next action")
 
     network.hub.serve(network.hub.keys.executor_control("command"), refuse)
-    app = PbdApp(network.client_options, probe_seconds=None)
+    app = PbdApp(network.client_options, probe_seconds=None, bridge=hub_bridge(network.hub))
     async with app.run_test(size=SIZE) as pilot:
-        await connected(app, pilot)
+        await connected(pilot, app)
         await pilot.press("f8")
         await until(pilot, lambda: conversation(app).texts("error"), timeout=10, what="the error line")
         assert conversation(app).texts("error") == ["switch action failed: there is no next action"]
@@ -335,9 +326,9 @@ async def test_history_and_vocabulary_completion(network: Network) -> None:
     )
     hub.serve(hub.keys.nlu_query("describe"), lambda _r: dict(DESCRIPTIONS))
     hub.declare_alive("nlu")
-    app = PbdApp(network.client_options, probe_seconds=0.2)
+    app = PbdApp(network.client_options, probe_seconds=0.2, bridge=hub_bridge(network.hub))
     async with app.run_test(size=SIZE) as pilot:
-        await connected(app, pilot)
+        await connected(pilot, app)
         entry = app.query_one(CommandInput)
         await until(pilot, lambda: entry.vocabulary.words, what="the vocabulary")
         await until(pilot, lambda: status(app).latency.get("nlu") is not None, what="nlu latency")
