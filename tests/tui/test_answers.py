@@ -20,7 +20,7 @@ from rich.style import Style
 from textual.message import Message
 
 from tests.processes import Launcher, Network
-from tests.tui.helpers import OBJECTS, until
+from tests.tui.helpers import OBJECTS, connected, hub_bridge, until
 from tui import events
 from tui.app import PbdApp
 from tui.conversation import Conversation
@@ -65,10 +65,10 @@ async def test_an_answer_is_one_line_in_its_own_style_whichever_copy_comes_first
         if _carries_answer(message):
             taken_in.append(message)
 
-    app = PbdApp(network.client_options, probe_seconds=None)
+    app = PbdApp(network.client_options, probe_seconds=None, bridge=hub_bridge(hub))
     async with app.run_test(size=(120, 40), message_hook=hook) as pilot:
         conversation = app.query_one(Conversation)
-        await until(pilot, lambda: app.bridge.connected, what="the UI's session")
+        await connected(pilot, app)
         hub.publish(hub.keys.say, {"text": "There is nothing to stop.", "kind": "info"})
         hub.publish(hub.keys.say, {"text": "I can't reach the plate with my right hand.", "kind": "error"})
         await until(pilot, lambda: len(conversation.entries) == 2, what="an information and an error line")
@@ -76,7 +76,7 @@ async def test_an_answer_is_one_line_in_its_own_style_whichever_copy_comes_first
         for count, (key, message) in enumerate(reversed(copies) if spoken_first else copies, start=1):
             hub.publish(key, message)
             await until(pilot, lambda n=count: len(taken_in) == n, what=f"copy {count} of the answer taken in")
-        await pilot.pause(0.3)
+        await pilot.pause()
 
         assert conversation.texts().count(ANSWER) == 1, conversation.entries
         assert conversation.texts("answer") == [ANSWER]
@@ -95,8 +95,16 @@ async def test_a_typed_question_is_answered_once_in_its_own_style_and_spoken(
     voice = tmp_path / "voice"
     launcher.start("nlu")
     launcher.start("speech", "--microphone", "off", "--voice-dir", str(voice))
+    taken_in: list[str] = []
+
+    def hook(message: Message) -> None:
+        if isinstance(message, events.Understood) and message.result.text:
+            taken_in.append(message.result.text)
+        elif isinstance(message, events.Said):
+            taken_in.append(message.text)
+
     app = PbdApp(network.client_options, probe_seconds=None)
-    async with app.run_test(size=(120, 40)) as pilot:
+    async with app.run_test(size=(120, 40), message_hook=hook) as pilot:
         conversation = app.query_one(Conversation)
         await until(pilot, lambda: bool(app.world.descriptions), timeout=30, what="the NLU's referring expressions")
         await until(pilot, lambda: "speech" in app.query_one(StatusBar).alive, timeout=60, what="the speech service")
@@ -111,6 +119,7 @@ async def test_a_typed_question_is_answered_once_in_its_own_style_and_spoken(
         assert result["kind"] == "answer" and result["topic"] == "object" and answer == result["text"]
         assert "cm in front of me" in answer and "cup" in answer
         await until(pilot, lambda: len(_spoken(voice)) == 2, timeout=20, what="the answer spoken")
-        await pilot.pause(0.5)
+        await until(pilot, lambda: taken_in.count(answer) == 2, what="both copies of the answer taken in")
+        await pilot.pause()
         assert conversation.texts().count(answer) == 1, "the answer was shown more than once"
         assert _style_of(conversation, answer) not in (None, _style_of(conversation, "Moving my right hand up."))

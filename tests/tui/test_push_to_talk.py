@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import queue
 from collections.abc import Callable
 from typing import Any
@@ -15,6 +16,7 @@ from shared.bus import Bus
 from tests.processes import Launcher, Network
 from tests.speech.helpers import stream
 from tests.tui.helpers import until
+from tests.waiting import served
 from tui.app import NO_SPEECH, PbdApp
 from tui.conversation import Conversation
 from tui.status_bar import StatusBar
@@ -92,7 +94,9 @@ async def test_the_talk_key_without_a_working_speech_service_says_why(
         await until(pilot, lambda: app.bridge.connected, what="the UI's session")
         if setup is not no_speech:
             await until(pilot, lambda: "speech" in status(app).alive, what="the speech token")
-        await pilot.pause(0.3)  # let the UI's session learn the hub's queryables
+        if setup is refusing_speech:  # the UI's session must know the queryable before it asks
+            assert app.bridge.bus is not None
+            await asyncio.to_thread(served, app.bridge.bus, network.hub.keys.speech("ptt"))
         await pilot.press("f9")
         await until(pilot, lambda: conversation_lines(app, kind), timeout=10, what=f"the {kind} line")
         assert conversation_lines(app, kind) == [told]
