@@ -123,12 +123,18 @@ def _gap(box: Box, base: Box, side: str) -> float:
 
 
 def _found_again(moved: PerceivedObject, before: set[str], snap: SceneSnapshot) -> PerceivedObject | None:
-    """``moved`` as seen now: by its id, else (perception renamed it) the nearest new object that looks like it."""
-    if moved.id in snap.objects:
-        return snap.objects[moved.id]
+    """``moved`` as seen now: by its id while in view, else the nearest new object that looks like it.
+
+    Perception may lose an object's track when it is let go (its last place
+    was where the hand held it) and start a new one where it stands: then
+    the old id is kept a while, out of view, up in the air.
+    """
+    kept = snap.objects.get(moved.id)
+    if kept is not None and kept.visible is not False:
+        return kept
     alike = [o for o in snap.objects.values() if o.id not in before and cost(_desc(moved), o) < REJECT]
     if not alike:
-        return None
+        return kept
     there = np.asarray(moved.position, float)
     return min(alike, key=lambda o: float(np.linalg.norm(np.asarray(o.position, float)[:2] - there[:2])))
 

@@ -74,6 +74,7 @@ log = logging.getLogger("hfpbd.executor")
 REACH_POLL = 0.2  # seconds between checks whether the reach map is stale
 JOINT_CHANGE = 0.01  # rad: an arm that moved more than this invalidates the map
 RECORD_TIMEOUT = 15.0
+LOOKS = 2  # fresh looks at a replayed step's effect before it counts as not holding (a track lost on release)
 ADMIN_DOING = {
     "record": "looking at the table",
     "create_action": "creating an action",
@@ -627,11 +628,26 @@ class Executor:
         """What differs, seen afresh, from the effect a replayed step was taught to have (None: it holds)."""
         if procedure not in effects.CHECKED or moved is None:
             return None
-        try:
-            self._record_objects()
-        except StepFailed as exc:
-            return f"I couldn't check that step: {str(exc)[:1].lower()}{str(exc)[1:]}"
-        return effects.judge(procedure, args, moved, before, self.scene.snapshot())
+        for _ in range(LOOKS):
+            try:
+                self._record_objects()
+            except StepFailed as exc:
+                return f"I couldn't check that step: {str(exc)[:1].lower()}{str(exc)[1:]}"
+            snap = self.scene.snapshot()
+            problem = effects.judge(procedure, args, moved, before, snap)
+            if problem is None:
+                return None
+            log.info(
+                "%s did not take effect (%s); moved %s, objects seen: %s",
+                procedure,
+                problem,
+                moved.id,
+                {
+                    k: (np.round(o.position, 3).tolist(), np.round(o.size, 3).tolist(), o.held_by, o.visible)
+                    for k, o in snap.objects.items()
+                },
+            )
+        return problem
 
     # -- skills --------------------------------------------------------------------------------------
     def _run_skill(self, step: Step, context: dict[str, Any], failure_note: str | None = None) -> bool:

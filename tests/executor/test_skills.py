@@ -398,3 +398,17 @@ def test_a_placed_object_perception_renamed_is_found_by_its_looks() -> None:
     assert effects.judge("place_abs", {"arm": "right", "destination": "table"}, held, {"obj0"}, snapshot([BLUE])) == (
         "I can't see the red cup any more after putting it down."  # no longer seen: named by how it looked
     )
+
+
+def test_a_track_lost_on_release_is_not_taken_for_the_object_hanging_in_the_air() -> None:
+    held = obj("obj0", "red", "cup", 0.5, 0.1, CUP, z=0.9, held_by="right")
+    stale = PerceivedObject(
+        id="obj0", color="red", type="cup", position=(0.5, 0.2, 0.95), size=CUP, visible=False
+    )  # the old track, kept where the hand held it
+    fresh = obj("obj9", "red", "cup", 0.5, 0.1, CUP)
+    seen = snapshot([stale, fresh])
+    assert effects.judge("place_abs", {"arm": "right", "destination": "table"}, held, {"obj0"}, seen) is None
+    alone = snapshot([stale])
+    assert effects.judge("place_abs", {"arm": "right", "destination": "table"}, held, {"obj0"}, alone) == words(
+        "{obj0} is not standing on anything I can see", alone
+    )
