@@ -28,7 +28,8 @@ from pathlib import Path
 import psutil
 
 from services.nlu import corpus
-from services.nlu.infer import Model
+from services.nlu.corpus.remarks import remarks
+from services.nlu.infer import Clarify, CommandResult, Model, Result
 from services.nlu.world import COLORS, TYPES, World, parse_world
 
 SIZES = (1, 2, 4, 8, 16, 32, 64)
@@ -38,6 +39,9 @@ PAPER_PARSE_MS = {4: 1.7, 16: 4.5}
 PAPER_BATCH_MS = {4: 3.5, 16: 6.2, 64: 16.5}
 BATCH_SPEEDUP_TARGET = 10.0
 ACCURACY_TARGET = 0.97
+NOT_MEANT_INPUTS = 2000  # per scene
+NOT_MEANT_SEED = 11  # the test draws with another seed
+NOT_MEANT_SCENES = ("table", "table_right_red", "table_skills")
 UTTERANCES = (
     "move your right hand above the red cup",
     "pick it up",
@@ -168,6 +172,37 @@ def accuracy_report() -> tuple[int, int]:
     return right, total
 
 
+def not_meant_report(count: int = NOT_MEANT_INPUTS, seed: int = NOT_MEANT_SEED) -> int:
+    """Print what came of generated input that is no command (``corpus.remarks``); the number acted on."""
+    scenes, _ = corpus.load()
+    outcomes: dict[str, int] = {"refused": 0, "asked": 0, "stop": 0, "acted on": 0}
+    examples: list[str] = []
+    for scene in NOT_MEANT_SCENES:
+        model = Model(parse_world(scenes[scene]))
+        for text in remarks(count, seed):
+            came = outcome(model.parse(text))
+            outcomes[came] += 1
+            if came == "acted on" and len(examples) < 5:
+                examples.append(f"{text!r} in {scene}")
+    total = sum(outcomes.values())
+    shown = ", ".join(f"{name} {n}" for name, n in outcomes.items())
+    verdict = "PASS" if not outcomes["acted on"] else "MISS"
+    print(
+        f"not meant ({total} generated numbers, code, remarks, questions over {len(NOT_MEANT_SCENES)} scenes): {shown}"
+    )
+    print(f"  acted on: {outcomes['acted on']}  {verdict} (target 0)" + "".join(f"\n    {e}" for e in examples))
+    return outcomes["acted on"]
+
+
+def outcome(result: Result) -> str:
+    """What the robot would do: a stop (always safe), a motion or step ("acted on"), a question, or nothing."""
+    if isinstance(result, CommandResult):
+        return "stop" if result.command.procedure == "stop" else "acted on"
+    if isinstance(result, Clarify) and (result.candidates or result.confirms is not None):
+        return "asked"
+    return "refused"
+
+
 def _verdict(value: float, target: float | None) -> str:
     if target is None:
         return ""
@@ -190,6 +225,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"Accuracy on the everyday corpus ({', '.join(corpus.FILES)}):")
     right, total = accuracy_report()
     missed = int(right < ACCURACY_TARGET * total)
+    print()
+    missed += int(not_meant_report() > 0)
     print()
     load = psutil.getloadavg()[0]
     print(

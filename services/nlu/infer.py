@@ -185,7 +185,12 @@ class Model:
         if match.scores[considered].max(initial=0.0) <= 0.0:
             return Clarify([], _not_understood(utterance))
         decided = self._decide(scores, considered, match, history)
-        if not utterance.unknown or focus:
+        if focus:
+            return decided
+        if not utterance.unknown:
+            if utterance.guesses and isinstance(decided, CommandResult):
+                read_as = ", ".join(f"'{said}' as '{word}'" for said, word in dict(utterance.guesses).items())
+                return meant.confirmation(decided, f"I read {read_as}.")
             return decided
         if isinstance(decided, Clarify):
             # "pick up the banana": the question back says which word was not understood, not only what is seen
@@ -397,7 +402,7 @@ def _focused(utterance: Utterance, focus: list[str]) -> Utterance:
         readings = tuple(r for r in term.readings if all(_parameter(m.slot) in wanted for m in r))
         if readings:
             terms.append(Term(term.words, readings, term.start))
-    return Utterance(tuple(terms), utterance.unknown) if terms else utterance
+    return Utterance(tuple(terms), utterance.unknown, utterance.guesses) if terms else utterance
 
 
 def _parameter(slot: str) -> str:

@@ -56,7 +56,7 @@ ORDINALS = ("first", "second", "third", "fourth", "fifth")
 # (phrases, readings); phrases are lower-case, single-spaced, already stemmed
 _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     # verbs of motion
-    (("move", "go", "bring", "shift", "position", "carry", "put your hand", "put your arm"), ((verb(MOVE),),)),
+    (("move", "go", "bring", "shift", "position", "carry", "hover", "put your hand", "put your arm"), ((verb(MOVE),),)),
     (("raise", "lift up"), ((verb(MOVE), option("direction", "up")),)),
     (("lower",), ((verb(MOVE), option("direction", "down")),)),
     (("approach",), ((verb(MOVE), option("direction", "towards")),)),

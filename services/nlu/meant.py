@@ -39,8 +39,11 @@ _TOKEN = re.compile(r"[a-z0-9]+")
 _DIGITS = re.compile(r"\d")
 # three numbers in a row: counting ("one two three testing"), not an amount ("twenty five millimetres")
 _COUNTING = re.compile(r"(?:\b(?:\d+|" + "|".join(NUMBER_WORDS) + r")\b\W*){3,}")
-# a question about something, not a request: "is it raining", "did you see the game"; never a command
-_ASKING = re.compile(r"^(?:is|are|was|were|did|does|has|have|had|isn't|aren't|didn't|doesn't)\b")
+# a question about something, not a request: "is it raining", "when does the news start"; never a command (the
+# questions the robot answers are read before any command, so one that reaches here is none of them)
+_ASKING = re.compile(
+    r"^(?:is|are|was|were|did|does|has|have|had|isn't|aren't|didn't|doesn't|what|when|why|who|whose|how|where)\b"
+)
 # a hand the robot does not have: "your third hand", "the 3rd arm", "four hands"
 _NO_SUCH_HAND = re.compile(
     r"\b(?:first|second|third|fourth|fifth|middle|extra|spare|\d+(?:st|nd|rd|th)?|three|four|five|six)"

@@ -17,6 +17,7 @@ from functools import lru_cache
 from rapidfuzz import process
 from rapidfuzz.distance import DamerauLevenshtein
 
+from services.nlu import english
 from services.nlu.lexicon import (
     FILLERS,
     MAX_PHRASE_WORDS,
@@ -83,6 +84,7 @@ class Utterance:
 
     terms: tuple[Term, ...]
     unknown: tuple[str, ...]
+    guesses: tuple[tuple[str, str], ...] = ()  # (said, read as): real words read as the lexicon word nearest them
 
 
 def read(text: str) -> Utterance:
@@ -90,12 +92,15 @@ def read(text: str) -> Utterance:
     raw = _TOKEN.findall(_CLAUSE.sub(" ", text.lower().replace("_", " ")))
     tokens: list[str] = []
     unknown: list[str] = []
+    guesses: list[tuple[str, str]] = []
     for token in raw:
         word = canonical(token)
         if word is None:
             unknown.append(token)
         else:
             tokens.append(word)
+            if guessed(token, word):
+                guesses.append((token, word))
     tokens = _join_particles(tokens)
     terms: list[Term] = []
     i = 0
@@ -113,7 +118,7 @@ def read(text: str) -> Utterance:
                 break
         else:
             i += 1  # a filler word: nothing to credit
-    return Utterance(tuple(terms), tuple(unknown))
+    return Utterance(tuple(terms), tuple(unknown), tuple(guesses))
 
 
 @lru_cache(maxsize=4096)
@@ -122,6 +127,10 @@ def canonical(token: str) -> str | None:
     token = _DIGIT_ORDINALS.get(token, token)
     if token in _KNOWN or token.isdigit():
         return token
+    return _stem(token) or _typo_fix(token)
+
+
+def _stem(token: str) -> str | None:
     for suffix, replacement in _SUFFIXES:
         if token.endswith(suffix) and len(token) > len(suffix) + 1:
             stem = token[: -len(suffix)] + replacement
@@ -129,12 +138,22 @@ def canonical(token: str) -> str | None:
                 return stem
             if not replacement and len(stem) > 2 and stem[-1] == stem[-2] and stem[:-1] in WORDS:
                 return stem[:-1]  # grabbed -> grab
+    return None
+
+
+def _typo_fix(token: str) -> str | None:
     if len(token) >= 3:
         edits = DECISION.typo_edits_short if len(token) <= 5 else DECISION.typo_edits_long
         match = process.extractOne(token, _CHOICES, scorer=DamerauLevenshtein.distance, score_cutoff=edits)
         if match is not None:
-            return match[0]
+            return str(match[0])
     return None
+
+
+def guessed(token: str, word: str) -> bool:
+    """Whether ``word`` was a guess: a real English word read as the lexicon word nearest to it ("late" as
+    "plate"), which may not be what was meant (see ``english``)."""
+    return word != token and english.is_word(token) and _stem(token) is None and token not in _DIGIT_ORDINALS
 
 
 def _number(word: str, previous: str) -> int | None:

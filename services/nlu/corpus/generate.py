@@ -448,7 +448,7 @@ def distances(b: Builder, rounds: int) -> None:
 
 def typos(b: Builder, rounds: int) -> None:
     """The paper's commands with one slip of the fingers (two letters swapped) in a longer word."""
-    from services.nlu.tokens import canonical
+    from services.nlu.tokens import canonical, guessed
 
     for _ in range(rounds):
         objects = _scene(b.rng, b.rng.randint(2, 6))
@@ -479,6 +479,8 @@ def typos(b: Builder, rounds: int) -> None:
         if typo == word or canonical(typo) != word:
             continue  # the swap made another word: not a typo the reader could know
         words[i] = typo
+        if guessed(typo, word):  # a slip that made a real word ("geren"): offered for a yes, never run
+            expect = {"kind": "clarify", "contains": f"I read '{typo}' as '{word}'. Did you mean"}
         b.add("typos", name, " ".join(words), expect)
 
 
