@@ -15,7 +15,7 @@ from textual_image import widget as image_widgets
 
 from shared.messages import Cloud, PerceivedObject, SimState, typed
 from tests.tui.camera_frame import FOCAL, HEIGHT, WIDTH, frame
-from tests.tui.helpers import DESCRIPTIONS, OBJECTS, SIM_STATE, fixed_network, stage_world, until
+from tests.tui.helpers import DESCRIPTIONS, OBJECTS, SIM_STATE, fixed_network, hub_bridge, stage_world, until
 from tests.tui.test_snapshots import settled
 from tui import main as tui_main
 from tui.app import PbdApp
@@ -164,7 +164,7 @@ def test_off_a_terminal_auto_draws_in_colour() -> None:
 async def test_f2_shows_the_camera_and_keeps_up_without_slowing_typing() -> None:
     with fixed_network("campilot") as (hub, options):
         world = stage_world(hub)
-        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell")
+        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell", bridge=hub_bridge(hub))
         async with app.run_test(size=(120, 40)) as pilot:
             await settled(app, hub)(pilot)
             view, entry = app.main.query_one(CameraView), app.main.query_one("#input")
@@ -193,7 +193,8 @@ async def test_f2_shows_the_camera_and_keeps_up_without_slowing_typing() -> None
             try:
                 await until(pilot, lambda: len(view.shown) >= 2, what="camera pictures")
                 busy = await typing_time()
-                await pilot.pause(1.0)
+                count = len(view.shown)  # a second more of pictures, for the rate
+                await until(pilot, lambda: len(view.shown) >= count + 5, what="five more pictures")
             finally:
                 streaming.set()
                 thread.join(timeout=5)
@@ -224,7 +225,7 @@ async def test_f3_shows_the_simulators_overview_picture() -> None:
         hub.serve(
             hub.keys.sim_control("snapshot"), lambda request: (asked.append(request), {"ok": True, "png": _png()})[1]
         )
-        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell")
+        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell", bridge=hub_bridge(hub))
         async with app.run_test(size=(100, 30)) as pilot:
             await settled(app, hub)(pilot)
             await pilot.press("f3")
@@ -239,7 +240,7 @@ async def test_f3_shows_the_simulators_overview_picture() -> None:
 async def test_f3_without_a_simulator_says_why() -> None:
     with fixed_network("camnosim") as (hub, options):
         world = stage_world(hub)
-        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell")
+        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell", bridge=hub_bridge(hub))
         async with app.run_test(size=(100, 30)) as pilot:
             await settled(app, hub)(pilot)
             await pilot.press("f3")
@@ -257,23 +258,17 @@ async def test_f3_without_a_simulator_says_why() -> None:
 async def test_a_frame_that_cannot_be_drawn_is_said_and_the_next_one_shows() -> None:
     with fixed_network("cambad") as (hub, options):
         world = stage_world(hub)
-        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell")
+        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell", bridge=hub_bridge(hub))
         async with app.run_test(size=(120, 40)) as pilot:
             await settled(app, hub)(pilot)
             await pilot.press("f2")
             view = app.main.query_one(CameraView)
             waiting = app.main.query_one("#camera-waiting")
             bad = {**frame(), "rgb": np.zeros((HEIGHT, WIDTH), np.uint8)}  # grey, where colour is expected
-            for _ in range(50):
-                if "could not be drawn" in str(waiting.render()):
-                    break
-                hub.publish(hub.keys.cloud, bad)
-                await pilot.pause(0.1)
+            hub.publish(hub.keys.cloud, bad)  # the hub knows the camera's subscription once F2 is handled
+            await until(pilot, lambda: "could not be drawn" in str(waiting.render()), what="the bad frame said")
             assert "could not be drawn" in str(waiting.render()) and app.is_running
-            for _ in range(50):
-                if view.picture is not None:
-                    break
-                hub.publish(hub.keys.cloud, frame())
-                await pilot.pause(0.1)
+            hub.publish(hub.keys.cloud, frame())
+            await until(pilot, lambda: view.picture is not None, what="the next frame")
             assert view.picture is not None and not waiting.display
         del world

@@ -18,7 +18,18 @@ from textual.pilot import Pilot
 from services.executor.store import ActionStore
 from shared.bus import Bus
 from tests.tui.camera_frame import frame
-from tests.tui.helpers import DESCRIPTIONS, OBJECTS, SIM_STATE, fixed_network, serve_actions, stage_world, teach, until
+from tests.tui.helpers import (
+    DESCRIPTIONS,
+    OBJECTS,
+    SIM_STATE,
+    connected,
+    fixed_network,
+    hub_bridge,
+    serve_actions,
+    stage_world,
+    teach,
+    until,
+)
 from tui.actions_screen import ActionsScreen
 from tui.app import PbdApp
 from tui.camera_view import CameraView
@@ -35,12 +46,9 @@ def settled(
 
     async def run_before(pilot: Pilot) -> None:
         app.query_one("#input").cursor_blink = False  # a blinking cursor would make two pictures differ
+        await connected(pilot, app)
         await until(pilot, lambda: len(app.query_one(StatusBar).alive) == 4, what="presence")
-        for _ in range(100):  # the sim streams; keep publishing until the UI has a sample
-            if app.world.ee:
-                break
-            hub.publish(hub.keys.sim_state, {"stamp": 1.0, **SIM_STATE})
-            await pilot.pause(0.1)
+        hub.publish(hub.keys.sim_state, {"stamp": 1.0, **SIM_STATE})  # a stream: sent once the UI is subscribed
         await until(
             pilot, lambda: len(app.world.objects) == len(OBJECTS) and app.world.ee and app.world.robot, what="the world"
         )
@@ -48,14 +56,13 @@ def settled(
         await until(pilot, lambda: app.query_one("#input").vocabulary.words, what="vocabulary")
         if then is not None:
             await then(pilot)
-        await pilot.pause(0.2)
+        await pilot.pause()
 
     return run_before
 
 
 async def pick_up_the_red_cup(app: PbdApp, hub: Bus, pilot: Pilot) -> None:
     """The user asks for a pick-up; the NLU's result and the executor's narration come back."""
-    await pilot.pause(0.3)
     await pilot.press(*"pick up the red cup", "enter")
     hub.publish(
         hub.keys.nlu_result,
@@ -76,7 +83,7 @@ async def pick_up_the_red_cup(app: PbdApp, hub: Bus, pilot: Pilot) -> None:
 def test_main_screen(snap_compare: Any) -> None:
     with fixed_network("snapmain") as (hub, options):
         world = stage_world(hub)
-        app = PbdApp(options, probe_seconds=None)
+        app = PbdApp(options, probe_seconds=None, bridge=hub_bridge(hub))
 
         async def dialog(pilot: Pilot) -> None:
             await pick_up_the_red_cup(app, hub, pilot)
@@ -88,10 +95,9 @@ def test_main_screen(snap_compare: Any) -> None:
 def test_clarification_prompt(snap_compare: Any) -> None:
     with fixed_network("snapclarify") as (hub, options):
         world = stage_world(hub)
-        app = PbdApp(options, probe_seconds=None)
+        app = PbdApp(options, probe_seconds=None, bridge=hub_bridge(hub))
 
         async def ask(pilot: Pilot) -> None:
-            await pilot.pause(0.3)
             await pilot.press(*"pick up the cup", "enter")
             hub.publish(
                 hub.keys.say,
@@ -105,14 +111,10 @@ def test_clarification_prompt(snap_compare: Any) -> None:
 
 
 async def show_the_camera(app: PbdApp, hub: Bus, pilot: Pilot) -> None:
-    """F2, then the synthetic head-camera frame until the picture is on screen."""
-    await pilot.press("f2")
+    """F2, then the synthetic head-camera frame, and wait for the picture on screen."""
+    await pilot.press("f2")  # the hub knows the camera's subscription once the key is handled
     view = app.main.query_one(CameraView)
-    for _ in range(100):
-        if view.picture is not None:
-            break
-        hub.publish(hub.keys.cloud, frame())
-        await pilot.pause(0.1)
+    hub.publish(hub.keys.cloud, frame())
     await until(pilot, lambda: view.picture is not None, what="the camera picture")
 
 
@@ -129,7 +131,7 @@ async def open_the_actions(app: PbdApp, pilot: Pilot) -> None:
 def test_camera_view(snap_compare: Any, size: tuple[int, int]) -> None:
     with fixed_network("snapcamera") as (hub, options):
         world = stage_world(hub)
-        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell")
+        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell", bridge=hub_bridge(hub))
 
         async def camera(pilot: Pilot) -> None:
             await pick_up_the_red_cup(app, hub, pilot)
@@ -148,7 +150,7 @@ def test_actions_screen(snap_compare: Any, tmp_path: Path, size: tuple[int, int]
     with fixed_network("snapactions") as (hub, options):
         world = stage_world(hub)
         serve_actions(hub, store, [])
-        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell")
+        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell", bridge=hub_bridge(hub))
         assert snap_compare(
             app, terminal_size=size, run_before=settled(app, hub, lambda pilot: open_the_actions(app, pilot))
         )
