@@ -7,9 +7,8 @@ import shutil
 import subprocess
 import sys
 import threading
-import time
 import uuid
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -19,6 +18,7 @@ from services.executor.store import ActionStore
 from tests.processes import ROOT, Network
 from tests.tui.camera_frame import frame
 from tests.tui.helpers import serve_actions, stage_world, teach
+from tests.waiting import eventually
 
 pytestmark = pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is not installed")
 
@@ -49,14 +49,21 @@ class Terminal:
         self._tmux("send-keys", "-t", "ui", *keys)
 
     def wait_for(self, text: str, timeout: float = 30.0) -> str:
-        deadline = time.monotonic() + timeout
-        while True:
-            screen = self.screen()
-            if text in screen:
-                return screen
-            if time.monotonic() > deadline:
-                raise AssertionError(f"{text!r} never appeared on the terminal:\n{screen}")
-            time.sleep(0.2)
+        """The screen once ``text`` is on it; fail showing the last screen seen."""
+        return self.wait_until(lambda screen: text in screen, timeout, f"{text!r} on the terminal")
+
+    def wait_until(self, shows: Callable[[str], bool], timeout: float, what: str) -> str:
+        """The screen once ``shows(screen)`` holds; fail showing the last screen seen."""
+        seen = [""]
+
+        def showing() -> str:
+            seen[0] = self.screen()
+            return seen[0] if shows(seen[0]) else ""
+
+        try:
+            return eventually(showing, timeout, what)
+        except AssertionError as exc:
+            raise AssertionError(f"{exc}:\n{seen[0]}") from None
 
     def running(self) -> bool:
         return (
@@ -106,9 +113,7 @@ def test_a_person_at_the_terminal(network: Network, terminal: Terminal) -> None:
     terminal.wait_for("stopped the arms directly")
 
     terminal.type("C-q")
-    deadline = time.monotonic() + 20
-    while terminal.running() and time.monotonic() < deadline:
-        time.sleep(0.2)
+    eventually(lambda: not terminal.running(), 20, "the UI to quit on ctrl+q")
     assert not terminal.running(), "the UI did not quit on ctrl+q"
 
 
@@ -130,11 +135,8 @@ def test_the_camera_and_the_actions_at_the_terminal(network: Network, terminal: 
     try:
         terminal.wait_for("● executor")
         terminal.type("F2")
-        screen = terminal.wait_for("world · head camera")
-        deadline = time.monotonic() + 30
-        while screen.count("▀") < 200 and time.monotonic() < deadline:
-            time.sleep(0.2)
-            screen = terminal.screen()
+        terminal.wait_for("world · head camera")
+        screen = terminal.wait_until(lambda shown: shown.count("▀") >= 200, 30, "a camera picture")
         assert screen.count("▀") >= 200, f"no camera picture:\n{screen}"
         assert "the green box" in screen and "obj2" in screen  # the name over the picture, the id only in the table
 
