@@ -53,6 +53,12 @@ def test_a_skill_taught_with_the_red_cup_serves_the_blue_cup_and_is_one_step_of_
     assert stack.state["robot"]["steps"] == ["serve the blue cup"]  # one step that calls the skill
     assert stack.state["robot"]["action"] == serve + 1
 
+    stack.load_scene("default")  # the action that calls serve replays it with the cup it was called with
+    said = ok(stack.command("execute", utterance="execute", timeout=300))
+    assert texts(said, "narration")[-1] == f"Completed action {serve + 1}.", said
+    verdict = stack.judged("obj1", "on_top_of", "obj3")
+    assert verdict.success, verdict
+
 
 @pytest.mark.slow
 def test_an_object_carried_away_goes_back_where_it_stood(stack: Stack) -> None:
