@@ -12,11 +12,18 @@ from services.nlu.nbest import NOT_MADE_OUT
 from shared.bus import RemoteError
 from tests.nlu.scenes import table_scene
 from tests.processes import Launcher, Network
+from tests.waiting import eventually, subscribed
 
 
 def collect(network: Network, key: str) -> queue.Queue[dict[str, Any]]:
+    """What the running NLU publishes on ``key`` from now on.
+
+    A request answered after the subscription is declared is the round trip
+    that proves the NLU's session knows it: declarations travel ahead of queries.
+    """
     inbox: queue.Queue[dict[str, Any]] = queue.Queue()
     network.hub.subscribe(key, inbox.put)
+    request(network, "describe", {})
     return inbox
 
 
@@ -52,18 +59,14 @@ def live(network: Network, launcher: Launcher) -> Network:
         }
     )
     launcher.start("nlu")
-    # the cached world arrives shortly after start; wait until describe sees all objects
-    deadline = time.monotonic() + 20
-    while time.monotonic() < deadline:
-        if len(request(network, "describe", {})) == 4:
-            break
-        time.sleep(0.1)
+    # the cached world arrives shortly after start
+    eventually(lambda: len(request(network, "describe", {})) == 4, 20, "describe to see all four objects")
+    subscribed(network.hub, keys.utterance)
     return network
 
 
 def test_utterance_to_command_with_live_world_and_reach(live: Network) -> None:
     results = collect(live, live.hub.keys.nlu_result)
-    time.sleep(0.3)
     say(live, text="pick up the blue cup")
     result = next_result(results)
     assert result["utterance"] == "pick up the blue cup"
@@ -76,7 +79,6 @@ def test_utterance_to_command_with_live_world_and_reach(live: Network) -> None:
 def test_clarification_is_said_and_a_choice_answers_it(live: Network) -> None:
     results = collect(live, live.hub.keys.nlu_result)
     spoken = collect(live, live.hub.keys.say)
-    time.sleep(0.3)
     say(live, text="point to the cup")
     question = next_result(results)
     assert question["kind"] == "clarify" and question["params"] == ["object"]
@@ -93,7 +95,6 @@ def test_clarification_is_said_and_a_choice_answers_it(live: Network) -> None:
 
 def test_nbest_picks_the_plausible_hypothesis(live: Network) -> None:
     results = collect(live, live.hub.keys.nlu_result)
-    time.sleep(0.3)
     say(
         live,
         text="pick up the read cap",
@@ -106,7 +107,6 @@ def test_nbest_picks_the_plausible_hypothesis(live: Network) -> None:
 def test_a_command_few_hypotheses_support_is_not_acted_on(live: Network) -> None:
     results = collect(live, live.hub.keys.nlu_result)
     spoken = collect(live, live.hub.keys.say)
-    time.sleep(0.3)
     say(live, text="the", nbest=[{"text": "the", "score": 0.95}, {"text": "pick up the red cup", "score": 0.05}])
     line = next_result(spoken)
     assert (line["kind"], line["text"]) == ("error", NOT_MADE_OUT)
@@ -118,7 +118,6 @@ def test_a_command_few_hypotheses_support_is_not_acted_on(live: Network) -> None
 def test_malformed_messages_do_not_crash_it(live: Network, launcher: Launcher) -> None:
     keys = live.hub.keys
     results = collect(live, keys.nlu_result)
-    time.sleep(0.3)
     live.hub.publish(keys.utterance, {"words": "no text field"})
     live.hub.publish(keys.objects, {"stamp": 1.0, "objects": [{"id": "bad", "position": "here"}]})
     live.hub.session.put(keys.utterance, b"\x00not msgpack")
@@ -150,7 +149,6 @@ def test_queryables(live: Network) -> None:
 def test_a_question_is_answered_on_the_result_and_said_as_info_with_its_topic(live: Network) -> None:
     results = collect(live, live.hub.keys.nlu_result)
     spoken = collect(live, live.hub.keys.say)
-    time.sleep(0.3)
     say(live, text="what do you see?")
     answer = next_result(results)
     assert answer["kind"] == "answer" and answer["topic"] == "scene" and answer["utterance"] == "what do you see?"
@@ -161,7 +159,6 @@ def test_a_question_is_answered_on_the_result_and_said_as_info_with_its_topic(li
 
 def test_a_compound_is_one_result_with_then(live: Network) -> None:
     results = collect(live, live.hub.keys.nlu_result)
-    time.sleep(0.3)
     say(live, text="pick up the red cup and put it on the plate")
     result = next_result(results)
     assert (result["procedure"], result["args"]) == ("pick_up", {"arm": "right", "object": "obj0"})
