@@ -43,12 +43,13 @@ import logging
 import threading
 import time
 from collections.abc import Callable
+from functools import partial
 from typing import Any, TypeVar
 
 import msgspec
 import numpy as np
 
-from services.executor import effects, skills, torso, wording
+from services.executor import effects, other_hand, skills, torso, wording
 from services.executor.actions_control import apply as apply_actions_request
 from services.executor.actions_control import step_words
 from services.executor.commands import ADMIN, BOTH, RECORDED, CommandError, Step, check, check_compound
@@ -546,6 +547,10 @@ class Executor:
         if matched.missing:  # find every landmark before moving at all: no half-done action
             self.say(f"{next(iter(matched.missing.values()))} I can't run {name}.", "error")
             return False
+        free = {arm: held is None for arm, held in self.procedures.held().items()}
+        found = partial(self._reground, matched=matched)
+        swaps = other_hand.swaps(steps, start, found, self.procedures.arms, self.scene.snapshot(), free)
+        hands = {i: swap for swap in swaps for i in range(swap.first, swap.last + 1)}
         for i in range(start, len(steps) + 1):
             if self.cancel.is_set():
                 self.say(f"Stopped {name} at step {i} of {len(steps)}.", "info")
@@ -554,7 +559,7 @@ class Executor:
                 with self._lock:
                     self._progress = {"step": i, "of": len(steps)}
                 self.publish_state()
-            if not self._replay_step(name, steps, i, matched, (*chain, number)):
+            if not self._replay_step(name, steps, i, matched, (*chain, number), hands.get(i)):
                 return False
         self.say(f"Completed {name}.", "narration")
         return True
@@ -572,13 +577,26 @@ class Executor:
         return matched
 
     def _replay_step(
-        self, name: str, steps: list[dict[str, Any]], i: int, matched: Regrounding, chain: tuple[int, ...]
+        self,
+        name: str,
+        steps: list[dict[str, Any]],
+        i: int,
+        matched: Regrounding,
+        chain: tuple[int, ...],
+        swap: other_hand.Swap | None = None,
     ) -> bool:
-        """Run stored step ``i`` with its objects as found now, then check its effect; False when the replay ends."""
+        """Run stored step ``i`` with its objects as found now (and ``swap``'s hand, where the recorded one
+        cannot reach them), then check its effect; False when the replay ends."""
         step = steps[i - 1]
         if step["procedure"] == "run_skill":
             return self._replay_call(step, matched, chain)
         args = dict(step["args"])
+        if swap is not None:
+            if i == swap.first:
+                self.say(
+                    f"My {args['arm']} hand can't reach there now, so I'm doing this with my {swap.arm} hand.", "info"
+                )
+            args["arm"] = swap.arm
         landmark = step.get("landmark")
         if landmark and "object" in args:
             found = self._reground(landmark, matched)
