@@ -12,7 +12,9 @@ import pytest
 
 from services.perception.synthetic import Box, Camera, Cylinder, Scene, render_map
 from shared.bus import RemoteError
+from shared.codec import decode, encode
 from shared.messages import typed
+from tests.waiting import eventually
 
 SMALL = Camera(width=320, height=240)
 SCENE = Scene([Cylinder((0.70, -0.15, 0.80), 0.035, 0.10, "red"), Box((0.85, 0.10, 0.79), (0.08, 0.08, 0.08), "blue")])
@@ -53,17 +55,17 @@ class Feed:
         return self.received.get(timeout=timeout)
 
     def until(self, cloud: dict, accept, timeout: float = 20.0) -> dict:
-        """Publish ``cloud`` every 0.2 s until a published object list satisfies ``accept``."""
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
+        """Publish ``cloud`` again after each object list until one satisfies ``accept`` (tracks need frames)."""
+
+        def published() -> dict | None:
             self.cloud.put({**cloud, "stamp": time.time()})
             try:
                 message = self.received.get(timeout=0.2)
-            except queue.Empty:
-                continue
-            if accept(message):
-                return message
-        raise AssertionError("perception never published the expected object list")
+            except queue.Empty:  # perception was busy or not yet subscribed: send the next frame
+                return None
+            return message if accept(message) else None
+
+        return eventually(published, timeout, "perception to publish the expected object list")
 
 
 @pytest.fixture
@@ -185,26 +187,20 @@ def test_a_cloud_says_which_scene_load_it_shows(feed, good_cloud):
 
 
 class Recording:
-    """A ``record`` request running in the background while the test feeds clouds."""
+    """A ``record`` request under way while the test feeds clouds.
+
+    The query is sent before this returns, on the same link as the clouds
+    published after it, so perception has it before it sees them.
+    """
 
     def __init__(self, feed: Feed) -> None:
-        self.reply: dict | None = None
-        self.error: Exception | None = None
-        self._thread = threading.Thread(target=self._ask, args=(feed,), daemon=True)
-        self._thread.start()
-        time.sleep(0.5)  # the request has reached perception
-
-    def _ask(self, feed: Feed) -> None:
-        try:
-            self.reply = feed.bus.request(feed.keys.record, {}, timeout=10)
-        except Exception as exc:  # noqa: BLE001 - handed to the test thread
-            self.error = exc
+        self._replies = feed.bus.session.get(feed.keys.record, payload=encode({}), timeout=10)
 
     def result(self) -> dict:
-        self._thread.join(timeout=15)
-        assert self.error is None, self.error
-        assert self.reply is not None
-        return self.reply
+        for reply in self._replies:
+            assert reply.ok is not None, reply.err.payload.to_string() if reply.err else "no reply"
+            return decode(reply.ok.payload.to_bytes())
+        raise AssertionError("perception never answered the record request")
 
 
 def test_record_ignores_clouds_rendered_before_the_request(feed):
@@ -214,7 +210,7 @@ def test_record_ignores_clouds_rendered_before_the_request(feed):
     state.put(sim_state("first", 9.0))
     feed.until(before, lambda m: len(m["objects"]) == 2)
     state.put(sim_state("first", 10.0))
-    time.sleep(0.3)
+    feed.once(before)  # a cloud after the state, answered: perception has the state
     recording = Recording(feed)
     for _ in range(3):
         feed.once(before)
@@ -231,7 +227,7 @@ def test_record_right_after_a_scene_load_waits_for_the_new_objects(feed):
     state.put(sim_state("first", 1.0))
     feed.until({**old, "sim_time": 1.0}, lambda m: len(m["objects"]) == 2)
     state.put(sim_state("second", 2.0))
-    time.sleep(0.3)
+    feed.once({**old, "sim_time": 1.0})  # a cloud after the state, answered: perception has the state
     recording = Recording(feed)
     feed.once({**old, "sim_time": 2.0})  # forgets every object; the old view starts candidates that never return
     for k in range(4):
@@ -249,15 +245,15 @@ def test_sigterm_while_clouds_stream_in_stops_cleanly(network, launcher, good_cl
     feed.until(good_cloud, lambda m: len(m["objects"]) == 2)
     stop = threading.Event()
 
-    def flood() -> None:
+    def flood() -> None:  # as fast as the link takes them: the publisher blocks when it is full
         while not stop.is_set():
             feed.cloud.put({**good_cloud, "stamp": time.time()})
-            time.sleep(0.02)
 
     flooding = threading.Thread(target=flood, daemon=True)
     flooding.start()
     try:
-        time.sleep(0.5)
+        answered = feed.received.qsize()
+        eventually(lambda: feed.received.qsize() >= answered + 3, 20, "perception working through the flood")
         code = process.stop()
     finally:
         stop.set()
