@@ -12,6 +12,7 @@ import pytest
 
 from shared.bus import BusTimeout, RemoteError
 from tests.processes import Launcher, Network
+from tests.waiting import eventually, subscribed
 
 
 @pytest.fixture
@@ -20,21 +21,22 @@ def echo(launcher: Launcher):
 
 
 def _collect(network: Network, suffix: str) -> queue.Queue:
+    """What the echo peer publishes on ``suffix`` from now on.
+
+    A request answered after the subscription is declared is the round trip
+    that proves the peer knows it: declarations travel ahead of queries.
+    """
     received: queue.Queue = queue.Queue()
     network.hub.subscribe(f"pbd/{network.namespace}/{suffix}", received.put)
+    network.hub.request(f"pbd/{network.namespace}/test/echo", {"text": "ready"})
     return received
 
 
 def test_publish_crosses_to_another_process_and_back(network: Network, echo) -> None:
     received = _collect(network, "test/out")
-    deadline = time.monotonic() + 10
-    message = None
-    while message is None and time.monotonic() < deadline:  # the first puts may precede route setup
-        network.hub.publish(f"pbd/{network.namespace}/test/in", {"text": "hello"})
-        try:
-            message = received.get(timeout=0.5)
-        except queue.Empty:
-            pass
+    subscribed(network.hub, f"pbd/{network.namespace}/test/in")
+    network.hub.publish(f"pbd/{network.namespace}/test/in", {"text": "hello"})
+    message = received.get(timeout=10)
     assert message is not None and message["text"] == "hello"
 
 
@@ -64,13 +66,11 @@ def test_failing_handler_becomes_error_reply(network: Network, echo) -> None:
 )
 def test_malformed_payload_is_counted_not_fatal(network: Network, echo, payload: bytes) -> None:
     received = _collect(network, "test/out")
-    network.hub.request(f"pbd/{network.namespace}/test/echo", {"text": "ready"})
+    subscribed(network.hub, f"pbd/{network.namespace}/test/in")
     network.hub.session.put(f"pbd/{network.namespace}/test/in", payload)
-    deadline = time.monotonic() + 10
-    rejected = 0
-    while rejected < 1 and time.monotonic() < deadline:
-        rejected = network.hub.request(f"pbd/{network.namespace}/test/stats", {})["rejected"]
-        time.sleep(0.1)
+    rejected = eventually(
+        lambda: network.hub.request(f"pbd/{network.namespace}/test/stats", {})["rejected"], 10, "the rejection counted"
+    )
     assert rejected == 1
     network.hub.publish(f"pbd/{network.namespace}/test/in", {"text": "still alive"})
     assert received.get(timeout=5)["text"] == "still alive"
@@ -95,9 +95,7 @@ def test_a_burst_of_signals_ends_the_service_cleanly(echo) -> None:
     """Signals arriving while the last one is handled (a parent dying as the launcher stops it) end it once."""
     for index in range(200):
         echo.kill(signal.SIGTERM if index % 2 else signal.SIGINT)
-    deadline = time.monotonic() + 15
-    while echo.exited() is None and time.monotonic() < deadline:
-        time.sleep(0.05)
+    eventually(lambda: echo.exited() is not None, 15, "the echo peer to exit")
     assert echo.exited() == 0, echo.log_tail()
     assert echo.log().count("echo stopped") == 1
 
@@ -109,8 +107,7 @@ def test_point_cloud_sized_message_crosses_intact(network: Network, echo) -> Non
     digest = hashlib.sha256(xyz.tobytes() + rgb.tobytes()).hexdigest()
     received = _collect(network, "test/out")
     publisher = network.hub.publisher(network.hub.keys.cloud, large=True)
-    network.hub.request(f"pbd/{network.namespace}/test/echo", {"text": "ready"})
-    time.sleep(0.3)
+    subscribed(network.hub, network.hub.keys.cloud)
     publisher.put(
         {"stamp": 1.0, "xyz": xyz, "rgb": rgb, "camera_pose": [0, 0, 1, 1, 0, 0, 0], "width": 640, "height": 480}
     )

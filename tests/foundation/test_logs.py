@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 from hfpbd.spawn import spawn_service
 from shared.config import free_port
+from tests.waiting import eventually
 
 
 def _zenoh_warnings(log: str) -> list[str]:
@@ -18,9 +18,9 @@ def test_zenohs_warning_reaches_the_service_log(tmp_path: Path) -> None:
     session = ["--namespace", "tlogs", "--connect", f"tcp/127.0.0.1:{free_port()}", "--no-multicast-scouting"]
     service = spawn_service("nlu", session, tmp_path / "nlu.log")
     try:
-        deadline = time.monotonic() + 30
-        while not _zenoh_warnings(service.log()) and time.monotonic() < deadline and service.exited() is None:
-            time.sleep(0.2)
+        eventually(
+            lambda: _zenoh_warnings(service.log()) or service.exited() is not None, 30, "a Zenoh warning or an exit"
+        )
         log = service.log()
     finally:
         service.stop()
