@@ -6,7 +6,6 @@ import random
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -22,6 +21,7 @@ from shared.bus import Bus
 from shared.config import free_port, loopback_options
 from shared.service import ALREADY_RUNNING
 from tests.processes import ROOT, Launcher, Network
+from tests.waiting import eventually
 
 HOLDER = (
     "import sys; from pathlib import Path; from services.executor.store import hold_store; "
@@ -101,7 +101,11 @@ WRITER = (
 
 
 def test_the_actions_file_survives_sigkill_during_writes(tmp_path: Path) -> None:
-    """A loop of kills at random moments of a writing process: the file always loads, nothing is lost."""
+    """A loop of kills at random moments of a writing process: the file always loads, nothing is lost.
+
+    Each kill comes once a random number of further steps is on disk: the
+    writer is then somewhere in its next write, wherever the scheduler has it.
+    """
     rng = random.Random(3)
     steps = 0
     for kill in range(12):
@@ -109,7 +113,8 @@ def test_the_actions_file_survives_sigkill_during_writes(tmp_path: Path) -> None
             [sys.executable, "-c", WRITER, str(tmp_path)], cwd=ROOT, stdout=subprocess.PIPE, text=True
         )
         assert writer.stdout.readline().strip() == "ready"
-        time.sleep(rng.uniform(0.0, 0.3))
+        on_disk, target = ActionStore(tmp_path), steps + rng.randint(0, 30)
+        eventually(lambda store=on_disk, n=target: sum(store.step_counts()) >= n, 30, f"{target} steps written")
         writer.send_signal(signal.SIGKILL)
         writer.wait(10)
         store = ActionStore(tmp_path)  # raises StoreError on a torn file
