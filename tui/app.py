@@ -219,8 +219,21 @@ class PbdApp(App[None]):
         if isinstance(object_id, str):
             self.world.highlighted = object_id
             self._refresh_world()
-        shown = ", ".join(f"{k}={self.world.name_of(v) if k == 'object' else v}" for k, v in args.items())
+        shown = ", ".join(f"{name}={self._named(name, value)}" for name, value in args.items())
         self.main.query_one(Conversation).add("ui", f"understood: {result.procedure}({shown})")
+
+    def _named(self, name: str, value: Any) -> str:
+        """An argument as the user reads it: objects by their descriptions, never by their ids."""
+        if name in ("object", "landmark", "carried") and isinstance(value, str):
+            seen = self.world.objects.get(value)
+            if value in self.world.descriptions or seen is None:
+                return self.world.name_of(value) if seen is not None else "an object not in view"
+            return f"the {seen.color} {seen.type}"  # not described yet: by its colour and kind
+        if isinstance(value, dict):
+            return "{" + ", ".join(f"{k}: {self._named(k, v)}" for k, v in value.items()) + "}"
+        if name == "each" and isinstance(value, list):
+            return "[" + ", ".join(self._named("object", v) for v in value) + "]"
+        return str(value)
 
     @while_running
     def on_objects_seen(self, event: events.ObjectsSeen) -> None:
@@ -299,6 +312,11 @@ class PbdApp(App[None]):
     @while_running
     def on_latency(self, event: events.Latency) -> None:
         self.main.query_one(StatusBar).set_latency(event.service, event.seconds)
+
+    @while_running
+    def on_heard(self, event: events.Heard) -> None:
+        sure = f"  ({event.sure:.0%} sure)" if event.sure is not None else ""
+        self.main.query_one(Conversation).add("heard", f"{event.text}{sure}")
 
     @while_running
     def on_talking(self, event: events.Talking) -> None:

@@ -54,6 +54,7 @@ class Bridge:
         bus = self.bus = Bus(self.options)
         keys = bus.keys
         bus.subscribe(keys.say, self._on_say, schema="say")
+        bus.subscribe(keys.utterance, self._on_utterance, schema="utterance")
         bus.subscribe(keys.nlu_result, self._on_nlu_result, schema="nlu_result")
         bus.subscribe(keys.objects, self._on_objects, schema="objects", latest_only=True, history=True)
         bus.subscribe(
@@ -81,6 +82,14 @@ class Bridge:
     # -- incoming ------------------------------------------------------------
     def _on_say(self, msg: Say) -> None:
         self._app.post_message(events.Said(msg.text, msg.kind, list(msg.candidates or []), msg.topic))
+
+    def _on_utterance(self, msg: Utterance) -> None:
+        """What the speech service heard, shown as heard (typed lines are already on screen as the user's)."""
+        if msg.source != "speech":
+            return
+        best = (msg.nbest or [{}])[0].get("score")
+        sure = float(best) if isinstance(best, (int, float)) and not isinstance(best, bool) and 0 < best <= 1 else None
+        self._app.post_message(events.Heard(msg.text, sure))
 
     def _on_nlu_result(self, msg: NluResult) -> None:
         self._app.post_message(events.Understood(msg))

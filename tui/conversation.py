@@ -10,6 +10,7 @@ from textual.widgets import RichLog
 # speaker/kind -> (prefix, style)
 _STYLES: dict[str, tuple[str, str]] = {
     "user": ("you   › ", "bold"),
+    "heard": ("heard › ", "italic"),  # what the speech service made of what was said
     "narration": ("robot › ", "green"),
     "info": ("robot › ", "cyan"),
     "answer": ("robot = ", "bold magenta"),  # a question answered: not narration, not an error
@@ -40,7 +41,7 @@ class Conversation(RichLog):
         self.entries: list[Line] = []
 
     def add(self, kind: str, text: str) -> None:
-        """Append a line; ``kind`` is 'user', a ``dialog/say`` kind, 'answer', 'ui' or 'warning'."""
+        """Append a line; ``kind`` is 'user', 'heard', a ``dialog/say`` kind, 'answer', 'ui' or 'warning'."""
         prefix, style = _STYLES.get(kind, _STYLES["info"])
         self.entries.append(Line(kind, text))
         line = Text(prefix, style=style)

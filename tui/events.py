@@ -117,6 +117,15 @@ class RequestFailed(Message):
         self.reason = reason
 
 
+class Heard(Message):
+    """The speech service heard a command: what it made of the sound and how sure it was (None: not said)."""
+
+    def __init__(self, text: str, sure: float | None) -> None:
+        super().__init__()
+        self.text = text
+        self.sure = sure
+
+
 class Talking(Message):
     """The speech service answered a push-to-talk press or release: whether it now listens."""
 

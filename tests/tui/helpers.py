@@ -56,7 +56,7 @@ class HubBridge(Bridge):
     def open(self) -> None:
         super().open()
         keys = self._hub.keys
-        for key in (keys.say, keys.nlu_result, keys.objects, keys.executor_state, keys.sim_state):
+        for key in (keys.say, keys.utterance, keys.nlu_result, keys.objects, keys.executor_state, keys.sim_state):
             subscribed(self._hub, key)
         self.ready.set()
 
