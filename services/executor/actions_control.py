@@ -33,6 +33,13 @@ def step_words(step: dict[str, Any]) -> str:
     if said or step.get("text"):
         return str(said or step.get("text"))
     args = step.get("args", {})
+    if step["procedure"] == "run_skill":  # its objects are ids of the day: named by how they looked
+        skill = args.get("skill")
+        seen = [
+            f"the {describe_kind(d)}" for d in [*(step.get("bound") or {}).values(), *(step.get("each_seen") or [])]
+        ]
+        called = f"action {skill}" if isinstance(skill, int) else str(skill)
+        return f"{called} with {' and '.join(seen)}" if seen else called
     landmark = step.get("landmark")
     parts = [step["procedure"].replace("_", " ")]
     parts += [str(v).replace("_", " ") for k, v in args.items() if k != "object"]

@@ -11,6 +11,7 @@ import pytest
 
 from services.executor import effects, skills, wording
 from services.executor.actions_cli import apply_action_op
+from services.executor.actions_control import step_words
 from services.executor.commands import CommandError, check, check_compound
 from services.executor.origins import Origins
 from services.executor.referring import refer
@@ -412,3 +413,14 @@ def test_a_track_lost_on_release_is_not_taken_for_the_object_hanging_in_the_air(
     assert effects.judge("place_abs", {"arm": "right", "destination": "table"}, held, {"obj0"}, alone) == words(
         "{obj0} is not standing on anything I can see", alone
     )
+
+
+def test_a_step_that_calls_a_skill_is_listed_by_its_name_and_the_objects_it_was_called_with() -> None:
+    called = {
+        "procedure": "run_skill",
+        "args": {"skill": "serve", "objects": {"carried": "obj1"}},
+        "bound": {"carried": desc(BLUE), "landmark": desc(PLATE_0)},
+    }
+    assert step_words(called) == "serve with the blue cup and the white plate"
+    assert step_words({"procedure": "run_skill", "args": {"skill": 2}}) == "action 2"
+    assert step_words({**called, "utterance": "serve the blue cup"}) == "serve the blue cup"
