@@ -74,21 +74,29 @@ def judge(
 
 
 def _in_hand(arm: str, wanted: PerceivedObject, words: str, snap: SceneSnapshot) -> str | None:
-    """After a pick-up: ``wanted`` (or an object that looks just like it, renamed) is in ``arm``'s hand."""
+    """After a pick-up: the hand holds something, and ``wanted`` is no longer standing where it stood.
+
+    Which object perception marks as held is not asked alone: tracking
+    marks the nearest object when a hand starts holding, which may be the
+    box a cup was lifted from. A cup still standing in its place while the
+    hand holds something is what tells that the hand took another object.
+    """
     if snap.gripper_state(arm) != "holding":
         return wording.sentence(f"My {arm} hand is empty after picking up {words}")
+    still = snap.objects.get(wanted.id)
+    left = (
+        still is not None
+        and still.visible is not False
+        and still.held_by is None
+        and snap.supported(still.id)
+        and _same_place(wanted, still)
+    )
+    if not left:
+        return None
     in_hand = snap.held_by(arm)
-    if in_hand is None:
-        still = snap.objects.get(wanted.id)
-        if still is not None and snap.supported(still.id) and _same_place(wanted, still):
-            return wording.sentence(f"{words} is still standing where it was, so my {arm} hand holds something else")
-        return None
-    if in_hand == wanted.id:
-        return None
-    renamed = snap.objects.get(wanted.id) is None or snap.objects[wanted.id].visible is False
-    if renamed and cost(_desc(wanted), snap.objects[in_hand]) < REJECT:
-        return None
-    return wording.sentence(f"My {arm} hand is holding {refer(snap.objects, in_hand)}, not {words}")
+    if in_hand is not None and in_hand != wanted.id:
+        return wording.sentence(f"My {arm} hand is holding {refer(snap.objects, in_hand)}, not {words}")
+    return wording.sentence(f"{words} is still standing where it was, so my {arm} hand holds something else")
 
 
 def _in_relation(

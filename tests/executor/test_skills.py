@@ -424,3 +424,16 @@ def test_a_step_that_calls_a_skill_is_listed_by_its_name_and_the_objects_it_was_
     assert step_words(called) == "serve with the blue cup and the white plate"
     assert step_words({"procedure": "run_skill", "args": {"skill": 2}}) == "action 2"
     assert step_words({**called, "utterance": "serve the blue cup"}) == "serve the blue cup"
+
+
+def test_a_cup_lifted_off_a_box_the_tracker_marked_held_counts_as_picked_up() -> None:
+    box = obj("obj3", "green", "box", 0.55, 0.10, (0.08, 0.08, 0.06))
+    on_box = obj("obj0", "red", "cup", 0.55, 0.10, CUP, z=TABLE_Z + 0.06)
+    marked = obj("obj3", "green", "box", 0.55, 0.10, (0.08, 0.08, 0.06), held_by="right")
+    lifted = obj("obj0", "red", "cup", 0.55, 0.10, CUP, z=TABLE_Z + 0.15)
+    seen = snapshot([marked, lifted], {"right": True})
+    assert effects.judge("pick_up", {"arm": "right", "object": "obj0"}, on_box, {"obj0", "obj3"}, seen) is None
+    stayed = snapshot([box, on_box], {"right": True})
+    assert effects.judge("pick_up", {"arm": "right", "object": "obj0"}, on_box, {"obj0", "obj3"}, stayed) == words(
+        "{obj0} is still standing where it was, so my right hand holds something else", stayed
+    )
