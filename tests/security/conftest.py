@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import queue
-import time
 import uuid
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -96,12 +95,3 @@ def collect(bus: Bus, key: str, history: bool = False) -> queue.Queue:
     received: queue.Queue = queue.Queue()
     bus.subscribe(key, received.put, history=history)
     return received
-
-
-def eventually(predicate: Callable[[], bool], timeout: float = 5.0) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.1)
-    return False

@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import json
 import queue
-import time
 
 import pytest
 import zenoh
 
 from shared.bus import BusTimeout
 from shared.config import SessionOptions, zenoh_config
-from tests.security.conftest import RobotHost, collect, eventually
+from tests.security.conftest import RobotHost, collect
+from tests.waiting import eventually, subscribed
 
 UTTERANCE = {"text": "move your right hand up"}
 AUDIO = {"stamp": 1.0, "rate": 16000, "pcm": b"\x00\x00" * 160}
@@ -32,16 +32,20 @@ def _serve_commands(host: RobotHost) -> None:
 def _reaches_service(host: RobotHost, key: str, send) -> bool:
     """Whether ``send()`` (a remote put) gets a message to the robot-side service within a few seconds."""
     received = collect(host.service, host.key(key))
-    time.sleep(0.3)  # the subscription reaches the router
-    deadline = time.monotonic() + 3
-    while time.monotonic() < deadline:
+    subscribed(host.router, host.key(key))
+
+    def delivered() -> bool:
         send()
         try:
             received.get(timeout=0.3)
-            return True
         except queue.Empty:
-            pass
-    return False
+            return False
+        return True
+
+    try:
+        return eventually(delivered, 3, f"a message on {key} at the service")
+    except AssertionError:
+        return False
 
 
 def _bad_client(host: RobotHost, change) -> zenoh.Config:
@@ -108,10 +112,10 @@ def test_operator_commands_and_receives(robot_host: RobotHost) -> None:
         history = collect(operator, operator.keys.executor_state, history=True)
         assert history.get(timeout=5)["robot"]["action"] == 3, "a cached stream's last sample reaches the operator"
         said = collect(operator, operator.keys.say)
-        time.sleep(0.3)
+        subscribed(robot_host.service, robot_host.service.keys.say)
         robot_host.service.publish(robot_host.service.keys.say, {"text": "done", "kind": "info"})
         assert said.get(timeout=5)["text"] == "done"
-        assert eventually(lambda: "nlu" in operator.alive_services())
+        eventually(lambda: "nlu" in operator.alive_services(), 5, "the nlu's token at the operator")
 
 
 def test_observer_receives_but_cannot_command(robot_host: RobotHost) -> None:
@@ -128,7 +132,7 @@ def test_observer_receives_but_cannot_command(robot_host: RobotHost) -> None:
             with pytest.raises(BusTimeout):
                 observer.request(robot_host.key(key), {"text": "hello"}, timeout=1)
         said = collect(observer, observer.keys.say)
-        time.sleep(0.3)
+        subscribed(robot_host.service, robot_host.service.keys.say)
         robot_host.service.publish(robot_host.service.keys.say, {"text": "seen", "kind": "info"})
         assert said.get(timeout=5)["text"] == "seen"
 

@@ -10,7 +10,7 @@ from tests.processes import ROOT
 # Lines as Zenoh 1.10.2 writes them (colours aside): a verdict naming the subject, a cached verdict naming
 # only the session id, and the forecast Zenoh logs for every kind of message when a key expression is declared.
 SCRIPT = r"""
-import logging, os, sys, time
+import logging, os, sys, threading
 logging.basicConfig(level=logging.INFO, format="%(name)s: %(message)s")
 before = os.fstat(1)
 from shared.denials import log_access_denials, unfiltered_stdout
@@ -29,7 +29,8 @@ for line in [*forecast, denied, allowed, cached, "an ordinary line\n", denied]:
     os.write(1, line.encode())
 print("terminal kept:", (real.st_dev, real.st_ino) == (before.st_dev, before.st_ino), now.st_ino != before.st_ino)
 sys.stdout.flush()
-time.sleep(0.5)
+os.dup2(os.open(os.devnull, os.O_WRONLY), 1)  # the filter's pipe is closed: it passes on what is left and ends
+next(t for t in threading.enumerate() if t.name == "access-denials").join(10)
 """
 
 
