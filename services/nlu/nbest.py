@@ -19,19 +19,29 @@ asks ("what are you holding") is not asked about: its answer competes with
 the commands as one more meaning, so a misheard command among the runners-up
 does not drown a question heard clearly.
 
-Why reject: when the chosen command gathers only a small share of the
-recogniser's probability mass, the recogniser heard mostly something else and
-acting on it is a guess; asking to say it again is cheaper than undoing a
-wrong move.
+Why three answers: a wrong motion costs far more than a question, and a
+question more than hearing a command right away. So a command is acted on
+only when the recogniser's searches agree and the n-best stands behind it:
+every search ranked first a sentence of this command (``first`` on the
+hypotheses, see ``services.speech.recogniser``) and the command gathers at
+least ``ACT_SHARE`` of the probability mass. When the searches disagree or
+the share is lower, but the command still gathers ``CONFIRM_SHARE``, the
+robot asks "Did you say: ...?" (:meth:`Choice.confirmation`, a question
+whose single candidate is the command, so a yes runs it, a no drops it and
+a new command replaces it). Below that it says it did not catch the command
+and nothing moves. Two steps in one breath are never asked about (a
+question has single commands as its candidates): they are acted on or said
+again.
 
-Why "stop" first: a stop among the hypotheses with at least the share a
-command needs to be acted on is acted on, whatever outweighs it. Stopping
-when not asked to costs saying the command again; moving on when told to
-stop may cost what the arm hits.
+Why "stop" first: a stop among the hypotheses with at least ``STOP_SHARE``
+is acted on, whatever outweighs it. Stopping when not asked to costs saying
+the command again; moving on when told to stop may cost what the arm hits.
 
-``NLU_WEIGHT`` and ``REJECT_BELOW`` were chosen on the speech benchmark's
-held-out set (``hfpbd bench speech --held-out``), in the middle of the range
-where each does best.
+``NLU_WEIGHT`` was chosen on the speech benchmark, in the
+middle of the range where it does best; ``ACT_SHARE`` and ``CONFIRM_SHARE``
+on the same set for the fewest wrong motions at a small cost in questions
+(``hfpbd bench speech`` prints the sweep), then checked once on the
+held-out set.
 """
 
 from __future__ import annotations
@@ -39,17 +49,28 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass
+from enum import Enum
 from typing import Any
 
 from services.nlu.commands import Command
-from services.nlu.infer import CommandResult, Model, Result
+from services.nlu.infer import Clarify, CommandResult, Model, Result
 from services.nlu.prior import History
 from services.nlu.results import Answer
 
 NLU_WEIGHT = 0.1  # λ: weight of the model's log score against the recogniser's log probability
-REJECT_BELOW = 0.1  # the chosen command's least share of the n-best probability mass to act on it
-NOT_MADE_OUT = "I couldn't make out that command. Please say it again."
+ACT_SHARE = 0.9  # the chosen command's least share of the n-best probability mass to act on it at once
+CONFIRM_SHARE = 0.3  # ... to ask whether it was meant; below, it is not acted on at all
+STOP_SHARE = 0.1  # ... for a stop, which is acted on whatever outweighs it
+NOT_MADE_OUT = "I didn't catch that. Please say it again."
 STOP = Command("stop")
+
+
+class Decision(Enum):
+    """What to do with the command heard."""
+
+    ACT = "act"
+    CONFIRM = "confirm"  # ask "Did you say: ...?"
+    REJECT = "reject"  # say it was not caught; nothing moves
 
 
 @dataclass(frozen=True)
@@ -59,6 +80,7 @@ class Reading:
     text: str
     probability: float  # the recogniser's, within its n-best (> 0)
     result: Result
+    first: int = 0  # how many of the recogniser's searches ranked this hypothesis first
 
     def weight(self, nlu_weight: float = NLU_WEIGHT) -> float:
         """log p(h) + λ score(h): this hypothesis's part of its command's weight, in log scale."""
@@ -67,20 +89,56 @@ class Reading:
 
 @dataclass(frozen=True)
 class Choice:
-    """The hypothesis to act on and how much of the n-best agrees with it."""
+    """The hypothesis chosen, how much of the n-best agrees with it, and whether the searches do."""
 
     reading: Reading  # the most plausible hypothesis of the chosen command (or question, if no command)
     share: float  # of the n-best probability mass, the part that resolves to the chosen meaning; 0 if none resolved
+    agreed: bool = False  # every search of the recogniser ranked first a hypothesis of this meaning
 
-    def rejected(self, below: float = REJECT_BELOW) -> bool:
-        """A command too few of the hypotheses support to act on."""
-        return isinstance(self.reading.result, CommandResult) and self.share < below
+    def decision(self, act: float = ACT_SHARE, confirm: float = CONFIRM_SHARE) -> Decision:
+        """Act, ask, or say it was not caught (see the module notes).
+
+        Anything but a command (a question to answer, the model's own question
+        back, a reply to one) moves nothing; it is taken up when the searches
+        agree on it, else it was not caught either.
+        """
+        result = self.reading.result
+        if not isinstance(result, CommandResult):
+            return Decision.ACT if self.agreed else Decision.REJECT
+        if result.commands == (STOP,) and self.share >= STOP_SHARE:
+            return Decision.ACT
+        if self.agreed and self.share >= act:
+            return Decision.ACT
+        if self.share >= confirm and not result.then:
+            return Decision.CONFIRM
+        return Decision.REJECT
+
+    def rejected(self, act: float = ACT_SHARE, confirm: float = CONFIRM_SHARE) -> bool:
+        """A command not to act on at once (to ask about, or to drop)."""
+        return self.decision(act, confirm) is not Decision.ACT
+
+    def confirmation(self, model: Model) -> Clarify:
+        """ "Did you say: ...?" about the chosen command: a question with that command as its single candidate."""
+        result = self.reading.result
+        assert isinstance(result, CommandResult) and not result.then, "only a single command is confirmed"
+        return Clarify(
+            [],
+            f"Did you say: {self.reading.text}?",
+            [result.command],
+            [model.describe_command(result.command)],
+            result.score,
+        )
 
 
 def most_plausible(
     model: Model, history: History | None, nbest: list[Any], nlu_weight: float = NLU_WEIGHT
 ) -> Choice | None:
-    """The choice among ``dialog/utterance`` n-best entries ``{"text", "score"}``; malformed ones are skipped."""
+    """The choice among ``dialog/utterance`` n-best entries ``{"text", "score", "first"}``; malformed ones are skipped.
+
+    ``first`` (how many of the recogniser's searches ranked the entry first)
+    may be missing; a command is then never agreed on, so it is asked about
+    at best.
+    """
     readings = []
     for hypothesis in nbest:
         if not isinstance(hypothesis, dict) or not isinstance(hypothesis.get("text"), str):
@@ -88,7 +146,10 @@ def most_plausible(
         probability = hypothesis.get("score", 1.0)
         if isinstance(probability, bool) or not isinstance(probability, (int, float)) or not 0 < probability < math.inf:
             continue
-        readings.append(Reading(hypothesis["text"], float(probability), model.parse(hypothesis["text"], history)))
+        first = hypothesis.get("first", 0)
+        first = first if isinstance(first, int) and not isinstance(first, bool) and first > 0 else 0
+        text = hypothesis["text"]
+        readings.append(Reading(text, float(probability), model.parse(text, history), first))
     return choose(readings, nlu_weight)
 
 
@@ -104,15 +165,19 @@ def choose(readings: Iterable[Reading], nlu_weight: float = NLU_WEIGHT) -> Choic
             groups.setdefault(reading.result.commands, []).append(reading)
         elif isinstance(reading.result, Answer):
             groups.setdefault(reading.result.topic, []).append(reading)
+    searches = sum(r.first for r in usable)
     if not groups:
-        return Choice(max(usable, key=lambda r: r.weight(nlu_weight)), 0.0)
+        best_reading = max(usable, key=lambda r: r.weight(nlu_weight))
+        same = sum(r.first for r in usable if r.text == best_reading.text)
+        return Choice(best_reading, 0.0, searches > 1 and same == searches)
     total = sum(r.probability for r in usable)
     stop = groups.get((STOP,), [])
-    if sum(r.probability for r in stop) / total >= REJECT_BELOW:  # a stop heard clearly enough to act on wins
+    if sum(r.probability for r in stop) / total >= STOP_SHARE:  # a stop heard clearly enough to act on wins
         best = stop
     else:
         best = max(groups.values(), key=lambda group: _log_sum(r.weight(nlu_weight) for r in group))
-    return Choice(max(best, key=lambda r: r.weight(nlu_weight)), sum(r.probability for r in best) / total)
+    agreed = searches > 1 and sum(r.first for r in best) == searches
+    return Choice(max(best, key=lambda r: r.weight(nlu_weight)), sum(r.probability for r in best) / total, agreed)
 
 
 def _log_sum(logs: Iterable[float]) -> float:

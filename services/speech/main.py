@@ -10,6 +10,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from services.speech.audio import AudioError, read_wav
+from services.speech.gate import judge
 from services.speech.recogniser import PER_MEANING, Recogniser
 from services.speech.service import Settings, SpeechService
 from services.speech.vad import UtteranceSplitter
@@ -84,7 +85,7 @@ def body(bus: Bus, args: argparse.Namespace, stop: threading.Event) -> None:
 
 
 def decode_files(argv: Sequence[str]) -> int:
-    """Print one JSON line per utterance heard in each file: its n-best list."""
+    """Print one JSON line per utterance heard in each file: its n-best list, or why it is no speech."""
     parser = argparse.ArgumentParser(
         prog="hfpbd speech decode", description="Decode WAV files with the command grammar."
     )
@@ -102,16 +103,16 @@ def decode_files(argv: Sequence[str]) -> int:
             continue
         splitter = UtteranceSplitter()
         for utterance in splitter.feed(pcm) + splitter.flush():
-            hypotheses = recogniser.decode(utterance)
-            print(
-                json.dumps(
-                    {
-                        "file": str(path),
-                        "text": hypotheses[0].text if hypotheses else None,
-                        "nbest": [h.to_json() for h in hypotheses],
-                    }
-                )
-            )
+            verdict = judge(utterance)
+            hypotheses = recogniser.decode(utterance) if verdict.speech else []
+            heard: dict[str, object] = {
+                "file": str(path),
+                "text": hypotheses[0].text if hypotheses else None,
+                "nbest": [h.to_json() for h in hypotheses],
+            }
+            if not verdict.speech:
+                heard["not_speech"] = verdict.reason
+            print(json.dumps(heard))
     return status
 
 

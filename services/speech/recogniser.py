@@ -11,20 +11,29 @@ genuinely different readings ("raise your arm" where the grammar heard
 "bring the left arm"); both passes score with the same acoustic model, so
 their scores can be pooled.
 
-Why two frame rates: the acoustic model's phones last at least three
-frames, 30 ms at the usual 100 frames per second, and fast speech has
-shorter ones, so words get lost. The same audio analysed at 120 frames per
-second reads like speech a sixth slower; both front ends' hypotheses are
-pooled, their log-likelihoods taken per 100 frames so that they compare.
+Why the passes' first choices are kept: the two searches are differently
+constrained (the scene's sentences against any word sequence of the command
+language), so when both put the same meaning first the audio fits it
+however it is searched, and when they differ the recogniser is guessing.
+The NLU acts only on such agreement (``services.nlu.nbest``); the count of
+first choices travels with each hypothesis (``first``).
 
-Why eight Gaussians per frame: the acoustic model's phones share codebooks
-of Gaussians and PocketSphinx scores only each frame's nearest few (4 by
-default, for speed), the rest counted as nothing. A voice unlike the model's
-training speakers (an accent, a fast synthetic voice) has its likelihood
-spread over more of them, and with 4 the right phone loses to a wrong one;
-8 was chosen on the benchmark's held-out set (frequency warping for higher
-voices, other frame rates and a stronger language weight helped less), at
-about a third more decoding time.
+Why one front end at 100 frames per second and PocketSphinx's default four
+Gaussians per frame: decoding must keep up with speech on a small machine
+(at most 0.3 s of CPU per second of audio, the speech benchmark measures
+it). A second front end at 120 frames per second and eight Gaussians
+recovered a few fast synthetic voices but doubled the time; with the
+confirmation question those utterances are asked about instead of lost.
+
+Why the grammar pass gives one sentence and the n-gram pass the alternatives:
+the n-best list comes from a word lattice, and the lattice of a grammar
+search costs several times the search itself (over a second of CPU per
+second of speech, tens of seconds for some laughter), while the n-gram
+search's lattice is cheap. So the grammar search runs without one
+(PocketSphinx's ``bestpath`` off, read when a search is made) and yields
+its best sentence; the n-gram search yields its n-best. Either list is read
+only when its search reached the end of a sentence: without a complete path
+the n-best search wanders the whole lattice and yields nothing usable.
 """
 
 from __future__ import annotations
@@ -32,7 +41,8 @@ from __future__ import annotations
 import itertools
 import math
 import tempfile
-from dataclasses import dataclass
+from collections import Counter
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -45,11 +55,11 @@ from services.speech.ngram import arpa, sample_sentences
 from services.speech.vocabulary import SpeechVocabulary
 
 NBEST = 5
-FRAME_RATES = (100, 120)  # frames per second of the front ends whose hypotheses are pooled
-TOP_GAUSSIANS = 8  # per frame and codebook scored by the acoustic model (PocketSphinx's topn)
+FRAME_RATES = (100,)  # frames per second of the front ends whose hypotheses are pooled
+TOP_GAUSSIANS = 4  # per frame and codebook scored by the acoustic model (PocketSphinx's topn)
 _BASE_RATE = 100  # log-likelihoods are compared per this many frames
 PER_MEANING = 3  # phrases per meaning in the grammar: the plain, usual ones (None: every phrase)
-NBEST_SEARCH = 50  # lattice paths read to find NBEST distinct sentences
+NBEST_SEARCH = 20  # lattice paths read to find NBEST distinct sentences
 # PocketSphinx scores acoustic frames as if independent, which overstates how
 # sure it is; this scale turns score differences into usable probabilities
 # (the speech benchmark shows command accuracy for several scales).
@@ -77,9 +87,10 @@ class Hypothesis:
     score: float
     loglik: float = 0.0  # the recogniser's scaled-down acoustic log-likelihood, for re-weighting
     in_grammar: bool = True  # a sentence of the scene grammar (else heard by the n-gram pass only)
+    first: int = 0  # how many of the recogniser's searches ranked this sentence first
 
     def to_json(self) -> dict[str, object]:
-        return {"text": self.text, "score": float(f"{self.score:.6g}")}
+        return {"text": self.text, "score": float(f"{self.score:.6g}"), "first": self.first}
 
 
 class Recogniser:
@@ -128,6 +139,7 @@ class Recogniser:
             self._set_ngram(whole)
         name = f"commands{self._version}"
         try:
+            self._decoder.config["bestpath"] = False  # read when a search is made: see the module notes
             self._decoder.add_jsgf_string(name, jsgf)
         except ValueError as exc:
             raise RecogniserError(f"the generated speech grammar does not parse: {exc}") from None
@@ -144,6 +156,7 @@ class Recogniser:
             path = Path(folder) / "commands.arpa"
             path.write_text(arpa(sample_sentences(build_jsgf(vocabulary))))
             try:
+                self._decoder.config["bestpath"] = True
                 self._decoder.add_lm_file(name, str(path))
             except RuntimeError as exc:
                 raise RecogniserError(f"the generated n-gram model does not load: {exc}") from None
@@ -178,39 +191,49 @@ class Recogniser:
         audio = dither(pcm).tobytes()
         pooled: dict[str, float] = {}
         firsts: list[tuple[bool, float, str]] = []  # each front end's first choice: (in grammar, loglik, text)
+        ranked_first: Counter[str] = Counter()  # each search's first choice
         for rate in self._frame_rates:
-            scored = self._front_end(rate, audio)
-            if scored:
-                text, loglik = next(iter(scored.items()))
+            grammar, ngram = self._front_end(rate, audio)
+            combined = {**ngram, **grammar}  # a sentence both passes heard keeps the grammar's likelihood
+            for scored in (grammar, ngram):
+                if scored:
+                    ranked_first[next(iter(scored))] += 1
+            preferred = grammar or ngram
+            if preferred:
+                text, loglik = next(iter(preferred.items()))
                 firsts.append((in_grammar(self._matcher, text), loglik, text))
-            for text, loglik in scored.items():
+            for text, loglik in combined.items():
                 pooled[text] = max(pooled.get(text, -math.inf), loglik)
         if not firsts:
             return []
         first = max(firsts)[2]
         ordered = {first: pooled.pop(first), **pooled}
         members = {text for text in ordered if in_grammar(self._matcher, text)}
-        return posteriors(ordered, self._scale if acoustic_scale is None else acoustic_scale, members)
+        scale = self._scale if acoustic_scale is None else acoustic_scale
+        return [
+            replace(h, first=ranked_first[h.text]) for h in posteriors(ordered, scale, members, keep=set(ranked_first))
+        ]
 
-    def _front_end(self, rate: int, audio: bytes) -> dict[str, float]:
-        """Both passes at ``rate`` frames per second: the grammar's sentence first, log-likelihoods per 100 frames."""
+    def _front_end(self, rate: int, audio: bytes) -> tuple[dict[str, float], dict[str, float]]:
+        """Both passes at ``rate`` frames per second, each's sentences best first, log-likelihoods per 100 frames.
+
+        A grammar result that is no sentence of the grammar is the search's
+        best partial path (a mishearing) and is left out.
+        """
         if self._decoder.config["frate"] != rate:
             self._decoder.config["frate"] = rate
             self._decoder.reinit_feat()
         per_base = _BASE_RATE / rate
-        # a grammar result that is no sentence of the grammar is the search's best partial path: a mishearing
-        scored = {
+        grammar = {
             text: loglik * per_base
-            for text, loglik in self._pass(self._search, audio).items()
+            for text, loglik in self._pass(self._search, audio, alternatives=False).items()
             if in_grammar(self._matcher, text)
         }
-        if self._ngram_search is not None:
-            for text, loglik in self._pass(self._ngram_search, audio).items():
-                scored.setdefault(text, loglik * per_base)
-        return scored
+        ngram = {text: loglik * per_base for text, loglik in self._pass(self._ngram_search, audio).items()}
+        return grammar, ngram
 
-    def _pass(self, search: str | None, audio: bytes) -> dict[str, float]:
-        """One search over the audio: its distinct sentences and their log-likelihoods, best first."""
+    def _pass(self, search: str | None, audio: bytes, alternatives: bool = True) -> dict[str, float]:
+        """One search over the audio: its best sentence and, with ``alternatives``, its n-best, with log-likelihoods."""
         if search is None:
             return {}
         self._decoder.activate_search(search)
@@ -218,9 +241,11 @@ class Recogniser:
         self._decoder.process_raw(audio, no_search=False, full_utt=True)
         self._decoder.end_utt()
         best = self._decoder.hyp()
-        scored: dict[str, float] = {}
-        if best is not None and best.hypstr:
-            scored[best.hypstr] = self._loglik(best.score)
+        if best is None or not best.hypstr:
+            return {}
+        scored = {best.hypstr: self._loglik(best.score)}
+        if not alternatives:
+            return scored
         for hyp in itertools.islice(self._decoder.nbest(), NBEST_SEARCH):
             if len(scored) >= self._nbest:
                 break
@@ -240,6 +265,7 @@ def posteriors(
     members: set[str] | None = None,
     off_grammar_prior: float = OFF_GRAMMAR_PRIOR,
     compound_prior: float = COMPOUND_PRIOR,
+    keep: set[str] | None = None,
 ) -> list[Hypothesis]:
     """Probabilities within the list, the decoder's first choice first.
 
@@ -247,7 +273,8 @@ def posteriors(
     sentence of the grammar (``members``; all when None), ``off_grammar_prior``
     otherwise, times ``compound_prior`` for a sentence of two steps.
     Alternatives too unlikely to ever win a rescoring (below
-    ``MIN_POSTERIOR``) are left out.
+    ``MIN_POSTERIOR``) are left out, unless they are in ``keep`` (a search's first choice, which the NLU
+    counts to see whether the searches agree).
     """
     if not logliks:
         return []
@@ -267,7 +294,8 @@ def posteriors(
     hyps = [
         Hypothesis(text, float(p), loglik, text in members) for (text, loglik), p in zip(logliks.items(), probabilities)
     ]
-    rest = sorted((h for h in hyps[1:] if h.score >= MIN_POSTERIOR), key=lambda h: -h.score)
+    kept = keep or set()
+    rest = sorted((h for h in hyps[1:] if h.score >= MIN_POSTERIOR or h.text in kept), key=lambda h: -h.score)
     return [hyps[0], *rest]
 
 

@@ -14,12 +14,14 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from services.speech.audio import RATE, AudioError, read_wav, resample, silence
+from services.speech.gate import judge
 from services.speech.grammar import SceneWords
 from services.speech.microphone import Microphone, MicrophoneUnavailable
 from services.speech.recogniser import Hypothesis, Recogniser
@@ -32,7 +34,7 @@ from shared.messages import Objects, Say, SpeechAudio, SpeechPtt, typed
 
 log = logging.getLogger("hfpbd.speech")
 
-NOT_HEARD = "I heard something but could not make out a command. Please say it again or type it."
+NOT_HEARD = "I didn't catch that. Please say it again or type it."
 WAV_CHUNK_S = 0.1
 RELEASE_TAIL_S = 0.4
 # a speech/audio stream that sends nothing for this long has stopped (its sender quit or paused
@@ -123,13 +125,13 @@ class SpeechService:
                 return
             utterances = self._splitter.feed(pcm)
         for utterance in utterances:
-            self._tasks.put(lambda u=utterance: self._decode(u))
+            self._tasks.put(partial(self._decode, utterance))
 
     def end_of_stream(self) -> None:
         with self._audio_lock:
             utterances = self._splitter.flush()
         for utterance in utterances:
-            self._tasks.put(lambda u=utterance: self._decode(u))
+            self._tasks.put(partial(self._decode, utterance))
 
     def feed_file(self, path: Path) -> None:
         """A WAV file as if it were spoken now (split into utterances like live audio)."""
@@ -225,7 +227,16 @@ class SpeechService:
                 log.exception("speech task failed")
 
     def _decode(self, pcm: np.ndarray) -> None:
+        """Decode one utterance unless it is no speech at all, which is dropped without a word.
+
+        Why silently: a cough or a door is not addressed to the robot, and a
+        reply to each would be noise of its own.
+        """
         started = time.monotonic()
+        verdict = judge(pcm)
+        if not verdict.speech:
+            log.info("%.1f s of sound ignored: %s", len(pcm) / RATE, verdict.reason)
+            return
         hypotheses = self.recogniser.decode(pcm)
         self.decoded += 1
         log.info(

@@ -1,4 +1,4 @@
-"""Choosing among speech hypotheses: summing per command, weighing the model's score, rejecting guesses."""
+"""Choosing among speech hypotheses: summing per command, weighing the model's score, acting, asking or not."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import math
 
 import pytest
 
-from services.nlu.infer import CommandResult, Model
-from services.nlu.nbest import NLU_WEIGHT, REJECT_BELOW, Choice, most_plausible
+from services.nlu.infer import Clarify, CommandResult, Model
+from services.nlu.nbest import CONFIRM_SHARE, NLU_WEIGHT, STOP_SHARE, Choice, Decision, most_plausible
 from services.nlu.world import parse_world
 from tests.nlu.scenes import table_scene
 
@@ -19,8 +19,10 @@ def model() -> Model:
     return Model(parse_world(table_scene(last_object=None)))
 
 
-def pick(model: Model, *nbest: tuple[str, float]) -> Choice:
-    choice = most_plausible(model, None, [{"text": text, "score": score} for text, score in nbest])
+def pick(model: Model, *nbest: tuple[str, float] | tuple[str, float, int]) -> Choice:
+    """The choice among ``(text, score[, first])``: ``first`` is how many searches ranked the text first."""
+    entries = [{"text": h[0], "score": h[1], "first": h[2] if len(h) > 2 else 0} for h in nbest]
+    choice = most_plausible(model, None, entries)
     assert choice is not None
     return choice
 
@@ -31,20 +33,19 @@ def command(choice: Choice) -> dict:
 
 
 def test_a_command_heard_in_two_ways_outweighs_one_likelier_string(model: Model) -> None:
-    choice = pick(model, ("pick up the blue cup", 0.4), ("pick up the red cup", 0.3), ("grab the red cup", 0.3))
+    choice = pick(model, ("pick up the blue cup", 0.4, 1), ("pick up the red cup", 0.3, 1), ("grab the red cup", 0.3))
     assert command(choice) == {"procedure": "pick_up", "args": {"arm": "right", "object": "obj0"}}
     assert choice.share == pytest.approx(0.6)
-    assert not choice.rejected()
+    # the searches ranked different commands first: asked about, not acted on
+    assert not choice.agreed and choice.decision() is Decision.CONFIRM and choice.rejected()
 
 
 def test_a_likelier_short_hypothesis_beats_one_that_only_matches_more_words(model: Model) -> None:
     nbest = (("go above the blue cup", 0.2), ("point at the blue cup", 0.8))
     assert command(pick(model, *nbest))["procedure"] == "point_to"
     # at full weight the longer sentence's extra matched words would win
-    assert (
-        command(most_plausible(model, None, [{"text": t, "score": s} for t, s in nbest], 1.0))["procedure"]
-        == "move_rel_dest"
-    )
+    heavy = most_plausible(model, None, [{"text": t, "score": s} for t, s in nbest], 1.0)
+    assert heavy is not None and command(heavy)["procedure"] == "move_rel_dest"
 
 
 def test_the_scene_still_breaks_a_near_tie(model: Model) -> None:
@@ -55,19 +56,56 @@ def test_the_scene_still_breaks_a_near_tie(model: Model) -> None:
     assert math.log(0.55 / 0.45) < NLU_WEIGHT * (choice.reading.result.score - opened.score)
 
 
-def test_a_command_with_little_support_in_the_nbest_is_rejected(model: Model) -> None:
-    choice = pick(model, ("the", 0.95), ("pick up the red cup", 0.05))
+def test_a_command_every_search_ranked_first_with_most_of_the_mass_is_acted_on(model: Model) -> None:
+    choice = pick(
+        model, ("pick up the red cup", 0.93, 1), ("grab the red cup", 0.05, 1), ("pick up the blue cup", 0.02)
+    )
+    assert choice.agreed and choice.share == pytest.approx(0.98)
+    assert choice.decision() is Decision.ACT and not choice.rejected()
+    # the same agreement with too little of the mass behind it is asked about
+    assert choice.decision(act=0.99) is Decision.CONFIRM
+
+
+def test_a_command_with_little_support_in_the_nbest_is_not_caught(model: Model) -> None:
+    choice = pick(model, ("the", 0.95, 2), ("pick up the red cup", 0.05))
     assert command(choice)["procedure"] == "pick_up"
-    assert choice.share == pytest.approx(0.05) and choice.share < REJECT_BELOW
-    assert choice.rejected()
-    assert not choice.rejected(below=0.01)
+    assert choice.share == pytest.approx(0.05) and choice.share < CONFIRM_SHARE
+    assert choice.decision() is Decision.REJECT and choice.rejected()
+    assert choice.decision(confirm=0.01) is Decision.CONFIRM
 
 
-def test_a_question_is_never_rejected_and_one_hypothesis_is_all_the_support(model: Model) -> None:
-    question = pick(model, ("the", 0.6), ("point to the cup", 0.4))
-    assert question.reading.text == "point to the cup" and question.share == 0.0 and not question.rejected()
-    alone = pick(model, ("stop", 0.2))
-    assert alone.share == 1.0 and not alone.rejected()
+def test_without_the_searches_first_choices_a_command_is_only_asked_about(model: Model) -> None:
+    choice = pick(model, ("pick up the red cup", 1.0))
+    assert choice.share == 1.0 and not choice.agreed and choice.decision() is Decision.CONFIRM
+
+
+def test_two_steps_are_never_asked_about(model: Model) -> None:
+    choice = pick(model, ("pick up the red cup and then lift it", 0.6, 1), ("point at the plate", 0.4, 1))
+    assert len(choice.reading.result.commands) == 2  # type: ignore[union-attr]
+    assert choice.decision() is Decision.REJECT
+
+
+def test_the_confirmation_is_a_question_with_the_command_as_its_only_candidate(model: Model) -> None:
+    choice = pick(model, ("point at the red cup", 0.7, 1), ("point at the blue cup", 0.3, 1))
+    assert choice.decision() is Decision.CONFIRM
+    question = choice.confirmation(model)
+    assert isinstance(question, Clarify)
+    assert question.question == "Did you say: point at the red cup?"
+    assert [c.as_dict() for c in question.candidates] == [command(choice)]
+    assert len(question.labels) == 1
+
+
+def test_a_question_is_answered_only_when_the_searches_agree_on_it(model: Model) -> None:
+    heard = pick(model, ("what are you holding", 0.9, 2), ("what are you holding now", 0.1))
+    assert heard.share == pytest.approx(1.0) and heard.decision() is Decision.ACT
+    unsure = pick(model, ("what are you holding", 0.6, 1), ("the", 0.4, 1))
+    assert unsure.decision() is Decision.REJECT
+
+
+def test_words_that_are_no_command_pass_to_the_dialogue_only_when_agreed(model: Model) -> None:
+    agreed = pick(model, ("the", 1.0, 2))
+    assert agreed.share == 0.0 and agreed.decision() is Decision.ACT
+    assert pick(model, ("the", 0.6, 1), ("a", 0.4, 1)).decision() is Decision.REJECT
 
 
 def test_malformed_entries_are_skipped(model: Model) -> None:
@@ -96,8 +134,9 @@ def test_a_compound_is_not_grouped_with_its_first_step(model: Model) -> None:
 
 
 def test_a_stop_heard_clearly_enough_to_act_on_wins_over_likelier_commands(model: Model) -> None:
-    heard = (("pick up the red cup", 0.55), ("point at the red cup", 0.3), ("stop it", 0.15))
-    assert command(pick(model, *heard)) == {"procedure": "stop", "args": {}}
-    # below the share a command needs to be acted on, a stop is one more guess
-    faint = (("pick up the red cup", 0.95), ("stop", 0.05))
+    heard = (("pick up the red cup", 0.55, 2), ("point at the red cup", 0.3), ("stop it", 0.15))
+    stop = pick(model, *heard)
+    assert command(stop) == {"procedure": "stop", "args": {}} and stop.decision() is Decision.ACT
+    # below STOP_SHARE, a stop is one more guess
+    faint = (("pick up the red cup", 0.95), ("stop", STOP_SHARE / 2))
     assert command(pick(model, *faint))["procedure"] == "pick_up"
