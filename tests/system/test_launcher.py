@@ -13,13 +13,13 @@ from pathlib import Path
 
 import psutil
 import pytest
-import zenoh
 
 from hfpbd.launcher import DEFAULT_PORT, hub_listen, local_endpoint
 from hfpbd.secure import init
 from shared.bus import Bus, BusTimeout
 from shared.config import SessionOptions, free_port, loopback_options
 from tests.processes import ROOT, start_up
+from tests.waiting import eventually
 
 
 def _run_module(*argv: str, timeout: float = 60) -> subprocess.CompletedProcess[str]:
@@ -30,12 +30,12 @@ def _run_module(*argv: str, timeout: float = 60) -> subprocess.CompletedProcess[
 
 
 def _wait(predicate, timeout: float) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.2)
-    return False
+    """Whether ``predicate()`` comes to hold within ``timeout`` seconds (the caller's assertion says what failed)."""
+    try:
+        eventually(predicate, timeout)
+    except AssertionError:
+        return False
+    return True
 
 
 @pytest.fixture(autouse=True)
@@ -203,14 +203,8 @@ def _remote(namespace: str, port: int, pki: Path, identity: str) -> Bus:
         secure=str(pki),
         identity=identity,
     )
-    deadline = time.monotonic() + 30
-    while True:
-        try:
-            return Bus(options)
-        except zenoh.ZError:
-            if time.monotonic() > deadline:
-                raise
-            time.sleep(0.3)
+    eventually(lambda: _port_taken(port), 30, f"the robot listening on port {port}")
+    return Bus(options)
 
 
 def _port_taken(port: int) -> bool:
