@@ -27,11 +27,9 @@ hypotheses, see ``services.speech.recogniser``) and the command gathers at
 least ``ACT_SHARE`` of the probability mass. When the searches disagree or
 the share is lower, but the command still gathers ``CONFIRM_SHARE``, the
 robot asks "Did you say: ...?" (:meth:`Choice.confirmation`, a question
-whose single candidate is the command, so a yes runs it, a no drops it and
-a new command replaces it). Below that it says it did not catch the command
-and nothing moves. Two steps in one breath are never asked about (a
-question has single commands as its candidates): they are acted on or said
-again.
+whose single candidate is the command and which the dialogue settles: a yes
+runs it, a no drops it, "no, ..." or a new command replaces it). Below that
+it says it did not catch the command and nothing moves.
 
 Why "stop" first: a stop among the hypotheses with at least ``STOP_SHARE``
 is acted on, whatever outweighs it. Stopping when not asked to costs saying
@@ -109,7 +107,7 @@ class Choice:
             return Decision.ACT
         if self.agreed and self.share >= act:
             return Decision.ACT
-        if self.share >= confirm and not result.then:
+        if self.share >= confirm:
             return Decision.CONFIRM
         return Decision.REJECT
 
@@ -117,16 +115,22 @@ class Choice:
         """A command not to act on at once (to ask about, or to drop)."""
         return self.decision(act, confirm) is not Decision.ACT
 
-    def confirmation(self, model: Model) -> Clarify:
-        """ "Did you say: ...?" about the chosen command: a question with that command as its single candidate."""
+    def confirmation(self) -> Clarify:
+        """ "Did you say: ...?" in the words heard: a question whose single candidate is the chosen command.
+
+        It carries the whole command heard (further steps too) for the
+        dialogue to run on a yes; the reading already passed the model's own
+        checks, so a yes never runs what would have been refused.
+        """
         result = self.reading.result
-        assert isinstance(result, CommandResult) and not result.then, "only a single command is confirmed"
+        assert isinstance(result, CommandResult), "only a command is confirmed"
         return Clarify(
             [],
             f"Did you say: {self.reading.text}?",
             [result.command],
-            [model.describe_command(result.command)],
+            [result.text],
             result.score,
+            confirms=result,
         )
 
 

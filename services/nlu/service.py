@@ -15,10 +15,10 @@ from typing import Any
 
 import msgspec
 
-from services.nlu.context import Dialogue
+from services.nlu.context import Dialogue, Pending
 from services.nlu.infer import Answer, Clarify, Model, Result
 from services.nlu.lexicon import vocabulary
-from services.nlu.nbest import NOT_MADE_OUT, most_plausible
+from services.nlu.nbest import NOT_MADE_OUT, Decision, most_plausible
 from services.nlu.templates import sentence_templates
 from services.nlu.world import COLORS, TYPES, WorldError, parse_world
 from shared.bus import Bus
@@ -131,8 +131,13 @@ class NluService:
             if choice is None and message.nbest is not None:
                 picked = most_plausible(model, dialogue.history, message.nbest)
             result: Result | None = None
-            if picked is not None and picked.rejected():  # a guess: the dialogue stays as it was
-                log.info("%r not acted on: only %.0f%% of the n-best means that command", text, 100 * picked.share)
+            decision = picked.decision() if picked is not None else Decision.ACT
+            if picked is not None and decision is Decision.CONFIRM:  # "Did you say ...?": a yes runs it
+                result = picked.confirmation()
+                dialogue.pending = Pending(result)
+                text = picked.reading.text
+            elif picked is not None and decision is Decision.REJECT:  # a guess: the dialogue stays as it was
+                log.info("%r not caught: %.0f%% of the n-best means that command", text, 100 * picked.share)
             else:
                 text = picked.reading.text if picked is not None else text
                 result = dialogue.understand(model, text, choice)

@@ -53,6 +53,10 @@ _DETERMINERS = ("your", "the")
 # action" was heard as "switch two then execute")
 COMPOUND_WEIGHT = 0.05
 QUESTION_WEIGHT = 0.2
+# replies to the robot's "Did you say ...?" (the dialogue reads them, they are no words of the command lexicon);
+# "no" may go on with the command meant instead
+REPLIES = ("yes", "yes please", "that is right", "no", "no thanks", "cancel")
+REPLY_WEIGHT = 0.2
 _RULE_WORD = re.compile(r"<[^>]*>|/[0-9.]+/|[()\[\]|;=*+]")
 _SLOT = re.compile(r"<(\w+)>")
 _TOKEN = re.compile(r"<[^>]+>|/[0-9.]+/|[()\[\]|]|[^\s()\[\]|<>/]+")
@@ -274,14 +278,21 @@ class _Builder:
 
 
 def build_jsgf(vocabulary: SpeechVocabulary, scene: SceneWords = SceneWords()) -> str:
-    """The grammar text; every word in it is a word of ``vocabulary``."""
+    """The grammar text; every word in it is a word of ``vocabulary`` or of :data:`REPLIES`."""
     builder = _Builder(vocabulary, scene)
     bodies = [body for procedure in PROCEDURES if (body := builder.command(procedure))]
     step = builder.rules.define("step", bodies)
     join = builder.rules.define("join", vocabulary.spoken.get("join", ()))
     question = builder.question()
     polite = builder.rules.define("polite", (w for w in ("please",) if w in vocabulary.fillers))
-    forms = ((1.0, step), (COMPOUND_WEIGHT, _seq(step, join, step)), (QUESTION_WEIGHT, question))
+    reply = builder.rules.define("reply", REPLIES)
+    forms = (
+        (1.0, step),
+        (COMPOUND_WEIGHT, _seq(step, join, step)),
+        (QUESTION_WEIGHT, question),
+        (REPLY_WEIGHT, reply),
+        (REPLY_WEIGHT, _seq("no", step)),
+    )
     said = " | ".join(f"/{weight:g}/ {form}" for weight, form in forms if form)
     lines = [
         "#JSGF V1.0;",

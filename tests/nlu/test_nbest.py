@@ -6,7 +6,8 @@ import math
 
 import pytest
 
-from services.nlu.infer import Clarify, CommandResult, Model
+from services.nlu.context import Dialogue, Pending
+from services.nlu.infer import Answer, Clarify, CommandResult, Model
 from services.nlu.nbest import CONFIRM_SHARE, NLU_WEIGHT, STOP_SHARE, Choice, Decision, most_plausible
 from services.nlu.world import parse_world
 from tests.nlu.scenes import table_scene
@@ -79,20 +80,26 @@ def test_without_the_searches_first_choices_a_command_is_only_asked_about(model:
     assert choice.share == 1.0 and not choice.agreed and choice.decision() is Decision.CONFIRM
 
 
-def test_two_steps_are_never_asked_about(model: Model) -> None:
-    choice = pick(model, ("pick up the red cup and then lift it", 0.6, 1), ("point at the plate", 0.4, 1))
-    assert len(choice.reading.result.commands) == 2  # type: ignore[union-attr]
-    assert choice.decision() is Decision.REJECT
-
-
 def test_the_confirmation_is_a_question_with_the_command_as_its_only_candidate(model: Model) -> None:
     choice = pick(model, ("point at the red cup", 0.7, 1), ("point at the blue cup", 0.3, 1))
     assert choice.decision() is Decision.CONFIRM
-    question = choice.confirmation(model)
+    question = choice.confirmation()
     assert isinstance(question, Clarify)
     assert question.question == "Did you say: point at the red cup?"
     assert [c.as_dict() for c in question.candidates] == [command(choice)]
-    assert len(question.labels) == 1
+    assert len(question.labels) == 1 and question.confirms is choice.reading.result
+
+
+def test_yes_runs_the_command_asked_about_and_no_drops_it(model: Model) -> None:
+    heard = pick(model, ("pick up the red cup and then lift it", 0.6, 1), ("point at the plate", 0.4, 1))
+    assert heard.decision() is Decision.CONFIRM
+    for reply, kind in (("yes", CommandResult), ("no", Answer)):
+        dialogue = Dialogue()
+        dialogue.pending = Pending(heard.confirmation())
+        result = dialogue.understand(model, reply)
+        assert isinstance(result, kind) and dialogue.pending is None
+        if isinstance(result, CommandResult):
+            assert result.commands == heard.reading.result.commands
 
 
 def test_a_question_is_answered_only_when_the_searches_agree_on_it(model: Model) -> None:

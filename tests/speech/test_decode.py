@@ -173,3 +173,16 @@ def test_wav_at_another_rate_and_in_stereo_is_converted(tmp_path: Path):
     assert len(back) == pytest.approx(2 * len(mono), rel=0.01)
     write_wav(tmp_path / "again.wav", back)
     assert len(read_wav(tmp_path / "again.wav")) == len(back)
+
+
+@pytest.mark.parametrize(("said", "voice"), [("yes", "en-us"), ("no", "en-gb"), ("cancel", "en-us")])
+def test_replies_to_a_question_are_heard_by_both_searches(recogniser, said: str, voice: str):
+    hypotheses = recogniser.decode(np.concatenate([silence(0.3), espeak.synthesise(said, voice, 150), silence(0.3)]))
+    assert hypotheses[0].text == said and hypotheses[0].first == 2
+
+
+def test_every_search_first_choice_travels_with_the_nbest(recogniser):
+    said = espeak.synthesise("look at the blue cup", "en-us", 150)
+    hypotheses = recogniser.decode(np.concatenate([silence(0.3), said, silence(0.3)]))
+    assert sum(h.first for h in hypotheses) == 2  # the grammar search's and the n-gram search's
+    assert all(set(h.to_json()) == {"text", "score", "first"} for h in hypotheses)
