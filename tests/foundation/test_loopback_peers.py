@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import queue
-import time
 import uuid
 
 from shared.bus import Bus
 from shared.config import SessionOptions, free_port
+from tests.waiting import subscribed
 
 
 def test_peers_of_a_listening_peer_reach_each_other_on_loopback() -> None:
@@ -19,14 +19,9 @@ def test_peers_of_a_listening_peer_reach_each_other_on_loopback() -> None:
     try:
         received: queue.Queue = queue.Queue()
         second.subscribe(second.keys.utterance, received.put, schema="utterance")
-        deadline = time.monotonic() + 10
-        message = None
-        while message is None and time.monotonic() < deadline:
-            first.publish(first.keys.utterance, {"text": "hello"})
-            try:
-                message = received.get(timeout=0.3)
-            except queue.Empty:
-                pass
+        subscribed(first, first.keys.utterance)
+        first.publish(first.keys.utterance, {"text": "hello"})
+        message = received.get(timeout=10)
         assert message is not None and message.text == "hello"
         assert second.session.info.zid() in list(first.session.info.peers_zid()), "the two peers connected directly"
     finally:

@@ -7,7 +7,6 @@ publishes maps as any peer would, the other session subscribes.
 from __future__ import annotations
 
 import queue
-import time
 from collections.abc import Iterator
 from typing import Any
 
@@ -16,6 +15,7 @@ import pytest
 from shared.bus import Bus
 from shared.messages import Gripper, Objects, PerceivedObject, SimState
 from tests.processes import Network
+from tests.waiting import subscribed
 
 pytestmark = pytest.mark.unit
 
@@ -37,26 +37,17 @@ def listener(network: Network) -> Iterator[Bus]:
         bus.close()
 
 
-def _subscribed(network: Network, listener: Bus, key: str, schema: str, good: dict[str, Any]) -> queue.Queue:
-    """Subscribe ``listener`` and wait until a ``good`` message gets through (routes take a moment to form)."""
+def _subscribed(network: Network, listener: Bus, key: str, schema: str) -> queue.Queue:
+    """Subscribe ``listener``, once the hub knows the subscription (what the hub publishes next gets there)."""
     received: queue.Queue = queue.Queue()
     listener.subscribe(key, received.put, schema=schema)
-    deadline = time.monotonic() + 10
-    while time.monotonic() < deadline:
-        network.hub.publish(key, good)
-        try:
-            received.get(timeout=0.3)
-        except queue.Empty:
-            continue
-        while not received.empty():
-            received.get_nowait()
-        return received
-    raise AssertionError(f"nothing arrived on {key}")
+    subscribed(network.hub, key)
+    return received
 
 
 def test_a_handler_receives_its_streams_typed_message(network: Network, listener: Bus) -> None:
     key = listener.keys.objects
-    received = _subscribed(network, listener, key, "objects", {"stamp": 1.0, "objects": []})
+    received = _subscribed(network, listener, key, "objects")
     network.hub.publish(key, {"stamp": 2.0, "objects": [CUP], "status": "ok", "extra": "welcome"})
     message = received.get(timeout=5)
     assert isinstance(message, Objects) and message.stamp == 2.0 and message.status == "ok"
@@ -68,7 +59,7 @@ def test_a_handler_receives_its_streams_typed_message(network: Network, listener
 
 def test_nested_messages_are_typed_all_the_way_down(network: Network, listener: Bus) -> None:
     key = listener.keys.sim_state
-    received = _subscribed(network, listener, key, "sim_state", STATE)
+    received = _subscribed(network, listener, key, "sim_state")
     network.hub.publish(key, {**STATE, "stamp": 2.0})
     state = received.get(timeout=5)
     assert isinstance(state, SimState) and isinstance(state.grippers["right"], Gripper)
@@ -106,7 +97,7 @@ def test_a_wrong_nested_type_is_rejected_and_counted(
     mark: tuple[str, Any],
 ) -> None:
     key = getattr(listener.keys, key_name)
-    received = _subscribed(network, listener, key, schema, good)
+    received = _subscribed(network, listener, key, schema)
     rejected = listener.rejected[key]
     field, value = mark
     network.hub.publish(key, bad)
@@ -120,14 +111,9 @@ def test_without_a_schema_the_handler_gets_the_map_and_its_key(network: Network,
     key = listener.keys.say
     received: queue.Queue = queue.Queue()
     listener.subscribe(key, received.put)
-    deadline = time.monotonic() + 10
-    message = None
-    while message is None and time.monotonic() < deadline:
-        network.hub.publish(key, {"text": "hello", "kind": "info"})
-        try:
-            message = received.get(timeout=0.3)
-        except queue.Empty:
-            pass
+    subscribed(network.hub, key)
+    network.hub.publish(key, {"text": "hello", "kind": "info"})
+    message = received.get(timeout=10)
     assert message == {"v": 1, "text": "hello", "kind": "info", "_key": key}
 
 
