@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import queue
-import threading
 from typing import Any
 
 import numpy as np
@@ -14,6 +13,7 @@ from shared.bus import Bus, RemoteError
 from shared.messages import typed
 from shared.robot import ROBOT
 from tests.processes import Network, ServiceProcess
+from tests.waiting import eventually
 
 
 class Inbox:
@@ -26,20 +26,16 @@ class Inbox:
         self.items.put(message)
 
     def wait(self, predicate=lambda m: True, timeout: float = 20.0) -> Any:
-        deadline = threading.Event()
-        timer = threading.Timer(timeout, deadline.set)
-        timer.start()
-        try:
-            while not deadline.is_set():
-                try:
-                    message = self.items.get(timeout=0.2)
-                except queue.Empty:
-                    continue
-                if predicate(message):
-                    return message
-        finally:
-            timer.cancel()
-        raise AssertionError("no matching message arrived")
+        """The first message that satisfies ``predicate``, the others dropped on the way."""
+
+        def matching() -> tuple[Any] | None:
+            try:
+                message = self.items.get(timeout=0.2)
+            except queue.Empty:
+                return None
+            return (message,) if predicate(message) else None
+
+        return eventually(matching, timeout, "a matching message")[0]
 
 
 @pytest.fixture(scope="module")
