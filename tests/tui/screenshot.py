@@ -20,7 +20,7 @@ from textual.pilot import Pilot
 from services.executor.store import ActionStore
 from shared.bus import Bus
 from tests.processes import ROOT
-from tests.tui.helpers import fixed_network, serve_actions, stage_world, teach
+from tests.tui.helpers import fixed_network, hub_bridge, serve_actions, stage_world, teach
 from tests.tui.test_snapshots import SIZE, open_the_actions, pick_up_the_red_cup, settled, show_the_camera
 from tui.app import PbdApp
 
@@ -34,7 +34,7 @@ async def draw(directory: Path, name: str, scene: Scene) -> Path:
         store = ActionStore(data)
         teach(store)
         serve_actions(hub, store, [])
-        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell")
+        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell", bridge=hub_bridge(hub))
         async with app.run_test(size=SIZE) as pilot:
 
             async def then(p: Pilot) -> None:

@@ -12,7 +12,7 @@ import pytest
 from textual.pilot import Pilot
 
 from services.executor.store import ActionStore
-from tests.tui.helpers import TAUGHT, fixed_network, serve_actions, stage_world, teach, until
+from tests.tui.helpers import TAUGHT, fixed_network, hub_bridge, serve_actions, stage_world, teach, until
 from tests.tui.test_snapshots import settled
 from tui.actions_screen import ActionsScreen, created_text
 from tui.app import PbdApp
@@ -44,7 +44,7 @@ async def actions_screen(
         world = stage_world(hub)
         if serve:
             serve_actions(hub, store, runs)
-        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell")
+        app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell", bridge=hub_bridge(hub))
         async with app.run_test(size=size) as pilot:
             await settled(app, hub)(pilot)
             await pilot.press("f4")

@@ -13,7 +13,7 @@ from typing import Any
 import pytest
 
 from tests.processes import Launcher, Network
-from tests.tui.helpers import OBJECTS, until
+from tests.tui.helpers import OBJECTS, hub_bridge, until
 from tui.app import PbdApp
 from tui.clarify import ClarifyPrompt
 from tui.conversation import Conversation
@@ -29,7 +29,7 @@ async def test_command_then_clarification_chosen_from_the_list(network: Network,
     results: queue.Queue[dict[str, Any]] = queue.Queue()
     hub.subscribe(hub.keys.nlu_result, results.put)
     launcher.start("nlu")
-    app = PbdApp(network.client_options, probe_seconds=None)
+    app = PbdApp(network.client_options, probe_seconds=None, bridge=hub_bridge(hub))
     async with app.run_test(size=(120, 40)) as pilot:
         await until(
             pilot,
