@@ -26,6 +26,7 @@ from typing import Any
 
 import psutil
 import pytest
+import zenoh
 from textual.pilot import Pilot
 
 from shared.bus import Bus
@@ -34,6 +35,7 @@ from shared.messages import Say
 from shared.robot import ROBOT
 from tests.processes import start_up
 from tests.tui.helpers import until
+from tests.waiting import eventually
 from tui.app import PbdApp
 from tui.conversation import Conversation
 
@@ -110,15 +112,15 @@ class Robot:
 
 def _wait_listening(port: int, timeout: float = 60) -> None:
     """Until the router accepts connections (a session opened before that would not find it)."""
-    deadline = time.monotonic() + timeout
-    while True:
+
+    def accepting() -> bool:
         try:
             socket.create_connection(("127.0.0.1", port), timeout=1).close()
-            return
         except OSError:
-            if time.monotonic() > deadline:
-                raise
-            time.sleep(0.2)
+            return False
+        return True
+
+    eventually(accepting, timeout, f"the router accepting connections on port {port}")
 
 
 def _child(up: subprocess.Popen[str], name: str) -> psutil.Process:
@@ -144,16 +146,22 @@ async def _until_progress(
     robot has done nothing towards it (``progressing()`` false) for ``quiet``
     seconds, or after ``LIMIT`` seconds in all.
     """
-    started = last_progress = time.monotonic()
-    while not condition():
+    last_progress = time.monotonic()
+
+    def done() -> bool:
+        nonlocal last_progress
+        if condition():
+            return True
         now = time.monotonic()
         if progressing():
             last_progress = now
-        if now - last_progress > quiet or now - started > LIMIT:
+        if now - last_progress > quiet:
             raise AssertionError(
                 f"timed out waiting for {what} (no progress for {now - last_progress:.0f} s); lately: {explain()}"
             )
-        await pilot.pause(0.05)
+        return False
+
+    await until(pilot, done, LIMIT, what)
 
 
 async def _restarted(
@@ -278,11 +286,19 @@ async def test_each_service_killed_mid_work_is_restarted_and_the_robot_carries_o
             since = len(robot.said)
             perception = _child(up, "perception")
             perception.send_signal(signal.SIGSTOP)
+            asked = threading.Event()
+
+            def in_flight(query: zenoh.Query) -> None:  # no answer: the request waits on perception, held still
+                asked.set()
+                query.drop()
+
+            watching = bus.session.declare_queryable(bus.keys.record, in_flight)
             reply = bus.request(bus.keys.executor_control("command"), {"procedure": "record", "args": {}})
             assert reply["ok"], reply
             await until(pilot, lambda: robot.robot.get("busy") == "record", 30, "the record taken up")
             await _until_progress(pilot, robot.arms_at_side, busy, "the arms out of the view", robot.recent_changes)
-            await pilot.pause(2.0)  # the head already on the table: the query goes out as the last arm arrives
+            await until(pilot, asked.is_set, 60, "the executor's request to perception")
+            watching.undeclare()
             perception.send_signal(signal.SIGKILL)
             cut = "I couldn't finish looking at the table: the perception service stopped, so it was interrupted."
             await _until_progress(
