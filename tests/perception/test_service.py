@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import queue
 import threading
 import time
@@ -121,9 +122,11 @@ def test_record_answers_from_fresh_settled_frames(feed, good_cloud):
     feed.until(good_cloud, lambda m: len(m["objects"]) == 2)
     stop = threading.Event()
 
-    def keep_publishing() -> None:
-        while not stop.wait(0.2):
+    def keep_publishing() -> None:  # the next cloud once perception has answered the last one
+        while not stop.is_set():
             feed.cloud.put({**good_cloud, "stamp": time.time()})
+            with contextlib.suppress(queue.Empty):
+                feed.received.get(timeout=1.0)
 
     publisher = threading.Thread(target=keep_publishing, daemon=True)
     publisher.start()
