@@ -141,10 +141,13 @@ class SpeechService:
             self.feed(pcm[start : start + step])
         self.end_of_stream()
 
+    def _hears_itself(self) -> bool:
+        """Whether the robot is speaking now: what any microphone picks up then is mostly its own voice."""
+        return self.speaker is not None and self.speaker.speaking.is_set()
+
     def _on_microphone(self, pcm: np.ndarray) -> None:
-        if self.speaker is not None and self.speaker.speaking.is_set():
-            return  # do not hear the robot's own voice
-        self.feed(pcm)
+        if not self._hears_itself():
+            self.feed(pcm)
 
     def _on_stream(self, message: SpeechAudio) -> None:
         pcm = np.asarray(message.pcm)
@@ -152,10 +155,12 @@ class SpeechService:
             log.warning("speech/audio chunk ignored: pcm must be 1-D int16, got %s %s", pcm.dtype, pcm.shape)
             return
         try:
-            self.feed(resample(pcm, message.rate))
+            pcm = resample(pcm, message.rate)
         except AudioError as exc:
             log.warning("speech/audio chunk ignored: %s", exc)
             return
+        if not self._hears_itself():  # a remote microphone hears the robot's voice as a local one does
+            self.feed(pcm)
         with self._audio_lock:
             self._streamed_at = None if message.end else time.monotonic()
         if message.end:
