@@ -7,7 +7,6 @@ the pick-up is judged by where the cup is in the physics simulation.
 from __future__ import annotations
 
 import queue
-import time
 from typing import Any
 
 import numpy as np
@@ -83,7 +82,12 @@ async def test_pick_up_through_the_ui(network: Network, launcher: Launcher, tmp_
             timeout=150,
             what="the cup held and the robot idle",
         )
-        time.sleep(1.0)  # let the physics settle a moment with the cup in the hand
+        await until(
+            pilot,
+            lambda: float(truth[cup_truth]["position"][2]) > table_z + 0.03,
+            timeout=10,
+            what="the cup lifted in the simulator's truth",
+        )
         lifted = float(truth[cup_truth]["position"][2])
         assert lifted > table_z + 0.03, f"the cup is at z={lifted:.3f}, it stood at {table_z:.3f}"
         assert app.world.highlighted == cup
