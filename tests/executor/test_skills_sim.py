@@ -72,3 +72,39 @@ def test_an_object_carried_away_goes_back_where_it_stood(stack: Stack) -> None:
     verdict = stack.judged("obj0", "down")
     assert verdict.success, verdict
     assert np.linalg.norm(stack.position("obj0")[:2] - stood[:2]) < 0.03, stack.position("obj0")
+
+
+@pytest.mark.slow
+def test_a_skill_done_for_each_cup_moves_each_in_the_order_said(stack: Stack) -> None:
+    stack.load_scene("default")
+    ok(stack.command("create_action", utterance="create a new action"))
+    ok(stack.command("pick_up", {"arm": "right", "object": stack.pid("obj0")}, utterance="pick up the red cup"))
+    ok(
+        stack.command(
+            "move_abs_dir", {"arm": "right", "direction": "forward", "distance": 0.05}, utterance="move forward"
+        )
+    )
+    ok(stack.command("place_abs", {"arm": "right", "destination": "table"}, utterance="put it down"))
+    ok(stack.command("name_action", {"name": "push on"}, utterance="call this action push on"))
+
+    stack.load_scene("default")
+    stood = {cup: stack.position(cup) for cup in ("obj0", "obj1")}
+    said = ok(
+        stack.command(
+            "run_skill",
+            {"skill": "push on", "each": [stack.pid("obj1"), stack.pid("obj0")]},
+            utterance="push on every cup",
+            timeout=400,
+        )
+    )
+    narration = texts(said, "narration")
+    assert narration[0].startswith("I'll run \u201cpush on\u201d with the ") and ", then the " in narration[0], (
+        narration
+    )
+    assert [line for line in narration if line.startswith("Completed")] == ["Completed \u201cpush on\u201d."] * 2
+    first = next(i for i, line in enumerate(narration) if line.startswith("Running"))
+    assert "blue" in narration[first] or "left" in narration[first], narration  # the blue cup first, as said
+    for cup in ("obj0", "obj1"):
+        went = stack.position(cup) - stood[cup]
+        assert went[0] > 0.01 and np.linalg.norm(went[:2]) > 0.02, (cup, went)  # put down where the table lets it
+        assert stack.judged(cup, "down").success
