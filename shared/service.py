@@ -17,7 +17,7 @@ from collections.abc import Callable, Sequence
 from shared.bus import Bus
 from shared.config import add_session_arguments, options_from_args
 from shared.logs import setup_logging
-from shared.signals import stop_on
+from shared.signals import ignore_from_now, stop_on
 
 ServiceBody = Callable[[Bus, argparse.Namespace, threading.Event], None]
 
@@ -29,6 +29,7 @@ LOOK_S = 1.0
 TOKEN_GRACE_S = 2.0
 # The exit code of a service that found itself already running: a supervisor does not restart it.
 ALREADY_RUNNING = 3
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)  # what ends a service: Ctrl-C, and its supervisor stopping it
 
 
 class AlreadyRunning(Exception):
@@ -85,7 +86,7 @@ def run_service(
         parser.error(str(exc))
     stop = threading.Event()
 
-    stop_on((signal.SIGINT, signal.SIGTERM), stop, log, "received %s, stopping")
+    stop_on(STOP_SIGNALS, stop, log, "received %s, stopping")
     try:
         with Bus(options) as bus:
             if already_alive(bus, name):
@@ -99,6 +100,8 @@ def run_service(
     except Exception:
         log.exception("%s failed", name)
         return 1
+    finally:
+        ignore_from_now(STOP_SIGNALS)
     log.info("%s stopped", name)
     return 0
 

@@ -37,5 +37,17 @@ def stop_on(signals: Iterable[signal.Signals], stop: threading.Event, log: loggi
     threading.Thread(target=watch, name="signals", daemon=True).start()
 
 
+def ignore_from_now(signals: Iterable[signal.Signals]) -> None:
+    """Ignore ``signals`` for the rest of the process (call from main, once stopping is under way).
+
+    Why: while Python shuts down it puts back the default action of every
+    signal it had a handler for, so a signal of a burst still arriving then
+    (a parent dying as the launcher stops it) would end a cleanly stopped
+    process with that signal's status. An ignored signal is left ignored.
+    """
+    for signum in signals:
+        signal.signal(signum, signal.SIG_IGN)
+
+
 def _noted_by_the_wakeup_pipe(_signum: int, _frame: object) -> None:
     """The Python-level handler: nothing to do, the number is already in the pipe."""
