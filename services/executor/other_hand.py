@@ -7,7 +7,9 @@ says so. A stretch of steps moves to the other hand whole: from a pick-up to
 the placement that lets go of what it picked up, and only when the other
 hand is free and has no step of its own in between. Whether a hand reaches
 is asked of its planning model as the reach map does (IK only): a grasp for
-the pick-up, and the hand's way to the landmark for a relative placement.
+the pick-up, and for a relative placement the hand's way to that side of
+the landmark and the hover over the release, with the object held as one
+of those grasps holds it.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from services.executor.scene import SceneSnapshot
 from shared.contract import BOTH, PLACES, other_arm
 
 LETS_GO = PLACES | {"place_back"}
+GRASPS_TRIED = 2  # grasps the object may be held by, for whether a hand reaches its release
 
 
 @dataclass(frozen=True)
@@ -36,14 +39,25 @@ class Swap:
 
 
 def reaches(kin: ArmKinematics, snap: SceneSnapshot, carried: str, relation: str | None, landmark: str | None) -> bool:
-    """Whether the empty hand of ``kin`` can pick ``carried`` up and (``relation``) get to that side of ``landmark``."""
+    """Whether the empty hand of ``kin`` can pick ``carried`` up and (``relation``) get to that side of
+    ``landmark``, and hold the object over its release there as one of its first grasps would hold it (the
+    arm's length, as a placement that is out of reach says it)."""
     sync(kin, snap, None)
-    if not can_pick(kin, snap.objects[carried], snap.near_edge):
+    obj = snap.objects[carried]
+    if not can_pick(kin, obj, snap.near_edge):
         return False
     if relation is None or landmark is None:
         return True
     box = Box.of(snap.objects[landmark])
-    return kin.first_reachable(targets.move_relation(relation, box, kin.fk(), None, snap.table_z)) is not None
+    if kin.first_reachable(targets.move_relation(relation, box, kin.fk(), None, snap.table_z)) is None:
+        return False
+    grasps = [g for g in targets.grasps(obj, snap.near_edge) if kin.ik(g.pregrasp) is not None][:GRASPS_TRIED]
+    for grasp in grasps:
+        held = targets.held_in_hand(carried, Box.of(obj), grasp.grasp, snap.table_z, seen_as=obj)
+        hovers = targets.place_relation(relation, box, grasp.grasp, held, snap.table_z)
+        if any(kin.ik(hover, check_collisions=False) is not None for hover, _ in hovers):
+            return True
+    return False
 
 
 def swaps(

@@ -56,3 +56,12 @@ def test_far_on_the_left_the_left_hand_takes_over_a_right_hand_pick_and_place(ar
 def test_within_reach_of_the_recorded_hand_nothing_changes(arms: dict[str, ArmKinematics]) -> None:
     snap = snapshot(cup("c", 0.55, -0.10), cup("b", 0.60, 0.05, color="blue"))
     assert swaps(steps("right"), 1, found, arms, snap, {"right": True, "left": True}) == []
+
+
+def test_a_release_beyond_the_recorded_hand_moves_the_pick_and_place_to_the_other(
+    arms: dict[str, ArmKinematics],
+) -> None:
+    snap = snapshot(cup("c", 0.50, 0.05), cup("b", 0.55, -0.30, color="blue"))  # the cup within both hands' reach
+    assert not reaches(arms["left"], snap, "c", "behind", "b") and reaches(arms["right"], snap, "c", "behind", "b")
+    assert swaps(steps("left"), 1, found, arms, snap, {"right": True, "left": True}) == [Swap(1, 2, "right")]
+    assert swaps(steps("left"), 2, found, arms, snap, {"right": True, "left": True}) == []  # no pick-up to move
