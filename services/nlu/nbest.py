@@ -35,11 +35,14 @@ Why "stop" first: a stop among the hypotheses with at least ``STOP_SHARE``
 is acted on, whatever outweighs it. Stopping when not asked to costs saying
 the command again; moving on when told to stop may cost what the arm hits.
 
-``NLU_WEIGHT`` was chosen on the speech benchmark, in the
-middle of the range where it does best; ``ACT_SHARE`` and ``CONFIRM_SHARE``
-on the same set for the fewest wrong motions at a small cost in questions
-(``hfpbd bench speech`` prints the sweep), then checked once on the
-held-out set.
+``NLU_WEIGHT`` was chosen on the speech benchmark, in the middle of the
+range where it does best. ``CONFIRM_SHARE`` was chosen on the benchmark's
+tuning set (``hfpbd bench speech --sweep``): lower, more guesses are asked
+about that are no command at all; higher, more commands meant are dropped.
+On that set the searches' agreement alone decides what is acted on (when
+they agree, the command holds nearly all the mass, so any ``ACT_SHARE``
+from 0.5 to 0.95 acts on the same commands); ``ACT_SHARE`` stays high so
+that an agreement the n-best does not back is asked about.
 """
 
 from __future__ import annotations
