@@ -30,7 +30,7 @@ from services.speech.vocabulary import SpeechVocabulary, nlu_vocabulary
 from services.speech.voice import Speaker
 from shared.bus import Bus, BusTimeout, RemoteError
 from shared.codec import MessageError
-from shared.messages import Objects, Say, SpeechAudio, SpeechPtt, typed
+from shared.messages import Objects, Say, SayKind, SpeechAudio, SpeechPtt, Utterance, typed
 
 log = logging.getLogger("hfpbd.speech")
 
@@ -312,10 +312,10 @@ class SpeechService:
                 "info",
             )
 
-    def _tell(self, text: str, kind: str) -> None:
+    def _tell(self, text: str, kind: SayKind) -> None:
         """Something the user must know: logged here and shown (and spoken) like the robot's words."""
         (log.warning if kind == "error" else log.info)("%s", text)
-        self._say.put({"text": text, "kind": kind})
+        self._say.put(Say(text=text, kind=kind))
 
     def _publish_status(self) -> None:
         self._status.put(
@@ -333,6 +333,6 @@ class SpeechService:
         )
 
 
-def utterance_message(hypotheses: list[Hypothesis]) -> dict[str, Any]:
+def utterance_message(hypotheses: list[Hypothesis]) -> Utterance:
     """``dialog/utterance`` for the NLU: the top string plus the n-best to rescore."""
-    return {"text": hypotheses[0].text, "source": "speech", "nbest": [h.to_json() for h in hypotheses]}
+    return Utterance(text=hypotheses[0].text, source="speech", nbest=[h.to_json() for h in hypotheses])
