@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Idempotent setup for a fresh Debian bookworm machine: system packages the
 # project needs (software Vulkan driver from bookworm-backports when no GPU
-# Vulkan driver is present, espeak-ng, tmux), a virtual environment in .venv,
-# and the project installed into it with its pinned dependencies.
+# Vulkan driver is present, espeak-ng, flite for the speech benchmark's
+# held-out voices, tmux), a virtual environment in .venv, and the project
+# installed into it with its pinned dependencies.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -20,7 +21,7 @@ mesa_is_new_enough() {
     [ -n "$v" ] && dpkg --compare-versions "$v" ge 24.3
 }
 
-apt_packages=(espeak-ng tmux libportaudio2 libgl1 libegl1 libglib2.0-0)
+apt_packages=(espeak-ng flite tmux libportaudio2 libgl1 libegl1 libglib2.0-0)
 missing=()
 for p in "${apt_packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
