@@ -24,7 +24,8 @@ question more than hearing a command right away. So a command is acted on
 only when the recogniser's searches agree and the n-best stands behind it:
 every search ranked first a sentence of this command (``first`` on the
 hypotheses, see ``services.speech.recogniser``) and the command gathers at
-least ``ACT_SHARE`` of the probability mass. When the searches disagree or
+least ``ACT_SHARE`` of the probability mass, in more than one word
+(``MIN_WORDS``). When the searches disagree or
 the share is lower, but the command still gathers ``CONFIRM_SHARE``, the
 robot asks "Did you say: ...?" (:meth:`Choice.confirmation`, a question
 whose single candidate is the command and which the dialogue settles: a yes
@@ -62,6 +63,10 @@ NLU_WEIGHT = 0.1  # λ: weight of the model's log score against the recogniser's
 ACT_SHARE = 0.9  # the chosen command's least share of the n-best probability mass to act on it at once
 CONFIRM_SHARE = 0.3  # ... to ask whether it was meant; below, it is not acted on at all
 STOP_SHARE = 0.1  # ... for a stop, which is acted on whatever outweighs it
+# words a command must be heard in to be acted on at once: a single short word is what laughter, "um" and
+# the robot's own voice most often fit ("hehe" is heard as "repeat" by every search), so "undo", "again" or
+# "execute" alone is asked about, and "undo that", "do it again" or "execute the action" are not
+MIN_WORDS = 2
 NOT_MADE_OUT = "I didn't catch that. Please say it again."
 STOP = Command("stop")
 
@@ -108,7 +113,7 @@ class Choice:
             return Decision.ACT if self.agreed else Decision.REJECT
         if result.commands == (STOP,) and self.share >= STOP_SHARE:
             return Decision.ACT
-        if self.agreed and self.share >= act:
+        if self.agreed and self.share >= act and len(self.reading.text.split()) >= MIN_WORDS:
             return Decision.ACT
         if self.share >= confirm:
             return Decision.CONFIRM

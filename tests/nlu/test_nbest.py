@@ -147,3 +147,10 @@ def test_a_stop_heard_clearly_enough_to_act_on_wins_over_likelier_commands(model
     # below STOP_SHARE, a stop is one more guess
     faint = (("pick up the red cup", 0.95), ("stop", STOP_SHARE / 2))
     assert command(pick(model, *faint))["procedure"] == "pick_up"
+
+
+def test_a_single_word_is_asked_about_even_when_every_search_heard_it(model: Model) -> None:
+    alone = pick(model, ("repeat", 1.0, 2))
+    assert alone.agreed and alone.decision() is Decision.CONFIRM
+    assert pick(model, ("do it again", 1.0, 2)).decision() is Decision.ACT
+    assert pick(model, ("stop", 1.0, 2)).decision() is Decision.ACT  # a stop is never delayed by a question
