@@ -101,7 +101,7 @@ def salient_labels(objects: list[dict]) -> frozenset[str]:
             contexts.add(scene.matching({color}, {kind}))
     for kind in set(scene.types):
         contexts.add(scene.matching(set(), {kind}))
-    labels = set()
+    labels: set[str] = set()
     for context in contexts:
         if len(context) < 2:
             continue
@@ -253,6 +253,8 @@ class _Builder:
             if not _fits(procedure, implied):
                 continue
             verb = self.rules.define(f"verb_{procedure}{_suffix(implied)}", phrases)
+            if verb is None:
+                continue
             said = {slot for slot, _ in implied}
             for shape in SHAPES.get(procedure, ["<verb>"]):
                 if "target" in said and "<number>" in shape:
