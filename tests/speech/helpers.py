@@ -6,6 +6,7 @@ import numpy as np
 
 from services.speech.audio import RATE
 from shared.bus import Bus
+from shared.messages import SpeechAudio
 
 
 def stream(bus: Bus, pcm: np.ndarray, chunk_s: float = 0.1) -> None:
@@ -18,4 +19,4 @@ def stream(bus: Bus, pcm: np.ndarray, chunk_s: float = 0.1) -> None:
     publisher = bus.publisher(bus.keys.speech("audio"), large=True)
     step = int(RATE * chunk_s)
     for start in range(0, len(pcm), step):
-        publisher.put({"pcm": pcm[start : start + step], "rate": RATE})
+        publisher.put(SpeechAudio(pcm=pcm[start : start + step], rate=RATE))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -21,7 +22,7 @@ from services.speech.vocabulary import nlu_vocabulary
 
 pytestmark = pytest.mark.skipif(not espeak.available(), reason="espeak-ng is not installed")
 
-WORLD = {
+WORLD: dict[str, Any] = {
     "objects": [
         {"id": "obj0", "color": "red", "type": "cup", "position": [0.55, -0.15, 0.77], "size": [0.07, 0.07, 0.1]},
         {"id": "obj1", "color": "blue", "type": "cup", "position": [0.6, 0.15, 0.77], "size": [0.07, 0.07, 0.1]},

@@ -141,7 +141,7 @@ def test_recogniser_loads_the_grammar_and_swaps_it_when_the_scene_changes(full):
 
 def test_every_spoken_question_and_distance_means_what_the_nlu_reads_from_it(full):
     model = Model(parse_world({"objects": TWO_CUPS, "robot": {"grippers": {"right": "open", "left": "open"}}}))
-    for topic, said in sentence_templates()["questions"].items():  # type: ignore[union-attr]
+    for topic, said in sentence_templates()["questions"].items():  # type: ignore[attr-defined]
         for question in said:
             result = model.parse(question.format(object="the leftmost cup"))
             assert isinstance(result, Answer) and result.topic == topic, question
