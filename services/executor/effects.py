@@ -6,8 +6,9 @@ table nobody asked for. So after each replayed pick-up and placement the
 executor takes a fresh look and asks here whether the step's effect holds:
 after a pick-up the object is in that hand; after a placement it stands
 upright, out of the hand, on the table or in its relation to the landmark
-(on top: over the landmark's outline; beside: on that side, close to it).
-The answer is the sentence that says what differs, or None.
+(on top: over the landmark's outline; beside: on that side, close to it);
+a move carrying it along the table went most of its way. The answer is
+the sentence that says what differs, or None.
 
 The thresholds are perception's, not the placement's: an object's box as
 seen may be off by a centimetre or two and a landmark partly hidden by the
@@ -25,10 +26,13 @@ from services.executor.geometry import Box
 from services.executor.grounding import REJECT, cost
 from services.executor.referring import refer
 from services.executor.scene import SceneSnapshot
-from shared.contract import VALUE_WORDS
+from shared.contract import DISTANCE, VALUE_WORDS
 from shared.messages import PerceivedObject
 
-CHECKED = frozenset({"pick_up", "place_abs", "place_rel", "place_back"})
+CHECKED = frozenset({"pick_up", "place_abs", "place_rel", "place_back", "move_abs_dir"})
+PLACEMENTS = frozenset({"place_abs", "place_rel", "place_back"})
+ALONG_TABLE = frozenset({"left", "right", "forward", "backward"})  # directions a carried object is slid over the table
+SHORT = 0.5  # share of a carried move's distance the hand must go: less was stopped by something in the way
 TIPPED_SLACK = 0.01  # metres by which a tall object's height must beat its width to count as standing up
 OVER_MARGIN = 0.02  # metres outside a landmark's outline an object on top of it may seem to stand
 BESIDE_MAX = 0.15  # metres, edge to edge: farther than this is not beside any more
@@ -42,13 +46,19 @@ SIDE_OF = {"next_to": ("left_of", "right_of"), "near": ("left_of", "right_of", "
 
 
 def judge(
-    procedure: str, args: dict[str, Any], moved: PerceivedObject | None, before: set[str], snap: SceneSnapshot
+    procedure: str,
+    args: dict[str, Any],
+    moved: PerceivedObject | None,
+    before: set[str],
+    snap: SceneSnapshot,
+    went: float | None = None,
 ) -> str | None:
     """What differs from the effect ``procedure`` was taught to have (None: it holds).
 
     ``moved``: the object the step moves, as seen before it (the one picked
-    up, or the one the hand held before a placement); ``before``: the ids
-    seen before the step; ``snap``: what is seen after it.
+    up, or the one the hand held before a placement or a move); ``before``:
+    the ids seen before the step; ``snap``: what is seen after it; ``went``:
+    for a move, how far the hand went in its direction (metres).
     """
     if procedure not in CHECKED or moved is None:
         return None
@@ -56,6 +66,8 @@ def judge(
     words = refer(snap.objects, moved.id, moved)
     if procedure == "pick_up":
         return _in_hand(arm, moved, words, snap)
+    if procedure == "move_abs_dir":
+        return _carried(args, went, words)
     now = _found_again(moved, before, snap)
     if now is None:
         return wording.sentence(f"I can't see {words} any more after putting it down")
@@ -97,6 +109,24 @@ def _in_hand(arm: str, wanted: PerceivedObject, words: str, snap: SceneSnapshot)
     if in_hand is not None and in_hand != wanted.id:
         return wording.sentence(f"My {arm} hand is holding {refer(snap.objects, in_hand)}, not {words}")
     return wording.sentence(f"{words} is still standing where it was, so my {arm} hand holds something else")
+
+
+def _carried(args: dict[str, Any], went: float | None, words: str) -> str | None:
+    """A move carrying an object along the table went most of its way (a move up or down may end pressed)."""
+    direction = args["direction"]
+    distance = float(args.get("distance") or DISTANCE.default_m)
+    if direction not in ALONG_TABLE or went is None or went >= SHORT * distance:
+        return None
+    return wording.sentence(
+        f"My {args['arm']} hand carried {words} only {round(100 * max(went, 0.0))} cm "
+        f"{VALUE_WORDS[direction]}, not {round(100 * distance)} cm: something was in the way"
+    )
+
+
+def hidden(moved: PerceivedObject, snap: SceneSnapshot) -> bool:
+    """Whether ``moved`` is out of view now (under the hand that let go of it): no judgement is sound then."""
+    now = snap.objects.get(moved.id)
+    return now is not None and now.visible is False
 
 
 def _in_relation(

@@ -50,6 +50,7 @@ import msgspec
 import numpy as np
 
 from services.executor import effects, other_hand, skills, torso, wording
+from services.executor import geometry as geo
 from services.executor.actions_control import apply as apply_actions_request
 from services.executor.actions_control import step_words
 from services.executor.commands import ADMIN, BOTH, RECORDED, CommandError, Step, check, check_compound
@@ -617,7 +618,7 @@ class Executor:
             if not self.cancel.is_set():
                 self.say(f"{_capital(name)} stopped at step {i} of {len(steps)}.", "error")
             return False
-        problem = self._effect_problem(step["procedure"], args, moved, set(snap.objects))
+        problem = self._effect_problem(step["procedure"], args, moved, snap)
         if problem is None:
             return True
         if i < len(steps):
@@ -641,18 +642,28 @@ class Executor:
         return None
 
     def _effect_problem(
-        self, procedure: str, args: dict[str, Any], moved: PerceivedObject | None, before: set[str]
+        self, procedure: str, args: dict[str, Any], moved: PerceivedObject | None, before: SceneSnapshot
     ) -> str | None:
-        """What differs, seen afresh, from the effect a replayed step was taught to have (None: it holds)."""
+        """What differs, seen afresh, from the effect a replayed step was taught to have (None: it holds).
+
+        A second look is taken before a step counts as not holding; when the
+        object was out of view under the hand that let go of it, that hand
+        first moves aside.
+        """
         if procedure not in effects.CHECKED or moved is None:
             return None
-        for _ in range(LOOKS):
+        went = _went(args, before, self.scene.snapshot()) if procedure == "move_abs_dir" else None
+        for look in range(LOOKS):
             try:
+                if look and procedure in effects.PLACEMENTS and effects.hidden(moved, self.scene.snapshot()):
+                    self.procedures.move_abs_dest(args["arm"])
                 self._record_objects()
             except StepFailed as exc:
                 return f"I couldn't check that step: {str(exc)[:1].lower()}{str(exc)[1:]}"
+            except Stopped:
+                return "I was stopped before I could check that step."
             snap = self.scene.snapshot()
-            problem = effects.judge(procedure, args, moved, before, snap)
+            problem = effects.judge(procedure, args, moved, set(before.objects), snap, went)
             if problem is None:
                 return None
             log.info(
@@ -1023,3 +1034,15 @@ def _no_role(name: str, role: str) -> str:
 def _capital(text: str) -> str:
     """``text`` with its first letter a capital, to begin a sentence with an action's name."""
     return text[:1].upper() + text[1:]
+
+
+def _went(args: dict[str, Any], before: SceneSnapshot, after: SceneSnapshot) -> float | None:
+    """How far the hand of a directional move went in its direction (None: the hand's place is not known)."""
+    arm = args.get("arm")
+    if arm not in ARMS or before.robot is None or after.robot is None:
+        return None
+    start, end = before.robot.ee.get(arm), after.robot.ee.get(arm)
+    if start is None or end is None:
+        return None
+    unit = np.asarray(geo.DIRECTIONS[args["direction"]], float)
+    return float(np.dot(np.asarray(end[:3], float) - np.asarray(start[:3], float), unit))

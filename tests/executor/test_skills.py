@@ -437,3 +437,21 @@ def test_a_cup_lifted_off_a_box_the_tracker_marked_held_counts_as_picked_up() ->
     assert effects.judge("pick_up", {"arm": "right", "object": "obj0"}, on_box, {"obj0", "obj3"}, stayed) == words(
         "{obj0} is still standing where it was, so my right hand holds something else", stayed
     )
+
+
+@pytest.mark.parametrize(
+    "direction, went, expected",
+    [
+        ("backward", 0.019, "My right hand carried {obj0} only 2 cm backward, not 10 cm: something was in the way"),
+        ("backward", 0.06, None),
+        ("down", 0.0, None),  # a move down may end pressed on the table or a plate
+        ("left", None, None),  # the hand's place was not known
+    ],
+)
+def test_a_carried_move_along_the_table_that_stopped_short_is_said(
+    direction: str, went: float | None, expected: str | None
+) -> None:
+    held = obj("obj0", "red", "cup", 0.5, 0.1, CUP, z=0.9, held_by="right")
+    seen = snapshot([held, BLUE], {"right": True})
+    judged = effects.judge("move_abs_dir", {"arm": "right", "direction": direction}, held, {"obj0", "obj1"}, seen, went)
+    assert judged == (None if expected is None else words(expected, seen))

@@ -369,3 +369,23 @@ def test_a_role_not_said_whose_taught_object_is_gone_asks_for_one(robot: tuple[E
     kind, text = bus.said()[-1]
     assert kind == "error" and text.startswith("There is no white plate on the table any more")
     assert text.endswith("Tell me which object to use in its place.") and bus.requests == []
+
+
+def test_an_object_hidden_under_the_hand_that_let_go_is_looked_at_again_with_that_hand_aside(
+    robot: tuple[Executor, RecordingBus], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    executor, bus = robot
+    held = PerceivedObject(id="obj0", color="red", type="cup", position=(0.6, 0.25, 0.87), size=CUP, visible=False)
+    on_plate = PerceivedObject(id="obj0", color="red", type="cup", position=(0.6, 0.25, 0.815), size=CUP)
+    executor.scene.update_objects([held, BLUE, PLATE_0], TABLE)  # stale, up where the hand let go of it
+    aside: list[str] = []
+
+    def move_aside(arm: str, destination: str = "side") -> None:
+        aside.append(arm)
+        executor.scene.update_objects([on_plate, BLUE, PLATE_0], TABLE)  # seen once the hand is out of the way
+
+    monkeypatch.setattr(executor, "_record_objects", lambda: list(executor.scene.snapshot().objects.values()))
+    monkeypatch.setattr(executor.procedures, "move_abs_dest", move_aside)
+    args = {"arm": "right", "relation": "on_top_of", "object": "obj2"}
+    assert executor._effect_problem("place_rel", args, held, executor.scene.snapshot()) is None
+    assert aside == ["right"]
