@@ -57,9 +57,20 @@ def _unpack_hook(obj: dict) -> Any:
 
 
 def _fields(message: msgspec.Struct) -> dict[str, Any]:
-    """A typed message's fields as the map the wire carries; a field left unset (None) is not sent."""
-    values = ((name, getattr(message, name)) for name in message.__struct_fields__)
-    return {name: value for name, value in values if value is not None}
+    """A typed message's fields as the map the wire carries.
+
+    Every field is sent (a null as null: the design's payloads say "or
+    null", and tools reading the plain maps rely on the key), except in a
+    type declared ``omit_defaults``, whose optional parts are sent only when
+    given, as ``hfpbd nlu parse`` prints a result.
+    """
+    if not message.__struct_config__.omit_defaults:
+        return {name: getattr(message, name) for name in message.__struct_fields__}
+    return {
+        field.name: getattr(message, field.name)
+        for field in msgspec.structs.fields(message)
+        if field.default is msgspec.NODEFAULT or getattr(message, field.name) != field.default
+    }
 
 
 def encode(message: dict[str, Any] | msgspec.Struct) -> bytes:

@@ -43,14 +43,14 @@ class Message(msgspec.Struct, kw_only=True):
     v: int = 1
 
 
-class Utterance(Message):
+class Utterance(Message, omit_defaults=True):
     text: str
     choice: int | None = None
     source: str | None = None
     nbest: list[dict[str, Any]] | None = None
 
 
-class Say(Message):
+class Say(Message, omit_defaults=True):
     text: str
     kind: SayKind
     candidates: list[str] | None = None
@@ -185,7 +185,7 @@ class Objects(Message):
     table: Table | None = None
 
 
-class CommandStep(msgspec.Struct, kw_only=True):
+class CommandStep(msgspec.Struct, kw_only=True, omit_defaults=True):
     """One command inside a result: a further step of a compound (``then``) or a clarification's candidate."""
 
     procedure: str
@@ -194,7 +194,7 @@ class CommandStep(msgspec.Struct, kw_only=True):
     text: str | None = None
 
 
-class NluResult(Message):
+class NluResult(Message, omit_defaults=True):
     """A command (``procedure``, ``args``, maybe ``then``), a clarification or an answer, for ``utterance``.
 
     ``kind`` and ``topic`` are the contract's enumerations, checked at the
@@ -260,6 +260,20 @@ class SpeechAudio(Message):
         _require_array("speech_audio", "pcm", self.pcm)
 
 
+class SpeechStatus(Message, kw_only=True):
+    """``speech/status``: whether the robot can hear and speak, and how it listens."""
+
+    stamp: float
+    microphone: bool
+    microphone_problem: str | None = None
+    voice: bool
+    voice_problem: str | None = None
+    trigger: str
+    talking: bool = False
+    grammar_words: int = 0
+    grammar: str | None = None  # "nlu" once the NLU's vocabulary grammar is loaded, else "built-in"
+
+
 class SpeechPtt(Message):
     on: bool
 
@@ -291,6 +305,7 @@ TYPES: dict[str, type[Message]] = {
     "executor_state": ExecutorState,
     "speech_audio": SpeechAudio,
     "speech_ptt": SpeechPtt,
+    "speech_status": SpeechStatus,
     "request": Request,
     "reply": Reply,
 }

@@ -30,7 +30,7 @@ from services.speech.vocabulary import SpeechVocabulary, nlu_vocabulary
 from services.speech.voice import Speaker
 from shared.bus import Bus, BusTimeout, RemoteError
 from shared.codec import MessageError
-from shared.messages import Objects, Say, SayKind, SpeechAudio, SpeechPtt, Utterance, typed
+from shared.messages import Objects, Say, SayKind, SpeechAudio, SpeechPtt, SpeechStatus, Utterance, typed
 
 log = logging.getLogger("hfpbd.speech")
 
@@ -319,17 +319,17 @@ class SpeechService:
 
     def _publish_status(self) -> None:
         self._status.put(
-            {
-                "stamp": time.time(),
-                "microphone": self.microphone is not None,
-                "microphone_problem": self.microphone_problem,
-                "voice": self.speaker is not None and self.speaker.working,
-                "voice_problem": self.speaker.problem if self.speaker is not None else None,
-                "trigger": self.settings.trigger,
-                "talking": self._talk is not None,
-                "grammar_words": len(self.recogniser.vocabulary.words()),
-                "grammar": self.grammar,
-            }
+            SpeechStatus(
+                stamp=time.time(),
+                microphone=self.microphone is not None,
+                microphone_problem=self.microphone_problem,
+                voice=self.speaker is not None and self.speaker.working,
+                voice_problem=self.speaker.problem if self.speaker is not None else None,
+                trigger=self.settings.trigger,
+                talking=self._talk is not None,
+                grammar_words=len(self.recogniser.vocabulary.words()),
+                grammar=self.grammar,
+            )
         )
 
 
