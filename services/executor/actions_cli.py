@@ -31,7 +31,7 @@ def apply_action_op(store: ActionStore, request: dict[str, Any]) -> dict[str, An
     op = request.get("op")
     if op == "list":
         return {"ok": True, "actions": store.summaries(), "current": store.current}
-    number = request.get("number")
+    number: Any = request.get("number")  # any JSON value; the store refuses what is not an action number
     if isinstance(number, str) and number.isdigit():
         number = int(number)
     if op == "show":

@@ -73,7 +73,11 @@ def apply(store: ActionStore, request: dict[str, Any], run: Runner | None = None
             raise StoreError(why)
         return {"ok": True, "number": number, "step": step, "message": why}
     if op == "delete_step":
-        store.edit_steps(number, lambda steps: steps.pop(step - 1))
+
+        def delete(steps: list[dict[str, Any]]) -> None:
+            steps.pop(step - 1)
+
+        store.edit_steps(number, delete)
         return {"ok": True, "number": number, "steps": count - 1}
     to = _whole(request.get("to"), "to")
     if not 1 <= to <= count:

@@ -21,6 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
 from shared.contract import DISTANCE
@@ -322,7 +323,7 @@ def table_release_centers(held_center: np.ndarray, held_size: np.ndarray, table_
 # -- directions, pointing, grasping ---------------------------------------------
 
 
-def shifted(pose: np.ndarray, offset: np.ndarray) -> np.ndarray:
+def shifted(pose: np.ndarray, offset: npt.ArrayLike) -> np.ndarray:
     out = np.array(pose, float)
     out[:3] += offset
     return out

@@ -295,7 +295,9 @@ class ArmKinematics:
                 continue
             padding = TABLE_PADDING if name == "table" else OBJECT_PADDING
             shape = fcl.CollisionObject(fcl.Box(np.maximum(box.size + 2 * padding, 1e-3)))
-            world.add_object(fcl.FCLObject(name, Pose(box.center, [1, 0, 0, 0]), [shape], [Pose()]))
+            # mplib's stubs take only ndarrays for Pose(p, q); pybind11 converts the list as well
+            pose = Pose(box.center, [1, 0, 0, 0])  # type: ignore[call-overload]
+            world.add_object(fcl.FCLObject(name, pose, [shape], [Pose()]))
         self._obstacles = set(boxes) - ({self.held} if self.held else set())
         self._obstacle_boxes = dict(boxes)
 
@@ -326,7 +328,8 @@ class ArmKinematics:
         if world.has_object(name):
             world.remove_object(name)
         self._obstacles.discard(name)
-        relative = _to_pose(tool_pose).inv() * Pose(box.center, [1, 0, 0, 0])
+        # mplib's stubs take only ndarrays for Pose(p, q); pybind11 converts the list as well
+        relative = _to_pose(tool_pose).inv() * Pose(box.center, [1, 0, 0, 0])  # type: ignore[call-overload]
         world.attach_object(
             HELD_PREFIX + name,
             fcl.Box(np.maximum(box.size, 1e-3)),
@@ -587,6 +590,7 @@ class ArmKinematics:
                     return self.timed(lines)
             start = self.full(self.arm_q)
             fixed = {FixedJoint(0, self.torso_idx, float(start[self.torso_idx]))}
+            path: np.ndarray  # mplib's plan() returns an ndarray whose shape types mypy cannot solve here
             for _ in range(PLANNING_TRIES):
                 if self.cancelled:
                     return None
@@ -669,6 +673,7 @@ class ArmKinematics:
             first = self._joint_line(self.arm_q, way)
             second = self._joint_line(way, arm_q) if first is not None else None
             if second is not None:
+                assert first is not None  # second is only computed when first is not None
                 return np.vstack([first, second[1:]])
         return None
 

@@ -233,7 +233,7 @@ class Procedures:
         for hand, held_now in self.held().items():
             if held_now is not None and snap.gripper_state(hand) != "holding":
                 self._set_held(hand, None)  # it fell, or the scene was reset: the hand is empty now
-        object_id = args.get("object")
+        object_id: Any = args.get("object")  # a JSON value, or None; the lookups below refuse what is not an object
         if object_id is not None:
             self._object(snap, object_id)
         arm = args.get("arm")
@@ -249,13 +249,13 @@ class Procedures:
         elif procedure == "place_back":
             self._holding(arm, snap, "put back")
         elif procedure == "pick_up":
-            if held[arm] is not None or gripper == "holding":
-                what = refer(snap.objects, held[arm].object_id, held[arm].seen_as) if held[arm] else "something"
+            mine = held[arm]
+            if mine is not None or gripper == "holding":
+                what = refer(snap.objects, mine.object_id, mine.seen_as) if mine else "something"
                 raise StepFailed(wording.sentence(f"My {arm} hand is already holding {what}"))
             other = other_arm(arm)
-            if (held[other] is not None and held[other].object_id == object_id) or snap.objects[
-                object_id
-            ].held_by == other:
+            theirs = held[other]
+            if (theirs is not None and theirs.object_id == object_id) or snap.objects[object_id].held_by == other:
                 raise StepFailed(wording.sentence(f"My {other} hand is holding {refer(snap.objects, object_id)}"))
         elif procedure == "open" and gripper == "open":
             raise StepFailed(wording.sentence(f"My {arm} hand is already open"))
@@ -265,8 +265,8 @@ class Procedures:
             )
         elif (
             procedure in ("move_rel_dest", "move_rel_dir", "point_to")
-            and held[arm] is not None
-            and held[arm].object_id == object_id
+            and (mine := held[arm]) is not None
+            and mine.object_id == object_id
         ):
             raise StepFailed(wording.sentence(f"I'm holding {refer(snap.objects, object_id)} in my {arm} hand"))
 

@@ -158,7 +158,11 @@ class SimRobot:
 
     def start_arm(self, arm: str, points: np.ndarray, times: np.ndarray, contact: bool = False) -> Started:
         """Start a timed joint trajectory without waiting for it (see :meth:`finish`)."""
-        payload = {"arm": arm, "points": np.asarray(points, np.float64), "times": np.asarray(times, np.float64)}
+        payload: dict[str, Any] = {
+            "arm": arm,
+            "points": np.asarray(points, np.float64),
+            "times": np.asarray(times, np.float64),
+        }
         if contact:
             payload["contact"] = True
         return self._start("arm", payload, float(times[-1]) if len(times) else 0.0)

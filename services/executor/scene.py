@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import copy
 import threading
-from collections.abc import Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -63,7 +63,7 @@ class SceneSnapshot:
         """x of the table edge facing the robot, when it has been seen."""
         return self.table.near_edge if self.table is not None else None
 
-    def obstacles(self, *, skip: set[str] = frozenset()) -> dict[str, Box]:
+    def obstacles(self, *, skip: Collection[str] = frozenset()) -> dict[str, Box]:
         """Boxes for the planning world: the table and every supported object not in ``skip``.
 
         An object floating in the air with nothing under it cannot be a real

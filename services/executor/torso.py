@@ -67,7 +67,7 @@ def height_reaching(
     (the step failed for another reason), or when no height reaches it.
     """
     arm, oid = args.get("arm"), args.get("object")
-    if arm not in arms:
+    if arm is None or arm not in arms:
         return None
     now = snap.joints().get(ROBOT.torso_joint, ROBOT.working_torso)
     if procedure not in CHECKED or oid not in snap.objects:
