@@ -42,7 +42,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from functools import partial
 from typing import Any, TypeVar
 
@@ -68,7 +68,7 @@ from services.executor.store import ActionStore, StoreError
 from services.executor.undo import before_state, reverse
 from shared.bus import Bus, BusTimeout, RemoteError
 from shared.contract import CARRIED, PLACES
-from shared.messages import NluResult, Objects, PerceivedObject, SimState, Table
+from shared.messages import NluResult, Objects, PerceivedObject, Say, SayKind, SimState, Table, as_received
 from shared.robot import ROBOT
 
 log = logging.getLogger("hfpbd.executor")
@@ -118,7 +118,7 @@ class Executor:
         self._can_move: dict[str, dict[str, bool]] = {arm: {} for arm in ARMS}
         self._reach_stale = threading.Event()
         self.origins = Origins()  # where objects stood before the robot moved them, for "put it back"
-        self._grippers: dict[str, str] = {}
+        self._grippers: Mapping[str, str] = {}
         self._closing = threading.Event()
         self._perception_losses = 0  # times perception's token vanished: one that died while asked is no mystery
         self._state_publisher = bus.publisher(bus.keys.executor_state, cached=True)
@@ -159,9 +159,9 @@ class Executor:
             thread.join(timeout=3.0)
 
     # -- speaking --------------------------------------------------------------------
-    def say(self, text: str, kind: str = "narration") -> None:
+    def say(self, text: str, kind: SayKind = "narration") -> None:
         log.info("say (%s): %s", kind, text)
-        self.bus.publish(self.bus.keys.say, {"text": text, "kind": kind})
+        self.bus.publish(self.bus.keys.say, Say(text=text, kind=kind))
 
     # -- inputs --------------------------------------------------------------------------
     def _on_objects(self, message: Objects) -> None:
@@ -194,7 +194,9 @@ class Executor:
 
     def _on_control_command(self, request: dict[str, Any]) -> dict[str, Any]:
         try:
-            steps = [Step(request.get("procedure"), check(request.get("procedure"), request.get("args")), {}, "")]
+            procedure = request.get("procedure")
+            args = check(procedure, request.get("args"))  # refuses a procedure that is not the contract's
+            steps = [Step(str(procedure), args, {}, "")]
         except CommandError as exc:
             return {"ok": False, "message": str(exc)}
         ok, text = self.submit(steps, "")
@@ -984,7 +986,7 @@ class Executor:
         """Publish the situated state; serialised so that states go out in the order they were taken."""
         with self._publish_lock:
             try:
-                self._state_publisher.put(self.state_message())
+                self._state_publisher.put(as_received("executor_state", self.state_message()))
             except StoreError as exc:
                 log.error("cannot publish state: %s", exc)
 

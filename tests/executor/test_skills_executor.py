@@ -10,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import msgspec
 import numpy as np
 import pytest
 
@@ -50,7 +51,7 @@ class RecordingBus:
         return RecordingBus.Publisher(self, key)
 
     def publish(self, key: str, message: Any) -> None:
-        self.published.append((key, message))
+        self.published.append((key, msgspec.to_builtins(message)))  # as a subscriber without a schema reads it
 
     def request(self, key: str, *args: Any, **kwargs: Any) -> Any:
         self.requests.append(key)
