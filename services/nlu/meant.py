@@ -115,14 +115,13 @@ def confirmation(result: CommandResult, why: str) -> Clarify:
     change what was meant ("move your right hand up in a minute"), so the
     command read without it is offered, never run.
     """
-    return Clarify(
-        [],
-        f"{why} Did you mean: {result.text}?",
-        [result.command],
-        [result.text],
-        result.score,
-        confirms=result,
-    )
+    return asking(result, f"{why} Did you mean: {result.text}?")
+
+
+def asking(result: CommandResult, question: str) -> Clarify:
+    """``question`` about ``result``: its one candidate is the command, and the whole of it (further steps
+    too) is kept for the dialogue to run on a yes."""
+    return Clarify([], question, [result.command], [result.text], result.score, confirms=result)
 
 
 def _no_such_action(model: Model, result: CommandResult) -> Clarify | None:

@@ -56,6 +56,7 @@ from typing import Any
 
 from services.nlu.commands import Command
 from services.nlu.infer import Clarify, CommandResult, Model, Result
+from services.nlu.meant import asking
 from services.nlu.prior import History
 from services.nlu.results import Answer
 
@@ -132,14 +133,7 @@ class Choice:
         """
         result = self.reading.result
         assert isinstance(result, CommandResult), "only a command is confirmed"
-        return Clarify(
-            [],
-            f"Did you say: {self.reading.text}?",
-            [result.command],
-            [result.text],
-            result.score,
-            confirms=result,
-        )
+        return asking(result, f"Did you say: {self.reading.text}?")
 
 
 def most_plausible(
