@@ -75,7 +75,7 @@ def judge(
         return wording.sentence(f"{words} is still in my {now.held_by} hand")
     if _tipped(moved, now):
         return wording.sentence(f"{words} has tipped over")
-    if not snap.supported(now.id):
+    if not snap.supported(now.id) and not _inside_another(now, snap):
         return wording.sentence(f"{words} is not standing on anything I can see")
     if procedure == "place_rel":
         landmark = snap.objects.get(args["object"])
@@ -83,6 +83,21 @@ def judge(
             return wording.sentence(f"I can't see what I put {words} {VALUE_WORDS[args['relation']]} any more")
         return _in_relation(now, args["relation"], landmark, words, refer(snap.objects, landmark.id))
     return None
+
+
+def _inside_another(obj: PerceivedObject, snap: SceneSnapshot) -> bool:
+    """Whether ``obj`` stands inside another object (a box put in a box): over its footprint, its bottom
+    between that object's bottom and top, where no top face carries it."""
+    box = Box.of(obj)
+    for other_id, other in snap.objects.items():
+        outer = Box.of(other)
+        if (
+            other_id != obj.id
+            and outer.bottom <= box.bottom <= outer.top
+            and np.all(np.abs(outer.center[:2] - box.center[:2]) < outer.half[:2])
+        ):
+            return True
+    return False
 
 
 def _in_hand(arm: str, wanted: PerceivedObject, words: str, snap: SceneSnapshot) -> str | None:
