@@ -20,6 +20,7 @@ from services.nlu.language import Index, Match
 from services.nlu.lexicon import OBJECT_SLOTS
 from services.nlu.phrasing import command_text, not_seen, parameter_question, rephrase_question
 from services.nlu.prior import History, history_scores, side_scores, situation_scores
+from services.nlu.referring import ground_phrase
 from services.nlu.refexp import Scene
 from services.nlu.results import Answer, Clarify, CommandResult, Result
 from services.nlu.skills import read_skill
@@ -298,8 +299,7 @@ class Model:
 
     def ground(self, text: str) -> dict[str, float]:
         """P(object | referring phrase) over the world's objects (paper Fig. 3)."""
-        terms = relational.resolve(self.scene, read(text).terms, self.scene.last_object, phrase=True)
-        probabilities = self.scene.ground(terms)
+        probabilities = ground_phrase(self.scene, text)
         return {obj.id: round(float(p), 4) for obj, p in zip(self.world.objects, probabilities)}
 
     def describe(self) -> dict[str, str]:

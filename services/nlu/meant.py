@@ -24,6 +24,7 @@ import re
 from typing import TYPE_CHECKING
 
 from services.nlu.lexicon import NUMBER_WORDS
+from services.nlu.phrasing import not_seen
 from services.nlu.results import Clarify, CommandResult, Result
 from services.nlu.tokens import read, slots_said
 from services.nlu.weights import DECISION
@@ -103,9 +104,19 @@ def after_reading(model: Model, text: str, result: Result) -> Result:
     refusal = _no_such_action(model, heard) or _object_to_no_object_verb(text, heard)
     if refusal is not None:
         return refusal
-    if heard is result and not heard.then and heard.confidence < DECISION.confirm_below:
+    if heard is not result:
+        return result
+    missing = not_seen(read(text).terms, model.world) if _acts_on_objects(heard) else None
+    if missing is not None:  # "pick up the blue cup" with no blue cup: never the red one unasked
+        return confirmation(heard, missing)
+    if not heard.then and heard.confidence < DECISION.confirm_below:
         return confirmation(heard, "I'm not sure I understood.")
     return result
+
+
+def _acts_on_objects(result: CommandResult) -> bool:
+    """Whether any step of ``result`` names an object (a skill's by its objects, or each one in turn)."""
+    return any(c.arg("object") or c.arg("objects") or c.arg("each") for c in result.commands)
 
 
 def confirmation(result: CommandResult, why: str) -> Clarify:

@@ -47,10 +47,9 @@ _HAND = re.compile(
     r"\b(?:hand|arm|gripper)s?\b"
 )  # "do that again with the other hand": the last command, not the action
 _EACH = re.compile(r"^(?:each|every|all)(?: of)?(?: the)? (?P<what>.+)$")
-_LANDMARK = re.compile(
-    r"^(?P<carried>.+?) (?:on top of|onto|on|into|in|to|next to|beside|behind|in front of|near|by|over|above)"
-    r" (?P<landmark>.+)$"
-)
+_LANDMARK_WORD = re.compile(
+    r" (?:on top of|onto|on|into|in|to|next to|beside|behind|in front of|near|by|over|above) "
+)  # where the carried object's words end and the landmark's begin
 _PUT_BACK = re.compile(
     r"^(?:put|place|set|bring|return) (?P<what>.+? )?back"
     r"(?: (?:where (?:it|they) (?:was|were|came from|stood|belongs?)|to where (?:it|they) (?:was|were|came from|stood)"
@@ -137,20 +136,47 @@ def _using(model: Model, skill: str | int, words: str, rest: str, history: Histo
         names = _listed([model.scene.describe(model.world.index_of(m)).text for m in members])
         command = Command("run_skill", base + (("each", tuple(members)),))
         return CommandResult(command, 1.0, f"{words} {names}, one at a time", {}, 0.0)
-    split = _LANDMARK.match(rest)
-    if split is not None and _names_an_object(split["landmark"]):
-        carried = _one_object(model, split["carried"], history)
-        landmark = _one_object(model, split["landmark"], history)
-    else:
-        carried, landmark = _one_object(model, rest, history), None
-    for found in (carried, landmark):
-        if isinstance(found, Clarify):
-            return found
-    roles = ((CARRIED, carried),) + (((LANDMARK, landmark),) if isinstance(landmark, str) else ())
-    text = f"{words} {model.scene.describe(model.world.index_of(str(carried))).text}"
-    if isinstance(landmark, str):
-        text += f", relative to {model.scene.describe(model.world.index_of(landmark)).text}"
-    return CommandResult(Command("run_skill", base + (("objects", roles),)), 1.0, text, {}, 0.0)
+    readings = _readings(model, rest, history)
+    if isinstance(readings, Clarify):
+        return readings
+    texts = [_reading_text(model, words, reading) for reading in readings]
+    if len(readings) > 1:
+        return Clarify([], f"Do you mean: {' or '.join(texts)}?")
+    roles = tuple(readings[0].items())
+    return CommandResult(Command("run_skill", base + (("objects", roles),)), 1.0, texts[0], {}, 0.0)
+
+
+def _readings(model: Model, rest: str, history: History) -> list[dict[str, str]] | Clarify:
+    """Every distinct way ``rest`` binds the roles: the carried object, and the landmark after a relation word.
+
+    "the red cup next to the box on the plate" splits at either relation
+    word; each split whose two parts name two different objects is a
+    reading, so the one meant is asked about rather than guessed. With no
+    such split the whole of ``rest`` names the carried object.
+    """
+    readings: list[dict[str, str]] = []
+    for split in _LANDMARK_WORD.finditer(rest):
+        carried_words, landmark_words = rest[: split.start()], rest[split.end() :]
+        if not _names_an_object(landmark_words) or not _names_an_object(carried_words):
+            continue
+        carried = _one_object(model, carried_words, history)
+        landmark = _one_object(model, landmark_words, history)
+        if isinstance(carried, str) and isinstance(landmark, str) and carried != landmark:
+            reading = {CARRIED: carried, LANDMARK: landmark}
+            if reading not in readings:
+                readings.append(reading)
+    if readings:
+        return readings
+    carried = _one_object(model, rest, history)
+    return carried if isinstance(carried, Clarify) else [{CARRIED: carried}]
+
+
+def _reading_text(model: Model, words: str, reading: dict[str, str]) -> str:
+    """One reading said back: "serve the leftmost cup, relative to the box"."""
+    text = f"{words} {model.scene.describe(model.world.index_of(reading[CARRIED])).text}"
+    if LANDMARK in reading:
+        text += f", relative to {model.scene.describe(model.world.index_of(reading[LANDMARK])).text}"
+    return text
 
 
 def _putting_back(model: Model, what: str, history: History) -> Result:
