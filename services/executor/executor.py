@@ -49,7 +49,7 @@ from typing import Any, TypeVar
 import msgspec
 import numpy as np
 
-from services.executor import effects, other_hand, skills, torso, wording
+from services.executor import effects, other_hand, said, skills, torso, wording
 from services.executor import geometry as geo
 from services.executor.actions_control import apply as apply_actions_request
 from services.executor.actions_control import step_words
@@ -484,7 +484,7 @@ class Executor:
                 "phrases": context.get("phrases", {}),
                 "text": context.get("text", ""),
                 "utterance": context.get("utterance", ""),
-                "landmark": done.landmark,
+                "landmark": self._remembered(done.landmark, context, snap),
                 "relative_pose": done.relative_pose,
                 "before": before,
             }
@@ -493,6 +493,16 @@ class Executor:
             self.store.append_step(step)
             self.publish_state()
         return True
+
+    @staticmethod
+    def _remembered(
+        landmark: dict[str, Any] | None, context: dict[str, Any], snap: SceneSnapshot
+    ) -> dict[str, Any] | None:
+        """A step's landmark as recorded: its look, and the words that named it then (see :mod:`said`)."""
+        if landmark is None:
+            return None
+        unique_as = refer(snap.objects, landmark["id"]) if landmark["id"] in snap.objects else None
+        return {**landmark, **said.remembered_words(context.get("phrases") or {}, unique_as)}
 
     # -- actions -----------------------------------------------------------------------------------
     def _execute(self, action: int | None = None, start: int = 1) -> None:
@@ -550,6 +560,9 @@ class Executor:
         if matched.missing:  # find every landmark before moving at all: no half-done action
             self.say(f"{next(iter(matched.missing.values()))} I can't run {name}.", "error")
             return False
+        if matched.unsure:  # the words said then no longer pick one object: ask before anything moves
+            self.say(self._which_one(number, steps, matched), "clarify")
+            return False
         free = {arm: held is None for arm, held in self.procedures.held().items()}
         found = partial(self._reground, matched=matched)
         swaps = other_hand.swaps(steps, start, found, self.procedures.arms, self.scene.snapshot(), free)
@@ -574,10 +587,26 @@ class Executor:
         taught = skills.roles(steps)
         fixed = {taught[role]["id"]: oid for role, oid in bound.items() if role in taught}
         remembered = [d for step in steps[start - 1 :] for d in skills.step_landmarks(step) if d["id"] not in fixed]
-        matched = reground(remembered, [o for o in snap.standing_objects() if o.id not in fixed.values()])
+        matched = said.find_again(remembered, [o for o in snap.standing_objects() if o.id not in fixed.values()])
         matched.mapping.update(fixed)
         matched.described.update({taught_id: descriptor(snap.objects[oid]) for taught_id, oid in fixed.items()})
         return matched
+
+    def _which_one(self, number: int, steps: list[dict[str, Any]], matched: Regrounding) -> str:
+        """The question when a remembered object's words fit several objects now, with the command that answers it."""
+        snap = self.scene.snapshot()
+        taught_id, choice = next(iter(matched.unsure.items()))
+        could_be = [refer(snap.objects, oid) for oid in choice.could_be]
+        name = skills.called(self.store, number)
+        question = (
+            f"When you taught me {name}, \u201c{choice.words}\u201d meant one object, but now it could be "
+            f"{_listed(could_be, 'or')}. Which one do you mean?"
+        )
+        if skills.roles(steps).get(CARRIED, {}).get("id") != taught_id:
+            return question
+        taught_name = self.store.summaries()[number - 1]["name"]
+        verb = taught_name or ("execute it with" if number == self.store.current else f"do action {number} with")
+        return f"{question} Say, for example, \u201c{verb} {could_be[0]}\u201d."
 
     def _replay_step(
         self,
@@ -737,30 +766,35 @@ class Executor:
         if not steps:
             raise SkillError(f"{_capital(name)} has no steps yet.")
         snap = self.scene.snapshot()
-        said = dict(args.get("objects") or {})
+        named = dict(args.get("objects") or {})
         each = list(args.get("each") or [])
-        for oid in [*said.values(), *each]:
+        for oid in [*named.values(), *each]:
             if oid not in snap.objects:
                 raise SkillError(f"I can't see {refer({}, oid, (snap.remembered or {}).get(oid))} on the table now.")
         taught = skills.roles(steps)
-        for role in [*said, *([CARRIED] if each else [])]:
+        for role in [*named, *([CARRIED] if each else [])]:
             if role not in taught:
                 raise SkillError(_no_role(name, role))
-        if each and CARRIED in said:
+        if each and CARRIED in named:
             raise SkillError("Tell me either the one object to carry or the objects to do it for one by one, not both.")
-        runs = [{**said, CARRIED: oid} for oid in each] if each else [said]
+        runs = [{**named, CARRIED: oid} for oid in each] if each else [named]
         return [self._all_roles(taught, run, snap) for run in runs]
 
     @staticmethod
-    def _all_roles(taught: dict[str, dict[str, Any]], said: dict[str, str], snap: SceneSnapshot) -> dict[str, str]:
-        """``said`` with every other role of the skill bound to the object it was taught with, as seen now."""
-        rest = {role: desc for role, desc in taught.items() if role not in said}
-        found = reground(list(rest.values()), [o for o in snap.standing_objects() if o.id not in said.values()])
+    def _all_roles(taught: dict[str, dict[str, Any]], bound: dict[str, str], snap: SceneSnapshot) -> dict[str, str]:
+        """``bound`` (the roles said) with every other role bound to the object it was taught with, as seen now:
+        found again by its words and look, as a replay finds it."""
+        rest = {role: desc for role, desc in taught.items() if role not in bound}
+        found = said.find_again(list(rest.values()), [o for o in snap.standing_objects() if o.id not in bound.values()])
         for role, desc in rest.items():
+            instead = "to carry instead" if role == CARRIED else "to use in its place"
             if desc["id"] in found.missing:
-                instead = "to carry instead" if role == CARRIED else "to use in its place"
                 raise SkillError(f"{found.missing[desc['id']]} Tell me which object {instead}.")
-        return {**said, **{role: found.mapping[desc["id"]] for role, desc in rest.items()}}
+            if desc["id"] in found.unsure:
+                choice = found.unsure[desc["id"]]
+                could_be = _listed([refer(snap.objects, oid) for oid in choice.could_be], "or")
+                raise SkillError(f"\u201c{choice.words}\u201d could be {could_be} now. Tell me which object {instead}.")
+        return {**bound, **{role: found.mapping[desc["id"]] for role, desc in rest.items()}}
 
     def _skill_sequence(self, number: int, runs: list[dict[str, str]], chain: tuple[int, ...]) -> bool:
         """Run skill ``number`` once per role binding, the order said first; the first failure ends the rest."""
@@ -1016,9 +1050,9 @@ def _context(step: Step, utterance: str) -> dict[str, Any]:
     return {"phrases": step.phrases, "text": step.text, "utterance": utterance}
 
 
-def _listed(words: list[str]) -> str:
-    """ "a", "a and b", "a, b and c"."""
-    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} and {words[-1]}"
+def _listed(words: list[str], last: str = "and") -> str:
+    """ "a", "a and b", "a, b and c" (or "a, b or c")."""
+    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} {last} {words[-1]}"
 
 
 def _skill_words(skill: str | int) -> str:

@@ -74,17 +74,29 @@ def cost(desc: dict[str, Any], obj: PerceivedObject) -> float:
     return float(np.linalg.norm(np.asarray(desc["size"], float) - np.asarray(obj.size, float))) + unknown_penalty
 
 
+@dataclass(frozen=True)
+class Choice:
+    """The object the words pick now (``object``), or why they don't and which ones they could mean."""
+
+    object: str | None
+    could_be: tuple[str, ...] = ()
+    words: str = ""
+
+
 @dataclass
 class Regrounding:
     """Result of matching: remembered id -> current id, and a message per landmark that found nothing.
 
     ``described``: for a remembered object bound to another one (a skill used
     with other objects), how that other one looks, to find it again by.
+    ``unsure``: a remembered object with look-alikes on the table that its
+    words no longer tell apart: which ones it could be.
     """
 
     mapping: dict[str, str]
     missing: dict[str, str]
     described: dict[str, dict[str, Any]] = dataclasses.field(default_factory=dict)
+    unsure: dict[str, Choice] = dataclasses.field(default_factory=dict)
 
 
 def reground(descriptors: list[dict[str, Any]], objects: list[PerceivedObject]) -> Regrounding:
