@@ -2,11 +2,19 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+from typing import Any
+
 import pytest
 
+from services.executor.executor import Executor
 from services.executor.grounding import descriptor
+from services.executor.referring import refer
 from services.executor.said import SAID, UNIQUE_AS, find_again, remembered_words
+from services.executor.store import ActionStore
 from shared.messages import PerceivedObject
+from tests.executor.test_skills import BLUE, PLATE_0, RED, SERVE
+from tests.executor.test_skills_executor import TABLE, RecordingBus, command, replaying
 
 pytestmark = pytest.mark.unit
 
@@ -78,3 +86,27 @@ def test_a_step_keeps_the_users_object_words_and_the_robots() -> None:
     words = remembered_words({"verb": "pick up", "object": "leftmost red cup"}, "the red cup on the left")
     assert words == {SAID: "leftmost red cup", UNIQUE_AS: "the red cup on the left"}
     assert remembered_words({"verb": "open"}, None) == {}
+
+
+def test_a_replay_whose_words_fit_two_objects_now_asks_which_before_anything_moves(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    bus = RecordingBus()
+    executor = Executor(bus, ActionStore(tmp_path))  # type: ignore[arg-type]
+    other_red = PerceivedObject(id="obj3", color="red", type="cup", size=CUP, position=(0.55, -0.25, 0.8))
+    executor.scene.update_objects([RED, BLUE, PLATE_0, other_red], TABLE)
+    executor.store.create()
+    first, second = SERVE
+    executor.store.append_step({**first, "landmark": {**first["landmark"], SAID: "red cup"}})
+    executor.store.append_step(second)
+    ran: list[tuple[str, dict[str, Any]]] = []
+    replaying(executor, monkeypatch, ran)
+    command(executor, "execute", {})
+    snap = executor.scene.snapshot()
+    assert [p for p, _ in ran] == ["record"]  # a look at the table, nothing else
+    cups = [refer(snap.objects, "obj0"), refer(snap.objects, "obj3")]
+    assert bus.said()[-1] == (
+        "clarify",
+        f"When you taught me action 1, \u201cred cup\u201d meant one object, but now it could be {cups[0]} or {cups[1]}."
+        f" Which one do you mean? Say, for example, \u201cexecute it with {cups[0]}\u201d.",
+    )
