@@ -19,7 +19,9 @@ from services.executor.kinematics import (
     PLANNING_TRIES,
     ArmKinematics,
 )
-from services.executor.procedures import Procedures, StepFailed, _reached_by_lines_first
+from services.executor.procedures import Procedures, StepFailed, place
+from services.executor.procedures.grasps import grasp_plans, reached_by_lines_first, suited_first, suits
+from services.executor.procedures.refusals import beyond
 from services.executor.reach import REACH_KEYS, reach_map, sync
 from services.executor.scene import Scene, measured, perceived
 from services.executor.targets import Held
@@ -322,12 +324,12 @@ def test_a_box_held_from_the_side_is_put_behind_a_cup_only_with_the_forearm_swun
     scene.update_robot(measured({**snap.joints(), **dict(zip([kin.names[i] for i in kin.arm_idx], lifted_q))}))
     snap = scene.snapshot()
     procedures = Procedures(scene, None, arms, list)  # type: ignore[arg-type]
-    held = procedures._refresh_held(at_grasp, snap, kin)
+    held = procedures.refresh_held(at_grasp, snap, kin)
     sync(kin, snap, held)
 
     def lowerable(yaws: tuple[float, ...]) -> int:
         pairs = targets.place_relation("behind", snap.box("mug"), kin.fk(), held, snap.table_z, yaws)
-        return sum(procedures._lowerable(kin, snap, held, hover, release) is not None for hover, release in pairs)
+        return sum(place.lowerable(kin, snap, held, hover, release) is not None for hover, release in pairs)
 
     kin.lines_blocked_by.clear()
     assert lowerable(targets.CARRY_YAWS) == 0
@@ -349,14 +351,14 @@ def test_a_place_out_of_one_hands_reach_says_how_far_and_that_the_other_hand_can
     held = Held("c", Box(tool[:3] + [0.0, 0.0, -0.01], np.array([0.07, 0.07, 0.10])), tool)
     sync(kin, snap, held)
     procedures = Procedures(scene, None, arms, list)  # type: ignore[arg-type]
-    words = procedures._beyond(kin, held, "on_top_of", snap.box("plate"), "the plate", snap.table_z, "right")
+    words = beyond(procedures, kin, held, "on_top_of", snap.box("plate"), "the plate", snap.table_z, "right")
     assert words is not None
     assert re.fullmatch(
         r"I can't put it on top of the plate: the plate is \d+ cm beyond my right hand; my left hand can reach it\.",
         words,
     ), words
-    procedures._set_held("left", held)  # the left hand busy: it is not offered
-    words = procedures._beyond(kin, held, "on_top_of", snap.box("plate"), "the plate", snap.table_z, "right")
+    procedures.set_held("left", held)  # the left hand busy: it is not offered
+    words = beyond(procedures, kin, held, "on_top_of", snap.box("plate"), "the plate", snap.table_z, "right")
     assert words is not None and "left hand" not in words
 
 
@@ -398,10 +400,10 @@ def test_a_pick_up_sets_off_with_a_grasp_the_lines_reach_before_one_only_the_ran
     box = cup("box", 0.587, 0.17, color="green", size=(0.06, 0.06, 0.06)) | {"type": "box"}
     scene = scene_with(cup("red", 0.643, 0.062), cup("blue", 0.532, -0.125, color="blue"), box, plate, pose="side")
     procedures = Procedures(scene, None, arms, list)  # type: ignore[arg-type]
-    kin, snap = procedures._ready("left")
-    preferred = list(procedures._grasp_plans(kin, snap.objects["red"]))
+    kin, snap = procedures.ready("left")
+    preferred = list(grasp_plans(kin, snap.objects["red"], snap.near_edge))
     assert not kin.reached_by_lines(preferred[0][1]), "no longer a case for the order"
-    ordered = list(_reached_by_lines_first(kin, iter(preferred)))
+    ordered = list(reached_by_lines_first(kin, iter(preferred)))
     assert sorted(id(c) for c in ordered) == sorted(id(c) for c in preferred)
     reached = [kin.reached_by_lines(q) for _, q in ordered]
     assert reached[0] and reached == sorted(reached, reverse=True)
@@ -415,12 +417,12 @@ def test_a_pick_up_followed_by_a_placement_grasps_so_that_it_can_be_set_down_the
     tall = cup("tall", 0.48, 0.0, color="blue", size=(0.1, 0.1, 0.2)) | {"type": "box"}
     scene = scene_with(cup("red", 0.6, -0.1), tall, pose="side")
     procedures = Procedures(scene, None, arms, list)  # type: ignore[arg-type]
-    kin, snap = procedures._ready("right")
+    kin, snap = procedures.ready("right")
     obj = snap.objects["red"]
     behind = {"relation": "behind", "object": "tall"}
-    plain = list(_reached_by_lines_first(kin, procedures._grasp_plans(kin, obj)))
-    assert not procedures._suits(kin, snap, obj, TABLE_TOP_Z, plain[0], behind), "no longer a case for the order"
-    suited = list(procedures._suited_first(kin, snap, obj, TABLE_TOP_Z, iter(plain), behind))
-    assert procedures._suits(kin, snap, obj, TABLE_TOP_Z, suited[0], behind)
+    plain = list(reached_by_lines_first(kin, grasp_plans(kin, obj, snap.near_edge)))
+    assert not suits(procedures, kin, snap, obj, TABLE_TOP_Z, plain[0], behind), "no longer a case for the order"
+    suited = list(suited_first(procedures, kin, snap, obj, TABLE_TOP_Z, iter(plain), behind))
+    assert suits(procedures, kin, snap, obj, TABLE_TOP_Z, suited[0], behind)
     assert sorted(id(c) for c in suited) == sorted(id(c) for c in plain)  # the same candidates, one moved ahead
     assert [c for c in plain if c is not suited[0]] == suited[1:]

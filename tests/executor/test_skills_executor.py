@@ -212,7 +212,7 @@ def test_putting_back_is_refused_for_an_empty_hand_and_an_object_never_moved(
     command(executor, "place_back", {"arm": "left"})
     assert bus.said() == [("error", "My left hand isn't holding anything to put back.")]
     snap = executor.scene.snapshot()
-    executor.procedures._set_held("right", Held("obj0", Box.of(RED), np.zeros(7), seen_as=RED))
+    executor.procedures.set_held("right", Held("obj0", Box.of(RED), np.zeros(7), seen_as=RED))
     with pytest.raises(StepFailed) as caught:
         executor._origin({"arm": "right"}, snap)
     assert str(caught.value) == (
@@ -351,7 +351,7 @@ def test_a_last_step_whose_effect_does_not_hold_is_reported_instead_of_completed
     ran: list[tuple[str, dict[str, Any]]] = []
     replaying(executor, monkeypatch, ran)
     held = RED  # the hand holds the red cup before the placement ...
-    executor.procedures._set_held("right", Held("obj0", Box.of(held), np.zeros(7), seen_as=held))
+    executor.procedures.set_held("right", Held("obj0", Box.of(held), np.zeros(7), seen_as=held))
     executor._replay_step("action 1", executor.store.get(1)["steps"], 2, executor._ground(SERVE, 2, {}), (1,))
     snap = executor.scene.snapshot()  # ... and sees it standing where it stood, off the plate
     assert ran == [("place_rel", {"arm": "right", "relation": "on_top_of", "object": "obj2"})]

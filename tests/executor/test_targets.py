@@ -9,7 +9,7 @@ from services.executor import geometry as geo
 from services.executor import targets
 from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics
-from services.executor.procedures import Procedures
+from services.executor.procedures.spots import back_where_lifted, on_the_table
 from services.executor.reach import sync
 from services.executor.scene import Scene, measured, perceived
 from services.executor.targets import Held
@@ -161,10 +161,10 @@ def test_a_cup_lifted_off_a_box_is_never_put_down_on_the_table_where_it_stood() 
     assert held.box.center[2] == pytest.approx(0.83)
     straight_down = geo.shifted(tool, [0.0, 0.0, -0.12])
     beside = geo.shifted(tool, [0.0, 0.12, -0.12])
-    assert Procedures._back_where_lifted(held, straight_down)
-    assert not Procedures._back_where_lifted(held, beside)
+    assert back_where_lifted(held, straight_down)
+    assert not back_where_lifted(held, beside)
     from_the_table = targets.held_in_hand("cup", stood, tool, support_top=TABLE_TOP_Z)
-    assert not Procedures._back_where_lifted(from_the_table, straight_down)
+    assert not back_where_lifted(from_the_table, straight_down)
 
 
 def test_a_placement_past_the_tables_edge_is_never_a_free_spot() -> None:
@@ -176,7 +176,7 @@ def test_a_placement_past_the_tables_edge_is_never_a_free_spot() -> None:
     near_edge = TABLE_X[0]
     for x, inside in ((near_edge + 0.10, True), (near_edge + CUP[0] / 2 + 0.01, False), (near_edge, False)):
         release = geo.shifted(held.tool_pose, [x - held.box.center[0], 0.0, 0.0])
-        assert Procedures._on_the_table(held, release, snap) is inside, x
+        assert on_the_table(held, release, snap) is inside, x
     assert snap.table is not None
     assert not snap.table.holds(np.array([TABLE_X[1], 0.0]), CUP[:2] / 2)  # the far edge alike
 
@@ -188,7 +188,7 @@ def test_in_front_of_a_cup_near_the_tables_edge_the_cup_goes_closer_to_it() -> N
     snap = scene.snapshot()
     held, landmark = held_cup(), standing(TABLE_X[0] + 0.15, 0.0)
     pairs = targets.place_relation("in_front_of", landmark, held.tool_pose, held, TABLE_TOP_Z)
-    on_table = [release for _, release in pairs if Procedures._on_the_table(held, release, snap)]
+    on_table = [release for _, release in pairs if on_the_table(held, release, snap)]
     assert on_table, "no spot in front of the cup on the table"
     for release in on_table:
         gap = landmark.center[0] - landmark.half[0] - (held.center_at(release)[0] + CUP[0] / 2)

@@ -10,7 +10,8 @@ import pytest
 from services.executor import targets, torso
 from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics
-from services.executor.procedures import Procedures, _reached_by_lines_first
+from services.executor.procedures import Procedures
+from services.executor.procedures.grasps import grasp_plans, reached_by_lines_first
 from services.executor.reach import reach_map
 from services.executor.scene import Scene, measured, perceived
 from services.sim.layout import TABLE_TOP_Z, table_truth
@@ -96,8 +97,8 @@ def test_a_held_cup_goes_behind_a_far_plate_with_the_torso_lowered(arms: dict[st
     """Held up by the right hand, a cup can be brought over the spot behind a plate 78 cm out but not down
     to it with the torso up; lowered to 0.15 m it can, the arm taking the hover pose's joints first."""
     procedures = Procedures(at_side(cup("red", 0.55, -0.15)), None, arms, list)  # type: ignore[arg-type]
-    kin, snap = procedures._ready("right")
-    grasp, pre_q = next(_reached_by_lines_first(kin, procedures._grasp_plans(kin, snap.objects["red"])))
+    kin, snap = procedures.ready("right")
+    grasp, pre_q = next(reached_by_lines_first(kin, grasp_plans(kin, snap.objects["red"], snap.near_edge)))
     kin.allow_touching("red", True)
     grasp_q = kin.ik(grasp.grasp, seeds=[pre_q])
     kin.allow_touching("red", False)

@@ -1,0 +1,171 @@
+"""Grasp candidates for a pick-up, in the order they are tried.
+
+A candidate is a grasp whose pre-grasp and grasp have IK solutions and
+whose straight approach is clear, with the joints to plan to. They are
+found one at a time (the arm sets off as soon as the first is known), then
+reordered: those joint-space lines reach first, and, when the placement
+that follows is known, the first one it can be done with in front.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Iterator
+from dataclasses import replace
+
+import numpy as np
+
+from services.executor import geometry as geo
+from services.executor import targets
+from services.executor.geometry import Box
+from services.executor.kinematics import ArmKinematics
+from services.executor.procedures.body import Body
+from services.executor.procedures.place import lowerable
+from services.executor.procedures.spots import on_free_spots
+from services.executor.reach import sync
+from services.executor.scene import SceneSnapshot
+from services.executor.targets import EdgeGrasp
+from shared.messages import PerceivedObject
+
+SUITED_TRIES = 6  # grasp candidates judged against the placement that follows, before the first is taken anyway
+
+Candidate = tuple[geo.Grasp, np.ndarray]
+
+
+def grasp_plans(kin: ArmKinematics, obj: PerceivedObject, near_edge: float | None) -> Iterator[Candidate]:
+    """Grasps whose pre-grasp and grasp both have IK solutions, in preference order (with the joints to plan to).
+
+    Found one at a time: the arm sets off as soon as the first is known,
+    and the next is looked for only if that grasp fails.
+    """
+    for grasp in targets.grasps(obj, near_edge):
+        pre_q = kin.ik(grasp.hover if isinstance(grasp, EdgeGrasp) else grasp.pregrasp)
+        if pre_q is None:
+            continue
+        if isinstance(grasp, EdgeGrasp):
+            hover_q = _edge_approach(kin, grasp, pre_q, obj.id)
+            if hover_q is not None:
+                yield grasp, hover_q
+            continue
+        kin.allow_touching(obj.id, True)
+        try:
+            grasp_q = kin.ik(grasp.grasp, seeds=[pre_q])
+        finally:
+            kin.allow_touching(obj.id, False)
+        if grasp_q is not None and _descent_clear(kin, pre_q, grasp.grasp, obj.id):
+            yield grasp, pre_q
+
+
+def _edge_approach(kin: ArmKinematics, grasp: EdgeGrasp, hover_q: np.ndarray, object_id: str) -> np.ndarray | None:
+    """Joints at the hover pose from which both straight legs (down to the pre-grasp, in to the grasp) are clear."""
+    for start in kin.turn_variants(hover_q):
+        low_q = kin.ik(grasp.pregrasp, seeds=[start])
+        if low_q is None or not _descent_clear(kin, start, grasp.pregrasp, object_id):
+            continue
+        for low in kin.turn_variants(low_q):
+            if _descent_clear(kin, low, grasp.grasp, object_id):
+                return start
+    return None
+
+
+def _descent_clear(kin: ArmKinematics, pre_q: np.ndarray, grasp_pose: np.ndarray, object_id: str) -> bool:
+    """Whether the straight approach from the pre-grasp to the grasp is free (checked before moving at all)."""
+    with kin.posed(pre_q):
+        return kin.line_path(grasp_pose, ignore=(object_id,)) is not None
+
+
+def reached_by_lines_first(kin: ArmKinematics, candidates: Iterator[Candidate]) -> Iterator[Candidate]:
+    """Grasp candidates whose pre-grasp joint-space lines reach, as they are found; the others after them.
+
+    A pre-grasp only the random planner reaches (a side grasp low over a
+    plate) costs seconds of planning and may not be found at all, while the
+    next grasp in preference order is often reached at once. Each is judged
+    from where the arm is when it comes up, as an attempt that failed has
+    moved it.
+    """
+    later = []
+    for candidate in candidates:
+        if kin.reached_by_lines(candidate[1]):
+            yield candidate
+        else:
+            later.append(candidate)
+    yield from later
+
+
+def suited_first(
+    body: Body,
+    kin: ArmKinematics,
+    snap: SceneSnapshot,
+    obj: PerceivedObject,
+    stood_on: float,
+    candidates: Iterator[Candidate],
+    coming: dict[str, str],
+) -> Iterator[Candidate]:
+    """The grasp candidates with the first one the ``coming`` placement can be done with moved to the front.
+
+    How the hand holds the object decides how it can set it down: a cup
+    held from its right cannot be lowered just left of a tall cup by the
+    right hand, whose forearm then comes down over the tall one. Up to
+    ``SUITED_TRIES`` candidates are judged (IK and the straight way down,
+    as the placement itself checks them), the first suited one leads,
+    and the others follow in their own order.
+    """
+    judged = []
+    for candidate in itertools.islice(candidates, SUITED_TRIES):
+        if suits(body, kin, snap, obj, stood_on, candidate, coming):
+            yield candidate
+            break
+        judged.append(candidate)
+    yield from judged
+    yield from candidates
+
+
+def suits(
+    body: Body,
+    kin: ArmKinematics,
+    snap: SceneSnapshot,
+    obj: PerceivedObject,
+    stood_on: float,
+    candidate: Candidate,
+    coming: dict[str, str],
+) -> bool:
+    """Whether, held as ``candidate`` grasps it and lifted, ``obj`` can be lowered ``coming`` its landmark."""
+    grasp, pre_q = candidate
+    landmark = snap.objects.get(coming["object"])
+    if landmark is None or isinstance(grasp, EdgeGrasp):
+        return True  # nothing to judge by: the candidate keeps its place
+    kin.allow_touching(obj.id, True)
+    try:
+        grasp_q = kin.ik(grasp.grasp, seeds=[pre_q])
+    finally:
+        kin.allow_touching(obj.id, False)
+    if grasp_q is None:
+        return False
+    lift = grasp.lift[:3] - grasp.grasp[:3]
+    grasped = targets.held_in_hand(obj.id, Box.of(obj), kin.fk(grasp_q), stood_on)
+    held = replace(grasped, box=Box(grasped.box.center + lift, grasped.box.size), tool_pose=grasp.lift)
+    relation = "on_top_of" if coming["relation"] == "above" else coming["relation"]
+    on = (landmark.id,) if relation == "on_top_of" else ()
+    box = Box.of(landmark)
+    # the placement's IK starts from the arm as the lift left it, as it will then
+    lift_q = kin.ik(grasp.lift, seeds=[grasp_q], check_collisions=False)
+    kin.set_obstacles(snap.obstacles(skip={obj.id}))
+    kin.attach(obj.id, held.box, held.tool_pose)
+    kin.lines_blocked_by.clear()
+
+    def can_lower(pairs: list[tuple[np.ndarray, np.ndarray]]) -> bool:
+        free = on_free_spots(body, held, pairs, snap, on)
+        return any(lowerable(kin, snap, held, hover, release) is not None for hover, release in free)
+
+    try:
+        with kin.posed(grasp_q if lift_q is None else lift_q):
+            if can_lower(targets.place_relation(relation, box, grasp.lift, held, snap.table_z)):
+                return True
+            # as the placement does: the wider ones only when the way down ran into the landmark
+            return (
+                not on
+                and landmark.id in kin.lines_blocked_by
+                and can_lower(targets.place_relation_wider(relation, box, grasp.lift, held, snap.table_z))
+            )
+    finally:
+        sync(kin, snap, None)
