@@ -3,7 +3,9 @@
 Why a wrapper: every service needs the same few guarantees — messages are
 validated before user code sees them (a subscription with a ``schema`` hands
 its handler the stream's typed message from :mod:`shared.messages`, checked
-all the way down, so no service walks an unchecked map), a bad message is logged and counted
+all the way down, so no service walks an unchecked map; a queryable answers
+with a reply type from there too, and an asker may read it as one), a bad
+message is logged and counted
 instead of crashing the receiver, Zenoh's threads are never blocked by user
 code, every query is finalised, requests time out cleanly, and closing leaves
 no thread behind. Samples wait in zenoh's own channels (ring channels for
@@ -17,7 +19,7 @@ import logging
 import threading
 from collections import Counter
 from collections.abc import Callable
-from typing import Any, overload
+from typing import Any, TypeVar, overload
 
 import zenoh
 import zenoh.ext as zext
@@ -26,13 +28,14 @@ from shared.codec import MessageError, decode, encode
 from shared.config import SessionOptions, enforces_access_control, zenoh_config
 from shared.denials import log_access_denials
 from shared.keys import Keys
-from shared.messages import TYPES, typed
+from shared.messages import TYPES, read, typed, wire
 from shared.messages import Message as Typed
 
 log = logging.getLogger("hfpbd.bus")
 
 Message = dict[str, Any]
 Handler = Callable[[Message], None]
+R = TypeVar("R", bound=Typed)
 
 
 class BusTimeout(TimeoutError):
@@ -257,21 +260,39 @@ class Bus:
         self._drain(f"sub:{key}", sub, run)
 
     # -- request / reply ---------------------------------------------------
-    def serve(self, key: str, handler: Callable[[Message], Message], *, capacity: int = 64) -> None:
-        """Answer queries on ``key`` with ``handler(request) -> reply``.
+    @overload
+    def serve(
+        self, key: str, handler: Callable[[Message], Typed], *, request: None = None, capacity: int = 64
+    ) -> None: ...
 
-        Runs on a worker thread; every query is finalised, and a handler
-        exception becomes an error reply carrying its message, so the asker
-        gets a reason rather than a timeout. ``ValueError`` and ``LookupError``
-        mean "refused" and are logged in one line; anything else is a bug and
-        is logged with its traceback.
+    @overload
+    def serve(self, key: str, handler: Callable[[R], Typed], *, request: type[R], capacity: int = 64) -> None: ...
+
+    def serve(
+        self,
+        key: str,
+        handler: Callable[[Any], Typed],
+        *,
+        request: type[Typed] | None = None,
+        capacity: int = 64,
+    ) -> None:
+        """Answer queries on ``key`` with ``handler(request) -> reply``, a typed reply of :mod:`shared.messages`.
+
+        With a ``request`` type the handler gets the request as that type; one
+        that does not fit is refused as malformed (logged and counted in
+        :attr:`rejected`) before the handler sees it. Without one it gets the
+        decoded map. Runs on a worker thread; every query is finalised, and a
+        handler exception becomes an error reply carrying its message, so the
+        asker gets a reason rather than a timeout. ``ValueError`` and
+        ``LookupError`` mean "refused" and are logged in one line; anything
+        else is a bug and is logged with its traceback.
         """
 
         def run(query: zenoh.Query) -> None:
             try:
                 try:
-                    request = decode(query.payload.to_bytes()) if query.payload is not None else {}
-                    reply = handler(request)
+                    asked = decode(query.payload.to_bytes()) if query.payload is not None else {}
+                    reply = handler(read(request, asked) if request is not None else asked)
                 except MessageError as exc:
                     self.rejected[key] += 1
                     log.warning("rejected request on %s: %s", key, exc)
@@ -285,19 +306,43 @@ class Bus:
                     log.exception("request handler on %s failed", key)
                     query.reply_err(encode({"error": _reason(exc)}))
                     return
-                query.reply(query.key_expr, encode(reply))
+                query.reply(query.key_expr, encode(wire(reply)))
             finally:
                 query.drop()
 
         self._drain(f"serve:{key}", self.session.declare_queryable(key, _channel(False, capacity)), run)
 
-    def request(self, key: str, message: Message | None = None, *, timeout: float = 5.0) -> Message:
-        """Send a query and return the first reply; raise on error or timeout."""
+    @overload
+    def request(
+        self, key: str, message: Typed | Message | None = None, *, reply: None = None, timeout: float = 5.0
+    ) -> Message: ...
+
+    @overload
+    def request(
+        self, key: str, message: Typed | Message | None = None, *, reply: type[R], timeout: float = 5.0
+    ) -> R: ...
+
+    def request(
+        self,
+        key: str,
+        message: Typed | Message | None = None,
+        *,
+        reply: type[Typed] | None = None,
+        timeout: float = 5.0,
+    ) -> Any:
+        """Send a query and return the first reply; raise on error or timeout.
+
+        With a ``reply`` type the answer is that type, checked all the way
+        down: an answer that does not fit raises :class:`MessageError` naming
+        the field, so an asker never reads a field the service did not send.
+        Without one it is the decoded map.
+        """
         replies = self.session.get(key, payload=encode(message or {}), timeout=timeout)
-        for reply in replies:
-            if reply.ok is not None:
-                return decode(reply.ok.payload.to_bytes())
-            refusal = reply.err
+        for answer in replies:
+            if answer.ok is not None:
+                decoded = decode(answer.ok.payload.to_bytes())
+                return read(reply, decoded) if reply is not None else decoded
+            refusal = answer.err
             if refusal is None:
                 continue
             try:

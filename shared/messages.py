@@ -18,7 +18,7 @@ default (``None``, or an empty map or list).
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Any, Literal, TypeVar
 
 import msgspec
 import numpy as np
@@ -30,6 +30,7 @@ Vector3 = tuple[float, float, float]
 Pose = tuple[float, float, float, float, float, float, float]  # x, y, z, qw, qx, qy, qz
 SayKind = Literal["narration", "error", "clarify", "info"]
 SAY_KINDS: tuple[str, ...] = SayKind.__args__  # type: ignore[attr-defined]
+M = TypeVar("M", bound="Message")
 
 
 def _require_array(schema: str, name: str, value: Any) -> None:
@@ -189,13 +190,14 @@ class CommandStep(msgspec.Struct, kw_only=True, omit_defaults=True):
     """One command inside a result: a further step of a compound (``then``) or a clarification's candidate."""
 
     procedure: str
-    args: dict[str, Any] = {}
+    # a factory, not a default, so the codec always sends ``args`` (DESIGN.md: candidates are {"procedure", "args"})
+    args: dict[str, Any] = msgspec.field(default_factory=dict)
     phrases: dict[str, str] | None = None
     text: str | None = None
 
 
-class NluResult(Message, omit_defaults=True):
-    """A command (``procedure``, ``args``, maybe ``then``), a clarification or an answer, for ``utterance``.
+class Parsed(Message, kw_only=True, omit_defaults=True):
+    """A command (``procedure``, ``args``, maybe ``then``), a clarification or an answer: ``nlu/parse``'s reply.
 
     ``kind`` and ``topic`` are the contract's enumerations, checked at the
     door; ``procedure`` stays a string so that an unknown one reaches the
@@ -203,7 +205,6 @@ class NluResult(Message, omit_defaults=True):
     """
 
     kind: ResultKind
-    utterance: str
     procedure: str | None = None
     args: dict[str, Any] | None = None
     confidence: float | None = None
@@ -214,6 +215,12 @@ class NluResult(Message, omit_defaults=True):
     question: str | None = None
     candidates: list[CommandStep] | None = None
     topic: AnswerTopic | None = None
+
+
+class NluResult(Parsed, kw_only=True):
+    """``nlu/result``: what ``nlu/parse`` answers, for the ``utterance`` it was made from."""
+
+    utterance: str
 
 
 class Progress(msgspec.Struct, kw_only=True):
@@ -288,8 +295,159 @@ class Ping(Message):
     i: int
 
 
+# -- queryable replies --------------------------------------------------------
+# Every queryable answers with one of these (``Bus.serve`` takes nothing else), and
+# an asker that reads fields decodes the reply with its type (``Bus.request(...,
+# reply=...)``). The field names are the maps the replies were before they were
+# typed: tools outside the project read them.
+
+
 class Reply(Message):
+    """A request answered: ``ok`` is false only where a refusal is an answer, not an error (a command)."""
+
     ok: bool
+
+
+class MotionReply(Reply):
+    """``sim/control/arm``, ``gripper``, ``head``, ``torso``: the motion started, whose end ``sim/events`` tells."""
+
+    motion_id: str
+
+
+class MotionsReply(Reply):
+    """``sim/control/arms``: each arm's motion, started in one simulation step."""
+
+    motion_ids: dict[str, str]
+
+
+class StopReply(Reply):
+    """``sim/control/stop``: the motions it ended."""
+
+    stopped: list[str]
+
+
+class SceneReply(Reply):
+    """``sim/control/scene``: the scene loaded, and its objects as ``sim/truth`` carries them."""
+
+    scene: str
+    objects: list[TruthObject]
+
+
+class PauseReply(Reply):
+    paused: bool
+    sim_time: float
+
+
+class StepReply(Reply):
+    sim_time: float
+
+
+class SnapshotReply(Reply):
+    """``sim/control/snapshot``: the overview camera's picture, a PNG."""
+
+    png: bytes
+
+
+class RecordReply(Reply, omit_defaults=True):
+    """``perception/record``: objects from two agreeing frames rendered after the request, and the table."""
+
+    objects: list[PerceivedObject]
+    settled: bool
+    table: Table | None = None  # absent until a table has been seen
+
+
+class PttReply(Reply):
+    """``speech/ptt``: whether the robot now listens."""
+
+    listening: bool
+
+
+class CommandReply(Reply):
+    """``executor/control/command``: accepted (or stopped), or why not, in words."""
+
+    message: str
+
+
+class ActionSummary(msgspec.Struct, kw_only=True):
+    """One line of ``executor/control/actions`` ``list``: an action and its steps in the user's words."""
+
+    number: int
+    name: str | None
+    steps: int
+    created: float | None
+    current: bool
+    words: list[str]
+
+
+class ActionList(Reply):
+    actions: list[ActionSummary]
+    current: int | None
+
+
+class ActionShown(Reply):
+    """``show``: the stored action as it is on disk (steps, name, landmarks)."""
+
+    number: int
+    action: dict[str, Any]
+
+
+class ActionRenamed(Reply):
+    number: int
+    name: str
+
+
+class ActionDeleted(Reply):
+    number: int
+    current: int | None
+
+
+class StepDeleted(Reply):
+    number: int
+    steps: int  # how many are left
+
+
+class StepMoved(Reply):
+    number: int
+    step: int
+    to: int
+
+
+class ActionStarted(Reply):
+    """``execute``: a replay from ``step`` was accepted."""
+
+    number: int
+    step: int
+    message: str
+
+
+class ByObject(Message):
+    """A reply that is a map keyed by object id, as ``hfpbd nlu ground`` and ``describe`` print it.
+
+    On the wire the map is the message itself (beside ``v``), so ``by_id``
+    is flattened by :func:`wire` and gathered again by :func:`read`.
+    """
+
+    by_id: dict[str, Any]
+
+
+class Grounding(ByObject):
+    """``nlu/ground``: how likely each object is the one the words mean."""
+
+    by_id: dict[str, float]
+
+
+class Descriptions(ByObject):
+    """``nlu/describe``: each object's referring expression."""
+
+    by_id: dict[str, str]
+
+
+class Vocabulary(Message):
+    """``nlu/vocabulary``: every word and phrase understood, and the sentence shapes they make."""
+
+    words: list[str]
+    phrases: list[str]
+    templates: dict[str, Any]
 
 
 TYPES: dict[str, type[Message]] = {
@@ -307,7 +465,6 @@ TYPES: dict[str, type[Message]] = {
     "speech_ptt": SpeechPtt,
     "speech_status": SpeechStatus,
     "request": Request,
-    "reply": Reply,
 }
 
 
@@ -322,6 +479,28 @@ def typed(schema: str, message: dict[str, Any]) -> Message:
 def decode_typed(schema: str, payload: bytes | bytearray | memoryview) -> Message:
     """Decode a payload straight into its schema's type."""
     return typed(schema, decode(payload))
+
+
+def wire(message: Message) -> Message | dict[str, Any]:
+    """What the codec sends for ``message``: a :class:`ByObject` reply as its flat map, any other as itself."""
+    if isinstance(message, ByObject):
+        return {"v": message.v, **message.by_id}
+    return message
+
+
+def read(kind: type[M], message: dict[str, Any]) -> M:
+    """A received map as the message type ``kind``; :class:`MessageError` names the first problem and where."""
+    if issubclass(kind, ByObject):
+        message = {"v": message.get("v"), "by_id": {k: v for k, v in message.items() if k != "v"}}
+    try:
+        return msgspec.convert(message, kind)
+    except (msgspec.ValidationError, TypeError) as exc:
+        raise MessageError(f"{kind.__name__}: {exc}") from None
+
+
+def reply_from(kind: type[M], message: dict[str, Any]) -> M:
+    """A reply a service built as a map (numpy numbers and all) as ``kind``, exactly as its asker will read it."""
+    return read(kind, decode(encode(message)))
 
 
 def as_received(schema: str, message: dict[str, Any]) -> Message:

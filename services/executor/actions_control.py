@@ -16,11 +16,24 @@ from typing import Any
 from services.executor.actions_cli import apply_action_op
 from services.executor.grounding import describe_kind
 from services.executor.store import ActionStore, StoreError
+from shared.messages import (
+    ActionDeleted,
+    ActionList,
+    ActionRenamed,
+    ActionShown,
+    ActionStarted,
+    Reply,
+    StepDeleted,
+    StepMoved,
+    reply_from,
+)
 
 # starts a run of action ``number`` from step ``start`` (1-based); returns (accepted, why not)
 Runner = Callable[[int, int], tuple[bool, str]]
 
 OPERATIONS = "list, show, rename, delete, delete_step, move_step or execute"
+# the reply type of each operation shared with the command line (``actions_cli``, which answers in maps)
+CLI_REPLIES: dict[str, type[Reply]] = {"show": ActionShown, "rename": ActionRenamed, "delete": ActionDeleted}
 
 
 def step_words(step: dict[str, Any]) -> str:
@@ -48,16 +61,16 @@ def step_words(step: dict[str, Any]) -> str:
     return " ".join(parts)
 
 
-def apply(store: ActionStore, request: dict[str, Any], run: Runner | None = None) -> dict[str, Any]:
+def apply(store: ActionStore, request: dict[str, Any], run: Runner | None = None) -> Reply:
     """Answer one request; ``StoreError`` (a ``ValueError``) carries the reason for a refusal."""
     op = request.get("op")
     if op == "list":
-        reply = apply_action_op(store, request)
-        for item in reply["actions"]:
+        listed = apply_action_op(store, request)
+        for item in listed["actions"]:
             item["words"] = [step_words(s) for s in store.get(item["number"])["steps"]]
-        return reply
+        return reply_from(ActionList, listed)
     if op in ("show", "rename", "delete"):
-        return apply_action_op(store, request)
+        return reply_from(CLI_REPLIES[op], apply_action_op(store, request))
     if op not in ("delete_step", "move_step", "execute"):
         raise StoreError(f"unknown actions operation {op!r}; use {OPERATIONS}")
     number = _whole(request.get("number"), "number")
@@ -71,19 +84,19 @@ def apply(store: ActionStore, request: dict[str, Any], run: Runner | None = None
         accepted, why = run(number, step)
         if not accepted:
             raise StoreError(why)
-        return {"ok": True, "number": number, "step": step, "message": why}
+        return ActionStarted(ok=True, number=number, step=step, message=why)
     if op == "delete_step":
 
         def delete(steps: list[dict[str, Any]]) -> None:
             steps.pop(step - 1)
 
         store.edit_steps(number, delete)
-        return {"ok": True, "number": number, "steps": count - 1}
+        return StepDeleted(ok=True, number=number, steps=count - 1)
     to = _whole(request.get("to"), "to")
     if not 1 <= to <= count:
         raise StoreError(f"cannot move step {step} to {to}: action {number} has steps 1 to {count}")
     store.edit_steps(number, lambda steps: steps.insert(to - 1, steps.pop(step - 1)))
-    return {"ok": True, "number": number, "step": step, "to": to}
+    return StepMoved(ok=True, number=number, step=step, to=to)
 
 
 def _whole(value: Any, field: str) -> int:

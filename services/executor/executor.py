@@ -68,7 +68,18 @@ from services.executor.store import ActionStore, StoreError
 from services.executor.undo import before_state, reverse
 from shared.bus import Bus, BusTimeout, RemoteError
 from shared.contract import CARRIED, PLACES
-from shared.messages import NluResult, Objects, PerceivedObject, Say, SayKind, SimState, Table, as_received
+from shared.messages import (
+    CommandReply,
+    NluResult,
+    Objects,
+    PerceivedObject,
+    Reply,
+    Say,
+    SayKind,
+    SimState,
+    Table,
+    as_received,
+)
 from shared.robot import ROBOT
 
 log = logging.getLogger("hfpbd.executor")
@@ -192,15 +203,15 @@ class Executor:
         if not ok:
             self.say(text, "error")
 
-    def _on_control_command(self, request: dict[str, Any]) -> dict[str, Any]:
+    def _on_control_command(self, request: dict[str, Any]) -> CommandReply:
         try:
             procedure = request.get("procedure")
             args = check(procedure, request.get("args"))  # refuses a procedure that is not the contract's
             steps = [Step(str(procedure), args, {}, "")]
         except CommandError as exc:
-            return {"ok": False, "message": str(exc)}
+            return CommandReply(ok=False, message=str(exc))
         ok, text = self.submit(steps, "")
-        return {"ok": ok, "message": text}
+        return CommandReply(ok=ok, message=text)
 
     # -- dispatch ---------------------------------------------------------------------------
     def submit(self, steps: list[Step], utterance: str) -> tuple[bool, str]:
@@ -934,7 +945,7 @@ class Executor:
             self._reach_stale.set()
         return objects
 
-    def _on_control_actions(self, request: dict[str, Any]) -> dict[str, Any]:
+    def _on_control_actions(self, request: dict[str, Any]) -> Reply:
         """Manage actions for the TUI (``actions_control``; errors become error replies)."""
         reply = apply_actions_request(self.store, request, self._execute_from)
         self.publish_state()

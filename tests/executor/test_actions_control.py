@@ -8,6 +8,7 @@ import pytest
 
 from services.executor.actions_control import apply, step_words
 from services.executor.store import ActionStore, StoreError
+from shared.messages import ActionList, ActionStarted, StepDeleted
 
 pytestmark = pytest.mark.unit
 
@@ -28,8 +29,9 @@ def test_list_gives_every_step_in_the_users_words(tmp_path: Path) -> None:
     store.create()
     store.append_step({"procedure": "pick_up", "args": {"arm": "left", "object": "obj0"}, "landmark": LANDMARK})
     reply = apply(store, {"op": "list"})
-    assert [a["words"] for a in reply["actions"]] == [SAID, ["pick up left the red cup"]]
-    assert [a["steps"] for a in reply["actions"]] == [3, 1]
+    assert isinstance(reply, ActionList)
+    assert [a.words for a in reply.actions] == [SAID, ["pick up left the red cup"]]
+    assert [a.steps for a in reply.actions] == [3, 1]
 
 
 def test_a_step_without_words_never_shows_an_object_id(tmp_path: Path) -> None:
@@ -45,7 +47,7 @@ def test_a_step_without_words_never_shows_an_object_id(tmp_path: Path) -> None:
 
 def test_delete_step_removes_only_that_step_and_survives_a_restart(tmp_path: Path) -> None:
     store = _store(tmp_path)
-    assert apply(store, {"op": "delete_step", "number": 1, "step": 2}) == {"ok": True, "number": 1, "steps": 2}
+    assert apply(store, {"op": "delete_step", "number": 1, "step": 2}) == StepDeleted(ok=True, number=1, steps=2)
     assert [s["utterance"] for s in ActionStore(tmp_path).get(1)["steps"]] == [SAID[0], SAID[2]]
 
 
@@ -86,6 +88,6 @@ def test_execute_hands_the_action_and_step_to_the_runner(tmp_path: Path) -> None
         return True, "accepted"
 
     reply = apply(store, {"op": "execute", "number": 1, "step": 2}, run)
-    assert runs == [(1, 2)] and reply["message"] == "accepted"
+    assert runs == [(1, 2)] and reply == ActionStarted(ok=True, number=1, step=2, message="accepted")
     with pytest.raises(StoreError, match="still busy"):
         apply(store, {"op": "execute", "number": 1, "step": 1}, lambda n, s: (False, "I'm still busy with open"))
