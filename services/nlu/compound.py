@@ -10,7 +10,6 @@ understood is asked about, naming that part, and nothing of the utterance runs.
 from __future__ import annotations
 
 import re
-from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from services.nlu import pairs, tokens
@@ -19,9 +18,8 @@ from services.nlu.lexicon import LANDMARK_PHRASES, OBJECT_SLOTS, PHRASES
 from services.nlu.phrasing import command_text
 from services.nlu.prior import History
 from services.nlu.results import Clarify, CommandResult, Result
+from services.nlu.situation import after
 from services.nlu.weights import LANGUAGE
-from services.nlu.world import RobotState, World
-from shared.contract import ARMS, BOTH
 
 if TYPE_CHECKING:
     from services.nlu.infer import Model
@@ -167,29 +165,3 @@ def run(model: Model, parts: list[str], history: History) -> Result:
     if not arm_said and (each := pairs.uncrossed(model.world, commands)) != commands:
         commands, texts = each, [command_text(command, model.scene) for command in each]
     return CommandResult(commands[0], confidence, ", then ".join(texts), {}, score, tuple(commands[1:]))
-
-
-def after(world: World, command: Command) -> World:
-    """The world as ``command`` leaves it, as far as the next step's understanding needs."""
-    arm, object_id = command.arg("arm"), command.arg("object")
-    robot = world.robot
-    grippers = dict(robot.grippers)
-    objects = world.objects
-    arms = ARMS if arm == BOTH else (arm,)
-    if command.procedure == "pick_up":
-        grippers[arm] = "holding"
-        objects = tuple(replace(o, held_by=arm) if o.id == object_id else o for o in objects)
-    elif command.procedure in ("place_abs", "place_rel", "open"):
-        for hand in arms:
-            grippers[hand] = "open"
-        objects = tuple(replace(o, held_by=None) if o.held_by in arms else o for o in objects)
-    elif command.procedure == "close":
-        for hand in arms:
-            grippers[hand] = "holding" if any(o.held_by == hand for o in objects) else "closed"
-    history = History(robot.last_arm, robot.last_object).after(command, world)
-    return World(
-        objects,
-        RobotState(
-            **{**robot.__dict__, "grippers": grippers, "last_arm": history.last_arm, "last_object": history.last_object}
-        ),
-    )

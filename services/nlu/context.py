@@ -14,11 +14,11 @@ from dataclasses import dataclass, field
 
 from services.nlu import modifiers, questions
 from services.nlu.commands import ADMIN_PROCEDURES, Command
-from services.nlu.compound import after
 from services.nlu.hands import NAMING_SLOTS
 from services.nlu.infer import Answer, Clarify, CommandResult, Model, Result
 from services.nlu.lexicon import OBJECT_SLOTS, REFERRING_SLOTS
 from services.nlu.prior import History
+from services.nlu.situation import after
 from services.nlu.skills import rebinds
 from services.nlu.tokens import read, slots_said
 from services.nlu.unsupported import unsupported
@@ -93,7 +93,7 @@ class Dialogue:
         """Interpret one utterance (or a numbered choice) in the current world."""
         if choice is not None:
             return self._choose(model, choice)
-        result: Result | None = questions.answer(model, text, self._history(model))
+        result: Result | None = questions.answer(model.situation, text, self._history(model))
         if result is not None:
             return result  # a question, even one asked while a question is pending
         if self.pending is not None and self.pending.clarify.confirms is not None:

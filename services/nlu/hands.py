@@ -22,13 +22,12 @@ runner-up:
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from services.nlu.commands import Command
 from services.nlu.language import Match, relation_at
 from services.nlu.prior import History
+from services.nlu.situation import Situation
 from services.nlu.tokens import slots_said
 from shared.contract import ARMS
 
@@ -37,48 +36,47 @@ DIRECTIONAL_MOVES = frozenset({"move_abs_dir", "move_rel_dir"})  # moves that ca
 # what a full hand does to the object it holds (a move of it, or its release)
 CARRYING_MOVES = DIRECTIONAL_MOVES | {"move_rel_dest", "place_abs", "place_rel"}
 
-if TYPE_CHECKING:
-    from services.nlu.infer import Model
-
 
 class Refusal(Exception):
     """The command cannot be done in this state; the message says why, in the robot's words."""
 
 
-def situate(model: Model, command: Command, match: Match, history: History, said_arm: bool) -> tuple[Command, ...]:
+def situate(
+    situation: Situation, command: Command, match: Match, history: History, said_arm: bool
+) -> tuple[Command, ...]:
     """The commands that carry out ``command`` in the current state (the first is the one asked for)."""
-    world = model.world
+    world = situation.world
     if command.procedure == "pick_up":
-        already_held(model, command.procedure, match)
+        already_held(situation, command.procedure, match)
         return (command,)
-    if command.procedure in CARRYING_MOVES and holds(model, command.arg("arm")):
-        command = _hand_for_named(model, command, match, said_arm)
-    if command.procedure in DIRECTIONAL_MOVES and not said_arm and _empty(model, command.arg("arm")):
-        moved = _theme(model, command, match) if _names_an_object(match) else None
+    if command.procedure in CARRYING_MOVES and holds(situation, command.arg("arm")):
+        command = _hand_for_named(situation, command, match, said_arm)
+    if command.procedure in DIRECTIONAL_MOVES and not said_arm and _empty(situation, command.arg("arm")):
+        moved = _theme(situation, command, match) if _names_an_object(match) else None
         if moved is not None and world.objects[moved].held_by is None and command.arg("direction") != "down":
-            return _carried(model, command, moved, history)
-    if command.procedure == "move_rel_dest" and not said_arm and _empty(model, command.arg("arm")):
-        carried = _theme(model, command, match)
+            return _carried(situation, command, moved, history)
+    if command.procedure == "move_rel_dest" and not said_arm and _empty(situation, command.arg("arm")):
+        carried = _theme(situation, command, match)
         if carried is not None:  # "move the cup next to the box": the cup goes there
             command = Command("place_rel", command.args)
         elif _names_an_object(match) and match.theme_end:
-            _which_to_carry(model, command, match)
-    if command.procedure not in ("place_abs", "place_rel") or not _empty(model, command.arg("arm")):
+            _which_to_carry(situation, command, match)
+    if command.procedure not in ("place_abs", "place_rel") or not _empty(situation, command.arg("arm")):
         return (command,)
     if said_arm:
-        _in_the_other_hand(model, command.arg("arm"), match)
-    theme = _theme(model, command, match)
+        _in_the_other_hand(situation, command.arg("arm"), match)
+    theme = _theme(situation, command, match)
     if theme is not None and world.objects[theme].held_by is None:
-        arm = command.arg("arm") if said_arm else best_arm(model, theme, history, command.arg("arm"))
+        arm = command.arg("arm") if said_arm else best_arm(situation, theme, history, command.arg("arm"))
         return (Command("pick_up", (("arm", arm), ("object", world.ids[theme]))), command.with_arg("arm", arm))
     if theme is None and _names_an_object(match) and match.theme_end:
-        _which_to_carry(model, command, match)
+        _which_to_carry(situation, command, match)
     if command.procedure == "place_rel":
         return (Command("move_rel_dest", command.args),)
     raise Refusal(f"My {command.arg('arm')} hand is not holding anything to put down.")
 
 
-def _hand_for_named(model: Model, command: Command, match: Match, said_arm: bool) -> Command:
+def _hand_for_named(situation: Situation, command: Command, match: Match, said_arm: bool) -> Command:
     """ "Put the red cup on the plate" while this hand holds the blue cup: the hand that holds, or can take, the red cup.
 
     The words for what to carry outweigh the hand the prior chose: it is
@@ -87,30 +85,30 @@ def _hand_for_named(model: Model, command: Command, match: Match, said_arm: bool
     it is refused. Putting it on an object a hand holds is refused too, and
     so is putting down an object no hand holds.
     """
-    world = model.world
+    world = situation.world
     arm = command.arg("arm")
     said_before = relation_at(match.terms)
-    theme = _unique(match.grounding(said_before), model)
+    theme = _unique(match.grounding(said_before), situation)
     in_hand = next((i for i, obj in enumerate(world.objects) if obj.held_by == arm), None)
     if theme is None or theme == in_hand or not _names_by_kind(match, said_before):
         return command
-    landmark = _unique(match.grounding_from(said_before), model)
+    landmark = _unique(match.grounding_from(said_before), situation)
     if landmark is not None and world.objects[landmark].held_by is not None:
         holder = world.objects[landmark].held_by
         raise Refusal(
-            f"I am holding {model.scene.describe(landmark).text} in my {holder} hand."
+            f"I am holding {situation.scene.describe(landmark).text} in my {holder} hand."
             f" Put it down first, then say it again."
         )
     if command.arg("object") is not None and theme == world.index_of(str(command.arg("object"))):
         return command  # the words name the landmark as what to carry too: nothing to go by
     holder = world.objects[theme].held_by
     other = next(a for a in ARMS if a != arm)
-    carrying = model.scene.describe(in_hand).text if in_hand is not None else "something"
-    named = model.scene.describe(theme).text
+    carrying = situation.scene.describe(in_hand).text if in_hand is not None else "something"
+    named = situation.scene.describe(theme).text
     if command.procedure == "place_abs" and holder is None:
         # "put the red cup down" while holding the blue cup: a pick-up and a put-down would leave it where it is
         raise Refusal(f"My {arm} hand is holding {carrying}, not {named}.")
-    if not said_arm and (holder is not None or _empty(model, other)):  # held by the other hand, or it is free
+    if not said_arm and (holder is not None or _empty(situation, other)):  # held by the other hand, or it is free
         return command.with_arg("arm", other)
     if holder is None and not said_arm:
         raise Refusal(f"Both my hands are full. Put one down first, then I can take {named}.")
@@ -122,21 +120,21 @@ def _names_by_kind(match: Match, upto: int) -> bool:
     return bool(slots_said(match.terms[:upto]) & (NAMING_SLOTS - {"anaphor"}))
 
 
-def _in_the_other_hand(model: Model, arm: str, match: Match) -> None:
+def _in_the_other_hand(situation: Situation, arm: str, match: Match) -> None:
     """ "Put it on the plate with your left hand" while the right hand holds it: refused, saying where it is
     (not a move of the empty left hand to the plate)."""
     if "anaphor" not in slots_said(match.terms):
         return
-    held = next((i for i, obj in enumerate(model.world.objects) if obj.held_by not in (None, arm)), None)
+    held = next((i for i, obj in enumerate(situation.world.objects) if obj.held_by not in (None, arm)), None)
     if held is not None:
-        other = model.world.objects[held].held_by
+        other = situation.world.objects[held].held_by
         raise Refusal(
-            f"My {arm} hand is empty: {model.scene.describe(held).text} is in my {other} hand."
+            f"My {arm} hand is empty: {situation.scene.describe(held).text} is in my {other} hand."
             f" Say it again without naming a hand, and my {other} hand will do it."
         )
 
 
-def _which_to_carry(model: Model, command: Command, match: Match) -> None:
+def _which_to_carry(situation: Situation, command: Command, match: Match) -> None:
     """ "Put the red cup on the plate" with three red cups and empty hands: ask which, not move a hand there.
 
     Only words before the relation count (they name what is carried), and
@@ -149,18 +147,18 @@ def _which_to_carry(model: Model, command: Command, match: Match) -> None:
     tied = [
         i
         for i in np.flatnonzero(grounding >= grounding.max() - 1e-9)
-        if model.world.ids[i] != landmark and model.world.objects[i].held_by is None
+        if situation.world.ids[i] != landmark and situation.world.objects[i].held_by is None
     ]
     if len(tied) > 1:
-        names = [model.scene.describe(int(i)).text for i in tied]
+        names = [situation.scene.describe(int(i)).text for i in tied]
         listed = ", ".join(names[:-1]) + " or " + names[-1]
         raise Refusal(f"Which one should I carry: {listed}? Say it again naming that one.")
 
 
-def _carried(model: Model, move: Command, obj: int, history: History) -> tuple[Command, ...]:
+def _carried(situation: Situation, move: Command, obj: int, history: History) -> tuple[Command, ...]:
     """Pick ``obj`` up, make ``move`` with it and (unless it went up) put it down there."""
-    arm = best_arm(model, obj, history, move.arg("arm"))
-    pick_up = Command("pick_up", (("arm", arm), ("object", model.world.ids[obj])))
+    arm = best_arm(situation, obj, history, move.arg("arm"))
+    pick_up = Command("pick_up", (("arm", arm), ("object", situation.world.ids[obj])))
     moved = move.with_arg("arm", arm)
     if move.arg("direction") == "up":
         return (pick_up, moved)
@@ -172,35 +170,37 @@ def _names_an_object(match: Match) -> bool:
     return bool(slots_said(match.terms) & NAMING_SLOTS)
 
 
-def _theme(model: Model, command: Command, match: Match) -> int | None:
+def _theme(situation: Situation, command: Command, match: Match) -> int | None:
     """The one object the words before the relation name, when it is not the command's landmark."""
-    theme = _unique(match.grounding(match.theme_end) if match.theme_end else match.grounding(), model)
-    if command.arg("object") is not None and theme == model.world.index_of(command.arg("object")):
+    theme = _unique(match.grounding(match.theme_end) if match.theme_end else match.grounding(), situation)
+    if command.arg("object") is not None and theme == situation.world.index_of(command.arg("object")):
         return None
     return theme
 
 
-def already_held(model: Model, procedure: str, match: Match) -> None:
+def already_held(situation: Situation, procedure: str, match: Match) -> None:
     """Refuse a pick-up whose words mean an object a hand already holds."""
     if procedure != "pick_up":
         return
-    held = _unique(match.grounding(), model)
-    if held is not None and model.world.objects[held].held_by is not None:
-        obj = model.world.objects[held]
-        raise Refusal(f"I am already holding {model.scene.describe(held).text} in my {obj.held_by} hand.")
+    held = _unique(match.grounding(), situation)
+    if held is not None and situation.world.objects[held].held_by is not None:
+        obj = situation.world.objects[held]
+        raise Refusal(f"I am already holding {situation.scene.describe(held).text} in my {obj.held_by} hand.")
 
 
-def _empty(model: Model, arm: str) -> bool:
+def _empty(situation: Situation, arm: str) -> bool:
     """The hand is known to hold nothing (an unknown gripper state may be holding)."""
-    return model.world.robot.grippers.get(arm) is not None and not holds(model, arm)
+    return situation.world.robot.grippers.get(arm) is not None and not holds(situation, arm)
 
 
-def holds(model: Model, arm: str) -> bool:
+def holds(situation: Situation, arm: str) -> bool:
     """The hand holds something: its gripper says so, or an object is held by it."""
-    return model.world.robot.grippers.get(arm) == "holding" or any(o.held_by == arm for o in model.world.objects)
+    return situation.world.robot.grippers.get(arm) == "holding" or any(
+        o.held_by == arm for o in situation.world.objects
+    )
 
 
-def _unique(grounding: np.ndarray | None, model: Model) -> int | None:
+def _unique(grounding: np.ndarray | None, situation: Situation) -> int | None:
     """The one object the words fit best, or None when they fit none or several equally."""
     if grounding is None or not len(grounding) or grounding.max() <= 0:
         return None
@@ -208,15 +208,15 @@ def _unique(grounding: np.ndarray | None, model: Model) -> int | None:
     return int(best[0]) if len(best) == 1 else None
 
 
-def best_arm(model: Model, obj: int, history: History, fallback: str) -> str:
+def best_arm(situation: Situation, obj: int, history: History, fallback: str) -> str:
     """The arm the prior prefers for picking ``obj`` up (``fallback`` when both are equal)."""
     scores: dict[str, float] = {}
-    object_id = model.world.ids[obj]
+    object_id = situation.world.ids[obj]
     for arm in ARMS:
-        position = model.index.position.get(Command("pick_up", (("arm", arm), ("object", object_id))))
+        position = situation.index.position.get(Command("pick_up", (("arm", arm), ("object", object_id))))
         if position is None:
             return fallback
-        scores[arm] = float(model.situation[position] + model.history_part(history)[position])
+        scores[arm] = float(situation.prior[position] + situation.history_part(history)[position])
     if abs(scores["right"] - scores["left"]) < 1e-9:
         return fallback
     return max(scores, key=scores.__getitem__)

@@ -16,13 +16,13 @@ import numpy as np
 
 from services.nlu import compound, hands, meant, modifiers, pairs, pushing, questions, relational, sayings, stacking
 from services.nlu.commands import NUMBER, PROCEDURES, Command
-from services.nlu.language import Index, Match
+from services.nlu.language import Match
 from services.nlu.lexicon import OBJECT_SLOTS
 from services.nlu.phrasing import command_text, not_seen, parameter_question, rephrase_question
-from services.nlu.prior import History, history_scores, side_scores, situation_scores
-from services.nlu.referring import ground_phrase
+from services.nlu.prior import History
 from services.nlu.refexp import Scene
 from services.nlu.results import Answer, Clarify, CommandResult, Result
+from services.nlu.situation import Situation
 from services.nlu.skills import read_skill
 from services.nlu.tokens import Term, Utterance, read, slots_said
 from services.nlu.unsupported import unsupported
@@ -44,16 +44,14 @@ class Model:
     """Everything precomputed for one world state."""
 
     def __init__(self, world: World) -> None:
+        self.situation = Situation(world)
         self.world = world
-        self.scene = Scene(world)
-        self.index = Index(world, self.scene)
-        self.situation = situation_scores(world, self.index.commands)
-        self.sides = side_scores(world, self.index.commands)
-        self._history_parts: dict[History, np.ndarray] = {}
+        self.scene = self.situation.scene
+        self.index = self.situation.index
 
     @property
     def default_history(self) -> History:
-        return History(self.world.robot.last_arm, self.world.robot.last_object)
+        return self.situation.default_history
 
     def parse(
         self,
@@ -74,7 +72,9 @@ class Model:
         refused = meant.before_reading(text, replying=among is not None)
         if refused is not None:
             return refused
-        return meant.after_reading(self, text, self._read(text, history or self.default_history, among, focus))
+        return meant.after_reading(
+            self.situation, text, self._read(text, history or self.default_history, among, focus)
+        )
 
     def _read(self, text: str, history: History, among: list[Command] | None, focus: list[str] | None) -> Result:
         """Understand ``text``: a question, one command, or several in a row."""
@@ -82,10 +82,10 @@ class Model:
             skill = read_skill(self, text, history)
             if skill is not None:
                 return skill
-            reply = questions.answer(self, text, history)
+            reply = questions.answer(self.situation, text, history)
             if reply is not None:
                 return reply
-            pushed = pushing.as_steps(self, text)
+            pushed = pushing.as_steps(self.situation, text)
             if isinstance(pushed, Clarify):
                 return pushed
             parts = compound.split(sayings.handed_over(sayings.taken_back(pushed)))
@@ -98,9 +98,9 @@ class Model:
         self, text: str, history: History, among: list[Command] | None = None, focus: list[str] | None = None
     ) -> Result:
         """One command: the model's choice, with the distance and "both hands" said put into it."""
-        if among is None and (stacked := stacking.spelled_out(self, text, history)) is not None:
+        if among is None and (stacked := stacking.spelled_out(self.situation, text, history)) is not None:
             return stacked
-        if among is None and (each := pairs.spelled_out(self, text)) is not None:
+        if among is None and (each := pairs.spelled_out(self.situation, text)) is not None:
             return each
         if among is None and (why := unsupported(text)) is not None:
             return Clarify([], why)
@@ -109,7 +109,7 @@ class Model:
         )
         if said.problem is not None:
             return Clarify(["distance"], said.problem)
-        if _THEM.search(said.text) and all(hands.holds(self, arm) for arm in ARMS):
+        if _THEM.search(said.text) and all(hands.holds(self.situation, arm) for arm in ARMS):
             said = replace(said, both=True)  # "put them on the plate" with a cup in each hand: each in turn
         result = self._understand(said.text, history, among, focus)
         first = (
@@ -150,20 +150,13 @@ class Model:
         A place is done with one hand at a time (DESIGN.md), but with both
         hands full "both" leaves no doubt which objects are meant.
         """
-        if command.procedure not in ("place_abs", "place_rel") or not all(hands.holds(self, arm) for arm in ARMS):
+        if command.procedure not in ("place_abs", "place_rel") or not all(
+            hands.holds(self.situation, arm) for arm in ARMS
+        ):
             return None
         steps = [command.with_arg("arm", arm) for arm in ARMS]
         text = ", then ".join(command_text(step, self.scene) for step in steps)
         return CommandResult(steps[0], 1.0, text, {}, score, tuple(steps[1:]))
-
-    def history_part(self, history: History) -> np.ndarray:
-        """The per-utterance part of the prior: last arm (or the object's side), last object (once per history)."""
-        part = self._history_parts.get(history)
-        if part is None:
-            part = self._history_parts[history] = history_scores(
-                self.index.arm, self.index.object, history, self.world, self.sides
-            )
-        return part
 
     def _understand(self, text: str, history: History, among: list[Command] | None, focus: list[str] | None) -> Result:
         utterance = read(text)
@@ -171,7 +164,7 @@ class Model:
             utterance = _focused(utterance, focus)
         if not utterance.terms:
             return Clarify([], _not_understood(utterance))
-        last = self.referent(history)
+        last = self.situation.referent(history)
         allowed = self._allowed(among)
         within = None
         if allowed is not None:
@@ -179,7 +172,7 @@ class Model:
             within = frozenset(int(i) for i in objects) or None
         terms = relational.resolve(self.scene, utterance.terms, last, within)
         match = self.index.match(terms, last, within)
-        scores = LANGUAGE.beta * match.scores + self.situation + self.history_part(history)
+        scores = LANGUAGE.beta * match.scores + self.situation.prior + self.situation.history_part(history)
         if not match.has_number:
             scores[self.index.number] = -np.inf
         considered = allowed if allowed is not None else np.arange(len(scores))
@@ -209,13 +202,6 @@ class Model:
             # "move the banana towards me": not a move of the hand alone
             return Clarify([], f'{_unknown_words(utterance)}. Please name the object another way, like "the red cup".')
         return meant.confirmation(decided, f"{_unknown_words(utterance)}.")
-
-    def referent(self, history: History) -> int | None:
-        """What "it" means: the object in a hand (the last used hand's first), else the last object referred to."""
-        held = {obj.held_by: i for i, obj in enumerate(self.world.objects) if obj.held_by is not None}
-        if held:
-            return held[history.last_arm] if history.last_arm in held else next(iter(held.values()))
-        return self.world.index_of(history.last_object) if history.last_object in self.world.ids else None
 
     def _allowed(self, among: list[Command] | None) -> np.ndarray | None:
         if not among:
@@ -248,7 +234,7 @@ class Model:
                 best_score,
             )
         try:
-            hands.already_held(self, everything[0].procedure, match)
+            hands.already_held(self.situation, everything[0].procedure, match)
         except hands.Refusal as refusal:
             return Clarify([], str(refusal))
         candidates = everything[: DECISION.max_candidates]
@@ -281,7 +267,7 @@ class Model:
             text = f"{command_text(switch, self.scene)}, then {command_text(command, self.scene, phrases)}"
             return CommandResult(switch, confidence, text, {}, score, (command,))
         try:
-            commands = hands.situate(self, command, match, history, "arm" in phrases)
+            commands = hands.situate(self.situation, command, match, history, "arm" in phrases)
         except hands.Refusal as refusal:
             return Clarify([], str(refusal))
         if commands[0] != command:  # a pick-up first: the user's words are about the step after it
@@ -299,8 +285,7 @@ class Model:
 
     def ground(self, text: str) -> dict[str, float]:
         """P(object | referring phrase) over the world's objects (paper Fig. 3)."""
-        probabilities = ground_phrase(self.scene, text)
-        return {obj.id: round(float(p), 4) for obj, p in zip(self.world.objects, probabilities)}
+        return self.situation.ground(text)
 
     def describe(self) -> dict[str, str]:
         """The generated referring expression of every object (paper Fig. 2)."""

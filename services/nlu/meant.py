@@ -21,17 +21,14 @@ anything else does not.
 from __future__ import annotations
 
 import re
-from typing import TYPE_CHECKING
 
 from services.nlu.lexicon import NUMBER_WORDS
 from services.nlu.phrasing import not_seen
 from services.nlu.results import Clarify, CommandResult, Result
+from services.nlu.situation import Situation
 from services.nlu.tokens import read, slots_said
 from services.nlu.weights import DECISION
 from shared.contract import ADMIN_PROCEDURES, PROCEDURES
-
-if TYPE_CHECKING:
-    from services.nlu.infer import Model
 
 # characters and shapes of code and markup, never of a spoken or typed command: tags, braces, calls, assignments
 _CODE = re.compile(r"[<>{}\[\]\\|=;`@#$^~_*]|[a-z_]\w*\s*\(|://")
@@ -90,7 +87,7 @@ def before_reading(text: str, replying: bool) -> Clarify | None:
     return None
 
 
-def after_reading(model: Model, text: str, result: Result) -> Result:
+def after_reading(situation: Situation, text: str, result: Result) -> Result:
     """``result`` when it is safe to act on as it stands; otherwise the refusal or the question to ask.
 
     A command already offered for confirmation is checked too: a refusal
@@ -101,12 +98,12 @@ def after_reading(model: Model, text: str, result: Result) -> Result:
         return result
     if _ASKING.match(text.lower().strip()):
         return Clarify([], NOT_ASKED)
-    refusal = _no_such_action(model, heard) or _object_to_no_object_verb(text, heard)
+    refusal = _no_such_action(situation, heard) or _object_to_no_object_verb(text, heard)
     if refusal is not None:
         return refusal
     if heard is not result:
         return result
-    missing = not_seen(read(text).terms, model.world) if _acts_on_objects(heard) else None
+    missing = not_seen(read(text).terms, situation.world) if _acts_on_objects(heard) else None
     if missing is not None:  # "pick up the blue cup" with no blue cup: never the red one unasked
         return confirmation(heard, missing)
     if not heard.then and heard.confidence < DECISION.confirm_below:
@@ -135,9 +132,9 @@ def asking(result: CommandResult, question: str) -> Clarify:
     return Clarify([], question, [result.command], [result.text], result.score, confirms=result)
 
 
-def _no_such_action(model: Model, result: CommandResult) -> Clarify | None:
+def _no_such_action(situation: Situation, result: CommandResult) -> Clarify | None:
     """A switch to an action number that does not exist, refused with the actions there are."""
-    count = len(model.world.robot.actions)
+    count = len(situation.world.robot.actions)
     if not count:
         return None  # the actions are not known here (a world file without them): nothing to check against
     for command in result.commands:

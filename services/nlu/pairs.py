@@ -13,7 +13,6 @@ as two pick-ups (see :func:`uncrossed`).
 from __future__ import annotations
 
 import re
-from typing import TYPE_CHECKING
 
 from services.nlu import hands
 from services.nlu.commands import Command
@@ -21,11 +20,9 @@ from services.nlu.lexicon import PLURAL_TYPE_WORDS
 from services.nlu.phrasing import command_text
 from services.nlu.plurals import plain, the_two
 from services.nlu.results import Clarify, CommandResult, Result
+from services.nlu.situation import Situation
+from services.nlu.world import World
 from shared.contract import ARMS
-
-if TYPE_CHECKING:
-    from services.nlu.infer import Model
-    from services.nlu.world import World
 
 _PLURAL_KINDS = "|".join(sorted(PLURAL_TYPE_WORDS, key=len, reverse=True))
 _SAID = re.compile(
@@ -41,27 +38,27 @@ def kind_named(text: str) -> str | None:
     return None if match is None else PLURAL_TYPE_WORDS[match.group("kind")]
 
 
-def spelled_out(model: Model, text: str) -> Result | None:
+def spelled_out(situation: Situation, text: str) -> Result | None:
     """The pick-ups "pick up both cups" means in this world; None when ``text`` is no such request."""
     kind = kind_named(text)
-    pair = the_two(model, kind, _not_two)
+    pair = the_two(situation, kind, _not_two)
     if pair is None or isinstance(pair, Clarify):
         return pair
-    world = model.world
+    world = situation.world
     to_take = [i for i in pair if world.objects[i].held_by is None]
-    free = [arm for arm in ARMS if not hands.holds(model, arm)]
+    free = [arm for arm in ARMS if not hands.holds(situation, arm)]
     if not to_take:
         return Clarify([], f"I am already holding both {kind}s.")
     if len(to_take) > len(free):
         # the hand holding something else (with a cup in one hand and a box in the other: the box's)
         others = {obj.held_by: i for i, obj in enumerate(world.objects) if obj.held_by and i not in pair}
         full = next((arm for arm in ARMS if arm in others), next(arm for arm in ARMS if arm not in free))
-        what = model.scene.describe(others[full]).text if full in others else "something"
+        what = situation.scene.describe(others[full]).text if full in others else "something"
         return Clarify([], f"My {full} hand is holding {what}: put it down first, then I can take both {kind}s.")
     steps = tuple(
         Command("pick_up", (("arm", arm), ("object", world.ids[i]))) for arm, i in _assigned(world, to_take, free)
     )
-    said = ", then ".join(command_text(step, model.scene) for step in steps)
+    said = ", then ".join(command_text(step, situation.scene) for step in steps)
     return CommandResult(steps[0], 1.0, said, {}, 0.0, steps[1:])
 
 

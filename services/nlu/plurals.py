@@ -9,12 +9,9 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
-from typing import TYPE_CHECKING
 
 from services.nlu.results import Clarify
-
-if TYPE_CHECKING:
-    from services.nlu.infer import Model
+from services.nlu.situation import Situation
 
 
 def plain(text: str) -> str:
@@ -23,10 +20,10 @@ def plain(text: str) -> str:
     return re.sub(r"^(?:please |robot |now |ok |okay )+|(?: please)$", "", said)
 
 
-def the_two(model: Model, kind: str | None, not_two: Callable[[str, int], str]) -> list[int] | Clarify | None:
+def the_two(situation: Situation, kind: str | None, not_two: Callable[[str, int], str]) -> list[int] | Clarify | None:
     """The indices of the two objects of ``kind`` in view; the question ``not_two(kind, count)`` says when there
     are not two; None when no kind was named (the words ask something else)."""
     if kind is None:
         return None
-    pair = [i for i, obj in enumerate(model.world.objects) if obj.type == kind]
+    pair = [i for i, obj in enumerate(situation.world.objects) if obj.type == kind]
     return pair if len(pair) == 2 else Clarify([], not_two(kind, len(pair)))

@@ -14,12 +14,9 @@ default step; said again, it slides on. A push with no way said asks which.
 from __future__ import annotations
 
 import re
-from typing import TYPE_CHECKING
 
 from services.nlu.results import Clarify
-
-if TYPE_CHECKING:
-    from services.nlu.infer import Model
+from services.nlu.situation import Situation
 
 _CARRYING_VERBS = frozenset({"move", "bring", "get"})  # verbs that push only a flat object ("move the plate left")
 FLAT = 0.03  # metres: no taller than this, an object is slid under the pressing hand rather than picked up
@@ -43,7 +40,7 @@ _NO_WAY = re.compile(r"^(?:please )?(?:push|slide|drag|shove|nudge)(?: over)? (?
 _SLIDE = "move your hand above {object}, then move down, then move {way}{rest}, then move up"
 
 
-def as_steps(model: Model, text: str) -> str | Clarify:
+def as_steps(situation: Situation, text: str) -> str | Clarify:
     """``text`` as the steps of the push it asks for, or unchanged when it asks for none; which way, when the
     push says none."""
     said = " ".join(text.lower().split())
@@ -59,16 +56,16 @@ def as_steps(model: Model, text: str) -> str | Clarify:
             )
         return text
     way = next(word for i, word in enumerate(_WAYS) if found[f"w{i}"] is not None)
-    grounding = model.ground(found["object"])
+    grounding = situation.ground(found["object"])
     best = max(grounding, key=grounding.__getitem__, default=None)
-    if best is not None and grounding[best] > 0 and _flat(model, best):
+    if best is not None and grounding[best] > 0 and _flat(situation, best):
         return _SLIDE.format(object=found["object"], way=way, rest=found["rest"])
     if found["verb"] in _CARRYING_VERBS:
         return text  # "move the red cup to the left": the model's own reading
     return f"move {found['object']} {way}{found['rest']}"
 
 
-def _flat(model: Model, object_id: str) -> bool:
+def _flat(situation: Situation, object_id: str) -> bool:
     """Flat and on the table: slid, not lifted (one in a hand is already carried)."""
-    obj = model.world.objects[model.world.index_of(object_id)]
+    obj = situation.world.objects[situation.world.index_of(object_id)]
     return obj.size[2] <= FLAT and obj.held_by is None

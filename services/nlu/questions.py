@@ -10,20 +10,18 @@ objects by their referring expressions (never by their ids).
 from __future__ import annotations
 
 import re
-from typing import TYPE_CHECKING, cast
+from typing import cast
 
 from services.nlu import relational, relations_asked
 from services.nlu.lexicon import NUMBER_WORDS
 from services.nlu.phrasing import either
+from services.nlu.prior import History
 from services.nlu.relations_asked import RELATION_WORDS
 from services.nlu.results import Answer
+from services.nlu.situation import Situation
 from services.nlu.tokens import Term, canonical, read, slots_said
 from services.nlu.weights import MARGINS
 from shared.contract import ARMS, AnswerTopic
-
-if TYPE_CHECKING:
-    from services.nlu.infer import Model
-    from services.nlu.prior import History
 
 _PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple(
     (topic, re.compile(pattern))
@@ -119,7 +117,7 @@ _CONTRACTED = re.compile(r"\b(what|where|that)(?:'s|s)\b")
 _CONTRACTED_AM_ARE = re.compile(r"\b(?:(i)'?m|(we)'re)\b")
 
 
-def answer(model: Model, text: str, history: History) -> Answer | None:
+def answer(situation: Situation, text: str, history: History) -> Answer | None:
     """The answer when ``text`` is a question; None when it is not one."""
     first = text.lstrip().split(" ", 1)[0].lower().strip("?!.,")
     if first.replace("'", "") not in _OPENERS:
@@ -134,27 +132,27 @@ def answer(model: Model, text: str, history: History) -> Answer | None:
         return None
     topic, found = found_any
     if topic == "object":
-        return Answer("object", _where(model, found["phrase"]))
+        return Answer("object", _where(situation, found["phrase"]))
     if topic == "which":  # "which cup is closest to you": where that one is
-        return Answer("object", _where(model, _about_me(found["phrase"])))
+        return Answer("object", _where(situation, _about_me(found["phrase"])))
     if topic == "related":  # "is the red cup on the plate"
-        return Answer("object", _is_related(model, found["subject"], found["relation"], found["landmark"]))
+        return Answer("object", _is_related(situation, found["subject"], found["relation"], found["landmark"]))
     if topic == "what_related" and not _names_an_object(found["landmark"]):  # "what is on the table"
-        return Answer("scene", _scene(model))
+        return Answer("scene", _scene(situation))
     if topic == "what_related":  # "what is on the plate"
-        return Answer("object", _what_is(model, found["relation"], found["landmark"]))
+        return Answer("object", _what_is(situation, found["relation"], found["landmark"]))
     if topic == "reach":  # "can you reach the box", "is the plate within reach"
-        return Answer("object", _reach(model, found["subject"] or found["phrase"]))
+        return Answer("object", _reach(situation, found["subject"] or found["phrase"]))
     if topic == "count":  # "how many cups are there"
-        return Answer("object", _count(model, found["phrase"]))
+        return Answer("object", _count(situation, found["phrase"]))
     if topic == "actions":
-        return Answer("actions", _actions(model, found.groupdict().get("number")))
-    if topic == "saved" and lowered.startswith("stop") and model.world.robot.executing:
+        return Answer("actions", _actions(situation, found.groupdict().get("number")))
+    if topic == "saved" and lowered.startswith("stop") and situation.world.robot.executing:
         return None  # "stop recording" while an action runs: a stop first of all
     if topic == "saved":  # "done", "save it": nothing to do, the steps are kept as they are made
-        return Answer("actions", _saved(model))
+        return Answer("actions", _saved(situation))
     plain = cast(AnswerTopic, topic)  # the patterns left are named by the contract's topics themselves
-    return Answer(plain, {"help": _help, "holding": _holding, "scene": _scene}[topic](model))
+    return Answer(plain, {"help": _help, "holding": _holding, "scene": _scene}[topic](situation))
 
 
 def _match(lowered: str) -> tuple[str, re.Match[str]] | None:
@@ -165,14 +163,14 @@ def _match(lowered: str) -> tuple[str, re.Match[str]] | None:
     return None
 
 
-def _named(model: Model, index: int) -> str:
-    obj = model.world.objects[index]
-    text = model.scene.describe(index).text
+def _named(situation: Situation, index: int) -> str:
+    obj = situation.world.objects[index]
+    text = situation.scene.describe(index).text
     return text if obj.color in ("unknown",) or obj.color in text else f"{text} ({obj.color})"
 
 
-def _where_is(model: Model, index: int) -> str:
-    obj = model.world.objects[index]
+def _where_is(situation: Situation, index: int) -> str:
+    obj = situation.world.objects[index]
     if obj.held_by is not None:
         return f"in my {obj.held_by} hand"
     x, y, _ = obj.position
@@ -181,87 +179,91 @@ def _where_is(model: Model, index: int) -> str:
     return f"{side}, {x * 100:.0f} cm in front of me"
 
 
-def _scene(model: Model) -> str:
-    objects = model.world.objects
+def _scene(situation: Situation) -> str:
+    objects = situation.world.objects
     if not objects:
         return "I don't see any objects on the table."
-    names = [_named(model, i) + (f" in my {o.held_by} hand" if o.held_by else "") for i, o in enumerate(objects)]
+    names = [_named(situation, i) + (f" in my {o.held_by} hand" if o.held_by else "") for i, o in enumerate(objects)]
     count = f"{len(names)} object{'s' if len(names) > 1 else ''}"
     return f"I see {count}: {_listed(names)}."
 
 
-def _where(model: Model, phrase: str) -> str:
-    best = _meant(model, phrase)
+def _where(situation: Situation, phrase: str) -> str:
+    best = _meant(situation, phrase)
     if isinstance(best, str):
         return best
     if len(best) == 1:
-        return _capital(f"{_named(model, best[0])} is {_where_is(model, best[0])}.")
-    places = [f"{_named(model, i)} {_where_is(model, i)}" for i in best]
+        return _capital(f"{_named(situation, best[0])} is {_where_is(situation, best[0])}.")
+    places = [f"{_named(situation, i)} {_where_is(situation, i)}" for i in best]
     return f"I see {len(best)}: {_listed(places)}."
 
 
-def _meant(model: Model, phrase: str) -> list[int] | str:
+def _meant(situation: Situation, phrase: str) -> list[int] | str:
     """The objects ``phrase`` fits best; the answer itself when it names nothing in view (or nothing at all)."""
     terms = read(phrase).terms
     colors, types = _said(terms, "color"), _said(terms, "type")
     words = " ".join(t.words for t in terms) or "that"
     if not (colors or types):
-        return _scene(model)
-    seen = model.world.objects
+        return _scene(situation)
+    seen = situation.world.objects
     if any(all(o.type != kind for o in seen) for kind in types) or any(all(o.color != c for o in seen) for c in colors):
         return f"I don't see {_article(words)} {words.removeprefix('the ')}."
     # "the cup closest to the plate": the relation decides among the cups, the plate is only its landmark
-    grounding = model.scene.ground(relational.resolve(model.scene, terms, model.scene.last_object, phrase=True))
+    grounding = situation.scene.ground(
+        relational.resolve(situation.scene, terms, situation.scene.last_object, phrase=True)
+    )
     return [i for i, p in enumerate(grounding) if p >= grounding.max() - 1e-6]
 
 
-def _landmark(model: Model, words: str, landmark: str) -> tuple[str, int, str] | str:
+def _landmark(situation: Situation, words: str, landmark: str) -> tuple[str, int, str] | str:
     """(relation, landmark index, the relation and landmark as said back) for a question about ``landmark``; the
     answer itself when the words name no one object in view."""
-    marks = _meant_or_it(model, landmark)
+    marks = _meant_or_it(situation, landmark)
     if isinstance(marks, str):
         return marks
     if len(marks) > 1:
-        return f"Which one do you mean: {either([_named(model, i) for i in marks])}?"
+        return f"Which one do you mean: {either([_named(situation, i) for i in marks])}?"
     # the relation in the words the user chose ("in the bowl", "on top of the box")
-    return relations_asked.WORDS[words], marks[0], f"{words} {model.scene.describe(marks[0]).text}"
+    return relations_asked.WORDS[words], marks[0], f"{words} {situation.scene.describe(marks[0]).text}"
 
 
-def _is_related(model: Model, subject: str, words: str, landmark: str) -> str:
+def _is_related(situation: Situation, subject: str, words: str, landmark: str) -> str:
     """Yes or no: whether the object(s) ``subject`` names stand ``words`` (a relation) the one ``landmark`` names."""
     if not _names_an_object(landmark):
-        return _where(model, subject)  # "is the cup close to you": where it is
-    subjects = _meant_or_it(model, subject)
+        return _where(situation, subject)  # "is the cup close to you": where it is
+    subjects = _meant_or_it(situation, subject)
     if isinstance(subjects, str):
         return subjects
-    found = _landmark(model, words, landmark)
+    found = _landmark(situation, words, landmark)
     if isinstance(found, str):
         return found
     relation, mark, said = found
-    objects = model.world.objects
+    objects = situation.world.objects
     related = [i for i in subjects if i != mark and relations_asked.holds(objects[i], relation, objects[mark])]
     if related:
         verb = "is" if len(related) == 1 else "are"
-        return f"Yes: {_listed([_named(model, i) for i in related])} {verb} {said}."
+        return f"Yes: {_listed([_named(situation, i) for i in related])} {verb} {said}."
     if len(subjects) == 1:
-        return f"No: {_named(model, subjects[0])} is {_where_is(model, subjects[0])}, not {said}."
-    names = [_named(model, i) for i in subjects]
+        return f"No: {_named(situation, subjects[0])} is {_where_is(situation, subjects[0])}, not {said}."
+    names = [_named(situation, i) for i in subjects]
     if len(names) == 2:
         return f"No: neither {names[0]} nor {names[1]} is {said}."
     return f"No: none of {_listed(names)} is {said}."
 
 
-def _what_is(model: Model, words: str, landmark: str) -> str:
+def _what_is(situation: Situation, words: str, landmark: str) -> str:
     """The objects standing ``words`` (a relation) the one ``landmark`` names ("what is on the plate")."""
-    found = _landmark(model, words, landmark)
+    found = _landmark(situation, words, landmark)
     if isinstance(found, str):
         return found
     relation, mark, said = found
-    objects = model.world.objects
+    objects = situation.world.objects
     related = [i for i, obj in enumerate(objects) if i != mark and relations_asked.holds(obj, relation, objects[mark])]
     if not related:
         return _capital(f"nothing is {said}.")
-    return _capital(f"{_listed([_named(model, i) for i in related])} {'is' if len(related) == 1 else 'are'} {said}.")
+    return _capital(
+        f"{_listed([_named(situation, i) for i in related])} {'is' if len(related) == 1 else 'are'} {said}."
+    )
 
 
 def _names_an_object(phrase: str) -> bool:
@@ -269,11 +271,11 @@ def _names_an_object(phrase: str) -> bool:
     return bool(slots_said(read(phrase).terms) & {"color", "type", "anaphor"})
 
 
-def _meant_or_it(model: Model, phrase: str) -> list[int] | str:
+def _meant_or_it(situation: Situation, phrase: str) -> list[int] | str:
     """:func:`_meant`, with "it" the object last referred to."""
-    if "anaphor" in slots_said(read(phrase).terms) and model.scene.last_object is not None:
-        return [model.scene.last_object]
-    return _meant(model, phrase)
+    if "anaphor" in slots_said(read(phrase).terms) and situation.scene.last_object is not None:
+        return [situation.scene.last_object]
+    return _meant(situation, phrase)
 
 
 def _said(terms: tuple[Term, ...], slot: str) -> set[str]:
@@ -288,14 +290,14 @@ def _about_me(phrase: str) -> str:
     return re.sub(r"\b(?:is|are)\b", " ", phrase)
 
 
-def _reach(model: Model, phrase: str) -> str:
+def _reach(situation: Situation, phrase: str) -> str:
     """Which hands can pick the object up, from the reach the executor publishes."""
-    best = _meant(model, phrase)
+    best = _meant(situation, phrase)
     if isinstance(best, str):
         return best
     if len(best) > 1:
-        return f"Which one do you mean: {either([_named(model, i) for i in best])}?"
-    obj, name = model.world.objects[best[0]], _named(model, best[0])
+        return f"Which one do you mean: {either([_named(situation, i) for i in best])}?"
+    obj, name = situation.world.objects[best[0]], _named(situation, best[0])
     if obj.held_by is not None:
         return _capital(f"{name} is in my {obj.held_by} hand.")
     known = {arm: obj.can(arm, "pick_up") for arm in ARMS}
@@ -307,27 +309,27 @@ def _reach(model: Model, phrase: str) -> str:
     return f"No: {name} is out of reach of both my hands."
 
 
-def _count(model: Model, phrase: str) -> str:
+def _count(situation: Situation, phrase: str) -> str:
     """How many objects of the kind (and colour) named are in view, and where each is."""
     terms = read(phrase).terms
     colors, types = _said(terms, "color"), _said(terms, "type")
     if not (colors or types):
-        return _scene(model)
-    matching = sorted(model.scene.matching(colors, types))
+        return _scene(situation)
+    matching = sorted(situation.scene.matching(colors, types))
     if not matching:
         return f"I don't see any {phrase.removeprefix('the ')}."
-    places = [f"{_named(model, i)} {_where_is(model, i)}" for i in matching]
+    places = [f"{_named(situation, i)} {_where_is(situation, i)}" for i in matching]
     kinds = " or ".join(f"{kind}{'' if len(matching) == 1 else 's'}" for kind in sorted(types)) or "objects"
     return f"I see {len(matching)} {' '.join([*sorted(colors), kinds])}: {_listed(places)}."
 
 
-def _holding(model: Model) -> str:
+def _holding(situation: Situation) -> str:
     parts = []
     for arm in ARMS:
-        held = [i for i, o in enumerate(model.world.objects) if o.held_by == arm]
-        state = model.world.robot.grippers.get(arm)
+        held = [i for i, o in enumerate(situation.world.objects) if o.held_by == arm]
+        state = situation.world.robot.grippers.get(arm)
         if held:
-            parts.append(f"my {arm} hand is holding {_named(model, held[0])}")
+            parts.append(f"my {arm} hand is holding {_named(situation, held[0])}")
         elif state == "holding":
             parts.append(f"my {arm} hand is holding something I can't see")
         else:
@@ -335,8 +337,8 @@ def _holding(model: Model) -> str:
     return _capital(" and ".join(parts) + ".")
 
 
-def _actions(model: Model, number_word: str | None) -> str:
-    robot = model.world.robot
+def _actions(situation: Situation, number_word: str | None) -> str:
+    robot = situation.world.robot
     steps = list(robot.actions)
     if not steps:
         return 'There are no actions yet. Say "create a new action" to start one.'
@@ -361,9 +363,9 @@ def _step_list(said: tuple[str, ...]) -> str:
     return " Its steps: " + "; ".join(f"{i}. {step}" for i, step in enumerate(said, 1)) + "."
 
 
-def _saved(model: Model) -> str:
+def _saved(situation: Situation) -> str:
     """What "done" or "save it" gets: every step is kept as it is made, and how to replay it."""
-    robot = model.world.robot
+    robot = situation.world.robot
     if robot.action is None or not robot.actions:
         return 'There is nothing to save yet: say "create a new action", then the steps.'
     count = robot.actions[robot.action - 1] if 1 <= robot.action <= len(robot.actions) else 0
@@ -374,7 +376,7 @@ def _saved(model: Model) -> str:
     )
 
 
-def _help(_model: Model) -> str:
+def _help(_situation: Situation) -> str:
     return (
         'You can say things like "pick up the red cup", "put it on the plate", "move your left hand up '
         '5 centimetres", "open both hands", "create a new action", "execute", "undo", "again", or ask '

@@ -186,7 +186,7 @@ def _putting_back(model: Model, what: str, history: History) -> Result:
     held = {obj.held_by: obj.id for obj in model.world.objects if obj.held_by is not None}
     if _ANAPHOR.match(what):
         if not held:
-            referent = model.referent(history)
+            referent = model.situation.referent(history)
             if referent is None:
                 return Clarify([], 'Which object should I put back? Say, for example, "put the red cup back".')
             return _picked_then_back(model, model.world.ids[referent], history)

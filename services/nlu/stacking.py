@@ -13,7 +13,6 @@ pick it up or reach the other's top, the next choice that can is taken. With mor
 from __future__ import annotations
 
 import re
-from typing import TYPE_CHECKING
 
 from services.nlu import hands
 from services.nlu.commands import Command
@@ -22,10 +21,8 @@ from services.nlu.phrasing import command_text
 from services.nlu.plurals import plain, the_two
 from services.nlu.prior import History
 from services.nlu.results import Clarify, CommandResult, Result
+from services.nlu.situation import Situation
 from shared.contract import other_arm
-
-if TYPE_CHECKING:
-    from services.nlu.infer import Model
 
 _KINDS = "|".join(sorted((*PLURAL_TYPE_WORDS, *TYPE_WORDS), key=len, reverse=True))
 _ON_EACH_OTHER = r"(?: up)?(?: on(?: top of)? (?:each other|one another)| one on(?: top of)? the other| together)?"
@@ -57,35 +54,35 @@ def kind_named(text: str) -> str | None:
     return None
 
 
-def spelled_out(model: Model, text: str, history: History) -> Result | None:
+def spelled_out(situation: Situation, text: str, history: History) -> Result | None:
     """The pick-up and place "stack the cups" means in this world; None when ``text`` is no such request."""
     kind = kind_named(text)
-    pair = the_two(model, kind, _not_two)
+    pair = the_two(situation, kind, _not_two)
     if pair is None or isinstance(pair, Clarify):
         return pair
-    world = model.world
+    world = situation.world
     held = [i for i in pair if world.objects[i].held_by is not None]
     if len(held) == 2:
         return Clarify([], f"I am holding both {kind}s: put one of them down first.")
-    top, base, arm = _chosen(model, pair, held, history)
+    top, base, arm = _chosen(situation, pair, held, history)
     place = Command("place_rel", (("arm", arm), ("relation", "on_top_of"), ("object", world.ids[base])))
     steps = (place,) if held else (Command("pick_up", (("arm", arm), ("object", world.ids[top]))), place)
-    said = ", then ".join(command_text(step, model.scene) for step in steps)
+    said = ", then ".join(command_text(step, situation.scene) for step in steps)
     return CommandResult(steps[0], 1.0, said, {}, 0.0, steps[1:])
 
 
-def _chosen(model: Model, pair: list[int], held: list[int], history: History) -> tuple[int, int, str]:
+def _chosen(situation: Situation, pair: list[int], held: list[int], history: History) -> tuple[int, int, str]:
     """(top, base, arm): the held one on the other; else the smaller (or nearer) on the other by the hand the
     prior prefers, unless the executor's reach says that hand cannot do both and another choice can."""
-    world = model.world
+    world = situation.world
     if held:
         top = held[0]
         return top, pair[1] if top == pair[0] else pair[0], str(world.objects[top].held_by)
-    first = _top(model, pair)
+    first = _top(situation, pair)
     choices = []
     for top in (first, pair[1] if first == pair[0] else pair[0]):
         base = pair[1] if top == pair[0] else pair[0]
-        preferred = hands.best_arm(model, top, history, history.last_arm or "right")
+        preferred = hands.best_arm(situation, top, history, history.last_arm or "right")
         choices += [(top, base, arm) for arm in (preferred, other_arm(preferred))]
     for top, base, arm in choices:
         if (
@@ -105,9 +102,9 @@ def _not_two(kind: str, count: int) -> str:
     return f"I see {count} {kind}s: which {kind} should go on which?"
 
 
-def _top(model: Model, pair: list[int]) -> int:
+def _top(situation: Situation, pair: list[int]) -> int:
     """Which of the two goes on top: the smaller, or of two of a size the one nearer the robot."""
-    first, second = (model.world.objects[i] for i in pair)
+    first, second = (situation.world.objects[i] for i in pair)
     if abs(first.volume - second.volume) > SAME_SIZE * max(first.volume, second.volume):
         return pair[0] if first.volume < second.volume else pair[1]
     return pair[0] if first.position[0] <= second.position[0] else pair[1]

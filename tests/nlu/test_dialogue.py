@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from services.nlu.compound import after
 from services.nlu.context import Dialogue
 from services.nlu.infer import Clarify, CommandResult, Model
+from services.nlu.situation import after
 from services.nlu.world import parse_world
 from tests.nlu.scenes import obj, table_scene, world
 
