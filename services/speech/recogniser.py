@@ -93,6 +93,18 @@ class Hypothesis:
         return {"text": self.text, "score": float(f"{self.score:.6g}"), "first": self.first}
 
 
+def _decoder(mllr: Path | None) -> Decoder:
+    """PocketSphinx with the shipped en-us model, adapted to a speaker by ``mllr`` when given."""
+    if mllr is None:
+        return Decoder(lm=None, loglevel="FATAL", topn=TOP_GAUSSIANS)
+    if not mllr.is_file():
+        raise RecogniserError(f"no voice adaptation file at {mllr} (make one with 'hfpbd speech enrol')")
+    try:
+        return Decoder(lm=None, loglevel="FATAL", topn=TOP_GAUSSIANS, mllr=str(mllr))
+    except (RuntimeError, ValueError) as exc:
+        raise RecogniserError(f"the voice adaptation file {mllr} could not be used ({exc}); enrol again") from None
+
+
 class Recogniser:
     """A PocketSphinx decoder whose grammar follows the vocabulary and the scene.
 
@@ -108,8 +120,10 @@ class Recogniser:
         acoustic_scale: float = ACOUSTIC_SCALE,
         ngram: bool = True,
         frame_rates: tuple[int, ...] = FRAME_RATES,
+        mllr: Path | None = None,
     ) -> None:
-        self._decoder = Decoder(lm=None, loglevel="FATAL", topn=TOP_GAUSSIANS)
+        """``mllr``: a speaker's MLLR transform (``hfpbd speech enrol``) applied to the acoustic model's means."""
+        self._decoder = _decoder(mllr)
         self._frame_rates = frame_rates
         self._nbest = nbest
         self._scale = acoustic_scale

@@ -51,6 +51,7 @@ class Settings:
     device: str | None = None
     per_meaning: int | None = 3  # phrases per meaning in the grammar; None: the whole vocabulary
     wav_files: tuple[Path, ...] = ()
+    mllr: Path | None = None  # an enrolled voice's MLLR transform (hfpbd speech enrol), else the model as shipped
 
 
 class SpeechService:
@@ -58,7 +59,7 @@ class SpeechService:
         self.bus = bus
         self.settings = settings
         self.speaker = speaker
-        self.recogniser = Recogniser(nlu_vocabulary(), per_meaning=settings.per_meaning)
+        self.recogniser = Recogniser(nlu_vocabulary(), per_meaning=settings.per_meaning, mllr=settings.mllr)
         self.microphone: Microphone | None = None
         self.microphone_problem: str | None = None
         self._splitter = UtteranceSplitter()
