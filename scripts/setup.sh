@@ -21,7 +21,7 @@ mesa_is_new_enough() {
     [ -n "$v" ] && dpkg --compare-versions "$v" ge 24.3
 }
 
-apt_packages=(espeak-ng flite tmux libportaudio2 libgl1 libegl1 libglib2.0-0)
+apt_packages=(espeak-ng flite sphinxtrain sphinxbase-utils tmux libportaudio2 libgl1 libegl1 libglib2.0-0)
 missing=()
 for p in "${apt_packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,4 +1,5 @@
-"""``hfpbd speech``: the speech service, and ``hfpbd speech decode FILE.wav...`` to try the recogniser."""
+"""``hfpbd speech``: the speech service; ``hfpbd speech decode FILE.wav...`` to try the recogniser;
+``hfpbd speech enrol`` to adapt it to a person's voice."""
 
 from __future__ import annotations
 
@@ -9,9 +10,11 @@ import threading
 from collections.abc import Sequence
 from pathlib import Path
 
+from services.speech import enrol
+from services.speech.adapt import AdaptationError, check_matrix
 from services.speech.audio import AudioError, read_wav
 from services.speech.gate import judge
-from services.speech.recogniser import PER_MEANING, Recogniser
+from services.speech.recogniser import PER_MEANING, Recogniser, RecogniserError
 from services.speech.service import Settings, SpeechService
 from services.speech.vad import UtteranceSplitter
 from services.speech.vocabulary import nlu_vocabulary
@@ -20,6 +23,40 @@ from shared.bus import Bus
 from shared.service import run_service, wait_until_stopped
 
 DESCRIPTION = "Spoken commands in (microphone, WAV files, speech/audio stream), spoken feedback out (espeak-ng)."
+
+
+def _speaker(name: str) -> Path:
+    """An enrolled voice's transform, checked while the arguments are read so a bad one is a usage error."""
+    try:
+        path = enrol.matrix_path(name)
+    except enrol.EnrolmentError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return _mllr(str(path))
+
+
+def _mllr(value: str) -> Path:
+    path = Path(value).expanduser()
+    if not path.is_file():
+        raise argparse.ArgumentTypeError(f"no such file: {path}")
+    try:
+        check_matrix(path)
+    except AdaptationError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return path
+
+
+def add_adaptation_arguments(parser: argparse.ArgumentParser) -> None:
+    """--speaker and --mllr: decode with an enrolled person's voice adaptation."""
+    adapted = parser.add_mutually_exclusive_group()
+    adapted.add_argument(
+        "--speaker",
+        dest="mllr",
+        type=_speaker,
+        default=None,
+        metavar="NAME",
+        help="decode with the voice enrolled under NAME ('hfpbd speech enrol --name NAME')",
+    )
+    adapted.add_argument("--mllr", type=_mllr, default=None, metavar="FILE", help="decode with this MLLR transform")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -59,6 +96,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="write each spoken sentence as a WAV file here instead of playing it",
     )
+    add_adaptation_arguments(parser)
 
 
 def body(bus: Bus, args: argparse.Namespace, stop: threading.Event) -> None:
@@ -68,6 +106,7 @@ def body(bus: Bus, args: argparse.Namespace, stop: threading.Event) -> None:
         device=args.device,
         per_meaning=None if args.vocabulary == "full" else PER_MEANING,
         wav_files=tuple(args.wav),
+        mllr=args.mllr,
     )
     speaker = None
     if not args.no_voice:
@@ -91,8 +130,15 @@ def decode_files(argv: Sequence[str]) -> int:
     )
     parser.add_argument("files", nargs="+", type=Path)
     parser.add_argument("--vocabulary", choices=("core", "full"), default="core")
+    add_adaptation_arguments(parser)
     args = parser.parse_args(argv)
-    recogniser = Recogniser(nlu_vocabulary(), per_meaning=None if args.vocabulary == "full" else PER_MEANING)
+    try:
+        recogniser = Recogniser(
+            nlu_vocabulary(), per_meaning=None if args.vocabulary == "full" else PER_MEANING, mllr=args.mllr
+        )
+    except RecogniserError as exc:
+        print(f"hfpbd speech decode: {exc}", file=sys.stderr)
+        return 1
     status = 0
     for path in args.files:
         try:
@@ -120,4 +166,6 @@ def main(argv: list[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
     if args and args[0] == "decode":
         return decode_files(args[1:])
+    if args and args[0] == "enrol":
+        return enrol.main(args[1:])
     return run_service("speech", DESCRIPTION, body, args, add_arguments)
