@@ -10,7 +10,6 @@ understood is asked about, naming that part, and nothing of the utterance runs.
 from __future__ import annotations
 
 import re
-from typing import TYPE_CHECKING
 
 from services.nlu import pairs, tokens
 from services.nlu.commands import Command
@@ -18,11 +17,8 @@ from services.nlu.lexicon import LANDMARK_PHRASES, OBJECT_SLOTS, PHRASES
 from services.nlu.phrasing import command_text
 from services.nlu.prior import History
 from services.nlu.results import Clarify, CommandResult, Result
-from services.nlu.situation import after
+from services.nlu.situation import Situation, Step, stepped
 from services.nlu.weights import LANGUAGE
-
-if TYPE_CHECKING:
-    from services.nlu.infer import Model
 
 _ALWAYS = re.compile(
     r"\s*(?:,\s*)?(?:\band then\b|\bthen\b|\bafter that\b|\bafterwards\b|\bnext,|;"
@@ -130,17 +126,21 @@ def _one_object_of(part: str, verb: str) -> bool:
     return bool(procedures) and procedures <= ONE_OBJECT and not relation
 
 
-def run(model: Model, parts: list[str], history: History) -> Result:
-    """Understand the parts in order, each in the world the ones before leave."""
+def read(text: str, situation: Situation, history: History, step: Step) -> Result:
+    """The steps ``text`` asks for, each read by ``step`` in the situation the ones before it leave (one step
+    when it asks for one)."""
+    parts = split(text)
+    if len(parts) == 1:
+        return step(parts[0], situation, history)
     if len(parts) > MAX_STEPS:
         return Clarify([], f"That is {len(parts)} steps in one go. Please give me at most {MAX_STEPS} at a time.")
     commands: list[Command] = []
     texts: list[str] = []
     score, confidence = 0.0, 1.0
     arm_said = False
-    current = model
+    current = situation
     for part in parts:
-        result = current.parse_step(part, history)
+        result = step(part, current, history)
         if not isinstance(result, CommandResult):
             if isinstance(result, Clarify):
                 prefix = f'About "{part}": ' if commands else ""
@@ -157,11 +157,7 @@ def run(model: Model, parts: list[str], history: History) -> Result:
         texts.append(result.text)
         score += result.score
         confidence *= result.confidence
-        world = current.world
-        for command in result.commands:
-            history = history.after(command, world)
-            world = after(world, command)
-        current = type(model)(world)
-    if not arm_said and (each := pairs.uncrossed(model.world, commands)) != commands:
-        commands, texts = each, [command_text(command, model.scene) for command in each]
+        current, history = stepped(current, history, result.commands)
+    if not arm_said and (each := pairs.uncrossed(situation.world, commands)) != commands:
+        commands, texts = each, [command_text(command, situation.scene) for command in each]
     return CommandResult(commands[0], confidence, ", then ".join(texts), {}, score, tuple(commands[1:]))

@@ -93,7 +93,7 @@ class Dialogue:
         """Interpret one utterance (or a numbered choice) in the current world."""
         if choice is not None:
             return self._choose(model, choice)
-        result: Result | None = questions.answer(model.situation, text, self._history(model))
+        result: Result | None = questions.read(text, model.situation)
         if result is not None:
             return result  # a question, even one asked while a question is pending
         if self.pending is not None and self.pending.clarify.confirms is not None:

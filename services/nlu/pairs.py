@@ -38,7 +38,7 @@ def kind_named(text: str) -> str | None:
     return None if match is None else PLURAL_TYPE_WORDS[match.group("kind")]
 
 
-def spelled_out(situation: Situation, text: str) -> Result | None:
+def read(text: str, situation: Situation) -> Result | None:
     """The pick-ups "pick up both cups" means in this world; None when ``text`` is no such request."""
     kind = kind_named(text)
     pair = the_two(situation, kind, _not_two)

@@ -15,8 +15,9 @@ from __future__ import annotations
 
 import re
 
-from services.nlu.results import Clarify
-from services.nlu.situation import Situation
+from services.nlu.prior import History
+from services.nlu.results import Clarify, Result
+from services.nlu.situation import Situation, Step
 
 _CARRYING_VERBS = frozenset({"move", "bring", "get"})  # verbs that push only a flat object ("move the plate left")
 FLAT = 0.03  # metres: no taller than this, an object is slid under the pressing hand rather than picked up
@@ -40,13 +41,13 @@ _NO_WAY = re.compile(r"^(?:please )?(?:push|slide|drag|shove|nudge)(?: over)? (?
 _SLIDE = "move your hand above {object}, then move down, then move {way}{rest}, then move up"
 
 
-def as_steps(situation: Situation, text: str) -> str | Clarify:
-    """``text`` as the steps of the push it asks for, or unchanged when it asks for none; which way, when the
-    push says none."""
+def read(text: str, situation: Situation, history: History, steps: Step) -> Result | None:
+    """The push ``text`` asks for, read by ``steps`` as the steps that do it; which way, when the push says
+    none; None when it asks for no push (or for a carry the model reads as it is)."""
     said = " ".join(text.lower().split())
     found = _PUSH.match(said)
     if found is not None and _HAND.search(found["object"]):
-        return text
+        return None
     if found is None:
         if (bare := _NO_WAY.match(said)) is not None:
             return Clarify(
@@ -54,15 +55,15 @@ def as_steps(situation: Situation, text: str) -> str | Clarify:
                 f"Which way should I push {bare['object']}: towards me, away from me, to the left or to the right?",
                 completes=said,
             )
-        return text
+        return None
     way = next(word for i, word in enumerate(_WAYS) if found[f"w{i}"] is not None)
     grounding = situation.ground(found["object"])
     best = max(grounding, key=grounding.__getitem__, default=None)
     if best is not None and grounding[best] > 0 and _flat(situation, best):
-        return _SLIDE.format(object=found["object"], way=way, rest=found["rest"])
+        return steps(_SLIDE.format(object=found["object"], way=way, rest=found["rest"]), situation, history)
     if found["verb"] in _CARRYING_VERBS:
-        return text  # "move the red cup to the left": the model's own reading
-    return f"move {found['object']} {way}{found['rest']}"
+        return None  # "move the red cup to the left": the model's own reading
+    return steps(f"move {found['object']} {way}{found['rest']}", situation, history)
 
 
 def _flat(situation: Situation, object_id: str) -> bool:

@@ -15,11 +15,11 @@ from typing import cast
 from services.nlu import relational, relations_asked
 from services.nlu.lexicon import NUMBER_WORDS
 from services.nlu.phrasing import either
-from services.nlu.prior import History
 from services.nlu.relations_asked import RELATION_WORDS
 from services.nlu.results import Answer
 from services.nlu.situation import Situation
-from services.nlu.tokens import Term, canonical, read, slots_said
+from services.nlu.tokens import Term, canonical, slots_said
+from services.nlu.tokens import read as read_words
 from services.nlu.weights import MARGINS
 from shared.contract import ARMS, AnswerTopic
 
@@ -117,7 +117,7 @@ _CONTRACTED = re.compile(r"\b(what|where|that)(?:'s|s)\b")
 _CONTRACTED_AM_ARE = re.compile(r"\b(?:(i)'?m|(we)'re)\b")
 
 
-def answer(situation: Situation, text: str, history: History) -> Answer | None:
+def read(text: str, situation: Situation) -> Answer | None:
     """The answer when ``text`` is a question; None when it is not one."""
     first = text.lstrip().split(" ", 1)[0].lower().strip("?!.,")
     if first.replace("'", "") not in _OPENERS:
@@ -200,7 +200,7 @@ def _where(situation: Situation, phrase: str) -> str:
 
 def _meant(situation: Situation, phrase: str) -> list[int] | str:
     """The objects ``phrase`` fits best; the answer itself when it names nothing in view (or nothing at all)."""
-    terms = read(phrase).terms
+    terms = read_words(phrase).terms
     colors, types = _said(terms, "color"), _said(terms, "type")
     words = " ".join(t.words for t in terms) or "that"
     if not (colors or types):
@@ -268,12 +268,12 @@ def _what_is(situation: Situation, words: str, landmark: str) -> str:
 
 def _names_an_object(phrase: str) -> bool:
     """Whether the words name an object of the table (a colour, a kind, "it"), not the robot or the table."""
-    return bool(slots_said(read(phrase).terms) & {"color", "type", "anaphor"})
+    return bool(slots_said(read_words(phrase).terms) & {"color", "type", "anaphor"})
 
 
 def _meant_or_it(situation: Situation, phrase: str) -> list[int] | str:
     """:func:`_meant`, with "it" the object last referred to."""
-    if "anaphor" in slots_said(read(phrase).terms) and situation.scene.last_object is not None:
+    if "anaphor" in slots_said(read_words(phrase).terms) and situation.scene.last_object is not None:
         return [situation.scene.last_object]
     return _meant(situation, phrase)
 
@@ -311,7 +311,7 @@ def _reach(situation: Situation, phrase: str) -> str:
 
 def _count(situation: Situation, phrase: str) -> str:
     """How many objects of the kind (and colour) named are in view, and where each is."""
-    terms = read(phrase).terms
+    terms = read_words(phrase).terms
     colors, types = _said(terms, "color"), _said(terms, "type")
     if not (colors or types):
         return _scene(situation)

@@ -19,11 +19,12 @@ from typing import TYPE_CHECKING
 from services.nlu.commands import Command
 from services.nlu.prior import History
 from services.nlu.results import Clarify, CommandResult, Result
-from services.nlu.tokens import read, slots_said
+from services.nlu.tokens import read as read_words
+from services.nlu.tokens import slots_said
 from shared.contract import CARRIED, LANDMARK, RESERVED_SKILL_NAMES, SKILL_NAME_MAX_CHARS
 
 if TYPE_CHECKING:
-    from services.nlu.infer import Model
+    from services.nlu.situation import Situation, Step
 
 _WORDS = re.compile(r"[a-z0-9']+")
 _POLITE = re.compile(r"^(?:(?:please|now|ok|okay|and|then|robot|so|right) )*")
@@ -61,25 +62,25 @@ _ANAPHOR = re.compile(r"^(?:it|that|this|that one|this one)$")
 _NAMING_WORDS = frozenset({"color", "type", "label", "generic", "refer", "anaphor"})
 
 
-def read_skill(model: Model, text: str, history: History) -> Result | None:
+def read(text: str, situation: Situation, history: History, step: Step) -> Result | None:
     """The skills command ``text`` asks for (or the question back); None when it is no skills sentence."""
     said = _POLITE.sub("", " ".join(_WORDS.findall(text.lower().replace("-", " "))))
     for pattern in _NAMING:
         found = pattern.match(said)
         if found is not None:
-            return _naming(model, found["name"], found.groupdict().get("number"))
+            return _naming(situation, found["name"], found.groupdict().get("number"))
     rebinding = rebinds(said)
     if rebinding is not None:
         number = rebinding["number"]
-        action = int(number) if number else model.world.robot.action or 1
-        return _using(model, action, f"do action {action} with", rebinding["rest"], history)
-    named = _named_skill(model, said)
+        action = int(number) if number else situation.world.robot.action or 1
+        return _using(situation, action, f"do action {action} with", rebinding["rest"], history, step)
+    named = _named_skill(situation, said)
     if named is not None:
         name, rest = named
-        return _using(model, name, name, rest, history)
+        return _using(situation, name, name, rest, history, step)
     back = _PUT_BACK.match(said) or _RETURN.match(said)
     if back is not None:
-        return _putting_back(model, (back["what"] or "it").strip(), history)
+        return _putting_back(situation, (back["what"] or "it").strip(), history, step)
     return None
 
 
@@ -89,7 +90,7 @@ def rebinds(said: str) -> re.Match[str] | None:
     return found if found is not None and not _HAND.search(found["rest"]) else None
 
 
-def _naming(model: Model, raw: str, number: str | None) -> Result:
+def _naming(situation: Situation, raw: str, number: str | None) -> Result:
     name = " ".join(raw.strip(" '\"").split())
     action = int(number) if number else None
     if not name:
@@ -98,8 +99,8 @@ def _naming(model: Model, raw: str, number: str | None) -> Result:
         return Clarify([], f"That name is too long: please give one of at most {SKILL_NAME_MAX_CHARS} characters.")
     if name in RESERVED_SKILL_NAMES or name.isdigit():
         return Clarify([], f'I can\'t call an action "{name}": that is already a command. Please choose another name.')
-    target = action or model.world.robot.action
-    taken = next((s for s in model.world.skills if s.name == name and s.action != target), None)
+    target = action or situation.world.robot.action
+    taken = next((s for s in situation.world.skills if s.name == name and s.action != target), None)
     if taken is not None:
         return Clarify([], f'Action {taken.action} is already called "{name}". Please choose another name.')
     args: tuple[tuple[str, object], ...] = (("name", name),) + ((("action", action),) if action else ())
@@ -107,9 +108,9 @@ def _naming(model: Model, raw: str, number: str | None) -> Result:
     return CommandResult(Command("name_action", args), 1.0, f'call {which} "{name}"', {}, 0.0)
 
 
-def _named_skill(model: Model, said: str) -> tuple[str, str] | None:
+def _named_skill(situation: Situation, said: str) -> tuple[str, str] | None:
     """The taught name ``said`` starts with (the longest, as "serve twice" over "serve"), and the words after it."""
-    for skill in sorted(model.world.skills, key=lambda s: -len(s.name)):
+    for skill in sorted(situation.world.skills, key=lambda s: -len(s.name)):
         found = re.match(
             rf"^(?:(?:do|run|use|perform) (?:the )?(?:skill )?)?{re.escape(skill.name)}(?: (?P<rest>.*))?$", said
         )
@@ -118,7 +119,7 @@ def _named_skill(model: Model, said: str) -> tuple[str, str] | None:
     return None
 
 
-def _using(model: Model, skill: str | int, words: str, rest: str, history: History) -> Result:
+def _using(situation: Situation, skill: str | int, words: str, rest: str, history: History, step: Step) -> Result:
     """``run_skill`` with the objects ``rest`` names bound to their roles, or the question about one.
 
     ``words`` start the sentence said back: the skill's name ("serve"), or
@@ -130,23 +131,23 @@ def _using(model: Model, skill: str | int, words: str, rest: str, history: Histo
         return CommandResult(Command("run_skill", base), 1.0, words.removesuffix(" with"), {}, 0.0)
     each = _EACH.match(rest)
     if each is not None:
-        members = _all_of(model, each["what"])
+        members = _all_of(situation, each["what"])
         if not members:
             return Clarify([], f"I don't see any {each['what']}.")
-        names = _listed([model.scene.describe(model.world.index_of(m)).text for m in members])
+        names = _listed([situation.scene.describe(situation.world.index_of(m)).text for m in members])
         command = Command("run_skill", base + (("each", tuple(members)),))
         return CommandResult(command, 1.0, f"{words} {names}, one at a time", {}, 0.0)
-    readings = _readings(model, rest, history)
+    readings = _readings(situation, rest, history, step)
     if isinstance(readings, Clarify):
         return readings
-    texts = [_reading_text(model, words, reading) for reading in readings]
+    texts = [_reading_text(situation, words, reading) for reading in readings]
     if len(readings) > 1:
         return Clarify([], f"Do you mean: {' or '.join(texts)}?")
     roles = tuple(readings[0].items())
     return CommandResult(Command("run_skill", base + (("objects", roles),)), 1.0, texts[0], {}, 0.0)
 
 
-def _readings(model: Model, rest: str, history: History) -> list[dict[str, str]] | Clarify:
+def _readings(situation: Situation, rest: str, history: History, step: Step) -> list[dict[str, str]] | Clarify:
     """Every distinct way ``rest`` binds the roles: the carried object, and the landmark after a relation word.
 
     "the red cup next to the box on the plate" splits at either relation
@@ -159,65 +160,65 @@ def _readings(model: Model, rest: str, history: History) -> list[dict[str, str]]
         carried_words, landmark_words = rest[: split.start()], rest[split.end() :]
         if not _names_an_object(landmark_words) or not _names_an_object(carried_words):
             continue
-        carried = _one_object(model, carried_words, history)
-        landmark = _one_object(model, landmark_words, history)
+        carried = _one_object(situation, carried_words, history, step)
+        landmark = _one_object(situation, landmark_words, history, step)
         if isinstance(carried, str) and isinstance(landmark, str) and carried != landmark:
             reading = {CARRIED: carried, LANDMARK: landmark}
             if reading not in readings:
                 readings.append(reading)
     if readings:
         return readings
-    carried = _one_object(model, rest, history)
+    carried = _one_object(situation, rest, history, step)
     return carried if isinstance(carried, Clarify) else [{CARRIED: carried}]
 
 
-def _reading_text(model: Model, words: str, reading: dict[str, str]) -> str:
+def _reading_text(situation: Situation, words: str, reading: dict[str, str]) -> str:
     """One reading said back: "serve the leftmost cup, relative to the box"."""
-    text = f"{words} {model.scene.describe(model.world.index_of(reading[CARRIED])).text}"
+    text = f"{words} {situation.scene.describe(situation.world.index_of(reading[CARRIED])).text}"
     if LANDMARK in reading:
-        text += f", relative to {model.scene.describe(model.world.index_of(reading[LANDMARK])).text}"
+        text += f", relative to {situation.scene.describe(situation.world.index_of(reading[LANDMARK])).text}"
     return text
 
 
-def _putting_back(model: Model, what: str, history: History) -> Result:
+def _putting_back(situation: Situation, what: str, history: History, step: Step) -> Result:
     """``place_back`` of the held object (a pick-up first when the object named is on the table)."""
     if _EVERYTHING.match(what):
         return Clarify([], 'I put things back one at a time: say which, like "put the red cup back".')
-    held = {obj.held_by: obj.id for obj in model.world.objects if obj.held_by is not None}
+    held = {obj.held_by: obj.id for obj in situation.world.objects if obj.held_by is not None}
     if _ANAPHOR.match(what):
         if not held:
-            referent = model.situation.referent(history)
+            referent = situation.referent(history)
             if referent is None:
                 return Clarify([], 'Which object should I put back? Say, for example, "put the red cup back".')
-            return _picked_then_back(model, model.world.ids[referent], history)
+            return _picked_then_back(situation, situation.world.ids[referent], history, step)
         arm = history.last_arm if history.last_arm in held else next(iter(held))
-        return _back(model, str(arm), held[arm])
-    found = _one_object(model, what, history)
+        return _back(situation, str(arm), held[arm])
+    found = _one_object(situation, what, history, step)
     if isinstance(found, Clarify):
         return found
     holder = next((arm for arm, obj in held.items() if obj == found), None)
-    return _back(model, holder, found) if holder is not None else _picked_then_back(model, found, history)
+    return _back(situation, holder, found) if holder is not None else _picked_then_back(situation, found, history, step)
 
 
-def _back(model: Model, arm: str, object_id: str) -> CommandResult:
+def _back(situation: Situation, arm: str, object_id: str) -> CommandResult:
     command = Command("place_back", (("arm", arm), ("object", object_id)))
-    name = model.scene.describe(model.world.index_of(object_id)).text
+    name = situation.scene.describe(situation.world.index_of(object_id)).text
     return CommandResult(command, 1.0, f"put {name} back where it was", {}, 0.0)
 
 
-def _picked_then_back(model: Model, object_id: str, history: History) -> Result:
+def _picked_then_back(situation: Situation, object_id: str, history: History, step: Step) -> Result:
     """Pick the object up with the hand the model chooses for it, then put it back."""
-    name = model.scene.describe(model.world.index_of(object_id)).text
-    picked = model.parse_step(f"pick up {name}", history)
+    name = situation.scene.describe(situation.world.index_of(object_id)).text
+    picked = step(f"pick up {name}", situation, history)
     if not isinstance(picked, CommandResult) or picked.command.arg("object") != object_id:
         return Clarify([], f"I can't pick up {name} to put it back.")
-    back = _back(model, str(picked.command.arg("arm")), object_id)
+    back = _back(situation, str(picked.command.arg("arm")), object_id)
     return replace(picked, text=f"{picked.text}, then {back.text}", then=(back.command,))
 
 
-def _one_object(model: Model, phrase: str, history: History) -> str | Clarify:
+def _one_object(situation: Situation, phrase: str, history: History, step: Step) -> str | Clarify:
     """The object ``phrase`` names, read as the model reads "look at <phrase>"; the question back when unsure."""
-    looked = model.parse_step(f"look at {phrase}", history)
+    looked = step(f"look at {phrase}", situation, history)
     if isinstance(looked, CommandResult) and looked.command.procedure == "look_at":
         return str(looked.command.arg("object"))
     if isinstance(looked, Clarify) and looked.candidates and looked.params == ["object"]:
@@ -225,14 +226,14 @@ def _one_object(model: Model, phrase: str, history: History) -> str | Clarify:
     return Clarify([], f'I couldn\'t tell which object you mean by "{phrase}". Please name it another way.')
 
 
-def _all_of(model: Model, phrase: str) -> list[str]:
+def _all_of(situation: Situation, phrase: str) -> list[str]:
     """Every object the colour and kind words of ``phrase`` fit, leftmost first (the robot's left)."""
-    terms = read(phrase).terms
+    terms = read_words(phrase).terms
     colours = {m.value for t in terms for r in t.readings for m in r if m.slot == "color"}
     kinds = {m.value for t in terms for r in t.readings for m in r if m.slot == "type"}
     fitting = [
         obj
-        for obj in model.world.objects
+        for obj in situation.world.objects
         if obj.held_by is None and (not colours or obj.color in colours) and (not kinds or obj.type in kinds)
     ]
     if not colours and not kinds:
@@ -242,7 +243,7 @@ def _all_of(model: Model, phrase: str) -> list[str]:
 
 def _names_an_object(phrase: str) -> bool:
     """Whether ``phrase`` names an object ("the box", "it"), not a place ("the left")."""
-    return bool(slots_said(read(phrase).terms) & _NAMING_WORDS)
+    return bool(slots_said(read_words(phrase).terms) & _NAMING_WORDS)
 
 
 def _listed(names: list[str]) -> str:

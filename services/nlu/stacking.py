@@ -54,7 +54,7 @@ def kind_named(text: str) -> str | None:
     return None
 
 
-def spelled_out(situation: Situation, text: str, history: History) -> Result | None:
+def read(text: str, situation: Situation, history: History) -> Result | None:
     """The pick-up and place "stack the cups" means in this world; None when ``text`` is no such request."""
     kind = kind_named(text)
     pair = the_two(situation, kind, _not_two)
