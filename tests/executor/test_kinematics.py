@@ -288,9 +288,9 @@ def test_a_straight_line_remembers_what_it_ran_into(arms: dict[str, ArmKinematic
     sync(kin, scene_with().snapshot(), None)
     below = kin.fk()[:3]
     sync(kin, scene_with(cup("mug", float(below[0]), float(below[1]), size=(0.08, 0.08, 0.20))).snapshot(), None)
-    kin.lines_blocked_by.clear()
-    assert kin.line_path(geo.direction_target(kin.fk(), "down", 0.20)) is None
-    assert kin.lines_blocked_by == {"mug"}
+    line = kin.line(geo.direction_target(kin.fk(), "down", 0.20))
+    assert line.path is None
+    assert line.blocked_by == {"mug"}
 
 
 def test_a_box_held_from_the_side_is_put_behind_a_cup_only_with_the_forearm_swung_past_it(
@@ -327,14 +327,17 @@ def test_a_box_held_from_the_side_is_put_behind_a_cup_only_with_the_forearm_swun
     held = procedures.refresh_held(at_grasp, snap, kin)
     sync(kin, snap, held)
 
-    def lowerable(yaws: tuple[float, ...]) -> int:
+    def lowerable(yaws: tuple[float, ...]) -> tuple[int, set[str]]:
         pairs = targets.place_relation("behind", snap.box("mug"), kin.fk(), held, snap.table_z, yaws)
-        return sum(place.lowerable(kin, snap, held, hover, release) is not None for hover, release in pairs)
+        lowerings = [place.lowerable(kin, snap, held, hover, release) for hover, release in pairs]
+        return sum(lowering.hover_q is not None for lowering in lowerings), set().union(
+            *(lowering.blocked_by for lowering in lowerings)
+        )
 
-    kin.lines_blocked_by.clear()
-    assert lowerable(targets.CARRY_YAWS) == 0
-    assert "mug" in kin.lines_blocked_by
-    assert lowerable(targets.SWING_YAWS) > 0
+    carried, blocked_by = lowerable(targets.CARRY_YAWS)
+    assert carried == 0
+    assert "mug" in blocked_by
+    assert lowerable(targets.SWING_YAWS)[0] > 0
 
 
 def test_a_place_out_of_one_hands_reach_says_how_far_and_that_the_other_hand_can(

@@ -151,21 +151,28 @@ def suits(
     lift_q = kin.ik(grasp.lift, seeds=[grasp_q], check_collisions=False)
     kin.set_obstacles(snap.obstacles(skip={obj.id}))
     kin.attach(obj.id, held.box, held.tool_pose)
-    kin.lines_blocked_by.clear()
 
-    def can_lower(pairs: list[tuple[np.ndarray, np.ndarray]]) -> bool:
-        free = on_free_spots(body, held, pairs, snap, on)
-        return any(lowerable(kin, snap, held, hover, release) is not None for hover, release in free)
+    def can_lower(pairs: list[tuple[np.ndarray, np.ndarray]]) -> tuple[bool, frozenset[str]]:
+        """Whether some free pair can be lowered from (tried in order, up to the first), and what the ways
+        down tried ran into."""
+        blocked_by: frozenset[str] = frozenset()
+        for hover, release in on_free_spots(body, held, pairs, snap, on):
+            lowering = lowerable(kin, snap, held, hover, release)
+            if lowering.hover_q is not None:
+                return True, blocked_by
+            blocked_by |= lowering.blocked_by
+        return False, blocked_by
 
     try:
         with kin.posed(grasp_q if lift_q is None else lift_q):
-            if can_lower(targets.place_relation(relation, box, grasp.lift, held, snap.table_z)):
+            lowered, blocked_by = can_lower(targets.place_relation(relation, box, grasp.lift, held, snap.table_z))
+            if lowered:
                 return True
             # as the placement does: the wider ones only when the way down ran into the landmark
             return (
                 not on
-                and landmark.id in kin.lines_blocked_by
-                and can_lower(targets.place_relation_wider(relation, box, grasp.lift, held, snap.table_z))
+                and landmark.id in blocked_by
+                and can_lower(targets.place_relation_wider(relation, box, grasp.lift, held, snap.table_z))[0]
             )
     finally:
         sync(kin, snap, None)

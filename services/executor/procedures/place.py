@@ -10,6 +10,7 @@ blocked is passed over instead of ending the step once the arm is there.
 from __future__ import annotations
 
 import logging
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -73,7 +74,7 @@ def place_abs(body: Body, arm: str, destination: str) -> Done:
             for k, o in snap.objects.items()
         },
     )
-    done = _carry_and_lower(
+    done, _ = _carry_and_lower(
         body, arm, kin, snap, held, pairs, wording.sentence(f"I can't find a clear path to put it down {where}")
     )
     if done is None and not pairs:
@@ -109,14 +110,14 @@ def place_rel(body: Body, arm: str, relation: str, object: str) -> Done:
 
     candidates = targets.place_relation(relation, box, kin.fk(), held, snap.table_z)
     pairs = on_free_spots(body, held, candidates, snap, on)
-    kin.lines_blocked_by.clear()
-    done = _carry_and_lower(body, arm, kin, snap, held, pairs, no_path, (object, box))
-    if done is None and object in kin.lines_blocked_by and not on:
+    done, blocked_by = _carry_and_lower(body, arm, kin, snap, held, pairs, no_path, (object, box))
+    if done is None and object in blocked_by and not on:
         # every way down ran into the landmark: swing the forearm past its side, or release further out
         wider = targets.place_relation_wider(relation, box, kin.fk(), held, snap.table_z)
-        done = _carry_and_lower(
+        done, also = _carry_and_lower(
             body, arm, kin, snap, held, on_free_spots(body, held, wider, snap, on), no_path, (object, box)
         )
+        blocked_by |= also
     if done is None:
         log.info(
             "no placement %s %s: %d candidates, %d on a free spot; objects seen: %s",
@@ -133,8 +134,8 @@ def place_rel(body: Body, arm: str, relation: str, object: str) -> Done:
                 if candidates and not pairs
                 else None
             )
-            or (refusals.arm_over(arm, relation, words) if object in kin.lines_blocked_by else None)
-            or refusals.blocked_place(body, arm, snap, held, relation, object, words, kin.lines_blocked_by)
+            or (refusals.arm_over(arm, relation, words) if object in blocked_by else None)
+            or refusals.blocked_place(body, arm, snap, held, relation, object, words, blocked_by)
         )
     done.landmark = descriptor(obj)
     return done
@@ -149,17 +150,21 @@ def _carry_and_lower(
     pairs: list[tuple[np.ndarray, np.ndarray]],
     no_path: str,
     landmark: tuple[str, Box] | None = None,
-) -> Done | None:
-    """Carry the held object to the first (hover, release) pair it can be lowered from, lower it, let go.
+) -> tuple[Done | None, frozenset[str]]:
+    """Carry the held object to the first (hover, release) pair it can be lowered from, lower it, let go; with
+    the obstacles the ways down tried ran into (all of them, when it was not done: what a refusal can name).
 
-    None when no pair can be lowered from (checked before the arm moves);
-    a pair no clear path leads to, or whose descent turns out blocked
-    once the hand is there (the view changed on the way), passes on to
-    the next; after ``PLACE_PLANS`` pairs without a path the step fails.
+    Not done when no pair can be lowered from (checked before the arm
+    moves); a pair no clear path leads to, or whose descent turns out
+    blocked once the hand is there (the view changed on the way), passes on
+    to the next; after ``PLACE_PLANS`` pairs without a path the step fails.
     """
     unplanned = 0
+    blocked_by: frozenset[str] = frozenset()
     for hover, release in pairs:
-        hover_q = lowerable(kin, snap, held, hover, release)
+        lowering = lowerable(kin, snap, held, hover, release)
+        blocked_by |= lowering.blocked_by
+        hover_q = lowering.hover_q
         if hover_q is None:
             continue
         if np.max(np.abs(hover_q - kin.arm_q)) > 1e-3:
@@ -173,12 +178,13 @@ def _carry_and_lower(
                 continue
             body.go(arm, trajectory)
             kin, snap = body.ready(arm)
-        done = lower_and_release(body, arm, kin, snap, held, release, landmark)
+        done, blocked = lower_and_release(body, arm, kin, snap, held, release, landmark)
+        blocked_by |= blocked
         if done is None:
             continue
         done.released = held.center_at(release)
-        return done
-    return None
+        return done, blocked_by
+    return None, blocked_by
 
 
 def put_back(body: Body, arm: str, center: np.ndarray) -> Done:
@@ -192,12 +198,12 @@ def put_back(body: Body, arm: str, center: np.ndarray) -> Done:
     spot = np.asarray(center, float) + [0.0, 0.0, geo.RELEASE_CLEARANCE]
     for release in geo.carry_poses(kin.fk(), held.box.center, [spot], targets.CARRY_YAWS):
         hover = geo.shifted(release, [0.0, 0.0, targets.HOVER])
-        hover_q = lowerable(kin, snap, held, hover, release)
+        hover_q = lowerable(kin, snap, held, hover, release).hover_q
         if hover_q is None:
             continue
         body.go(arm, plan(kin, hover_q, "I can't find a clear path to put it back where it stood."))
         kin, snap = body.ready(arm)
-        done = lower_and_release(body, arm, kin, snap, held, release)
+        done, _ = lower_and_release(body, arm, kin, snap, held, release)
         if done is None:
             raise StepFailed("I can't lower it back to where it stood: something is in the way now.")
         return done
@@ -213,9 +219,16 @@ def place_back(body: Body, arm: str, center: list[float]) -> Done:
     return put_back(body, arm, np.asarray(center, float))
 
 
-def lowerable(
-    kin: ArmKinematics, snap: SceneSnapshot, held: Held, hover: np.ndarray, release: np.ndarray
-) -> np.ndarray | None:
+@dataclass(frozen=True)
+class Lowering:
+    """Joints at a hover pose the held object can be lowered straight down from; else None, and what the way
+    down ran into (nothing named when the hover pose is out of reach)."""
+
+    hover_q: np.ndarray | None
+    blocked_by: frozenset[str] = frozenset()
+
+
+def lowerable(kin: ArmKinematics, snap: SceneSnapshot, held: Held, hover: np.ndarray, release: np.ndarray) -> Lowering:
     """Joints at ``hover`` when the held object can also be lowered straight from there to ``release``.
 
     Checked for every candidate before the arm moves at all, so a hover
@@ -224,10 +237,10 @@ def lowerable(
     """
     hover_q = kin.ik(hover, seeds=[kin.arm_q])
     if hover_q is None:
-        return None
+        return Lowering(None)
     with kin.posed(hover_q), kin.tolerating(kin.held_body or held.object_id, flat_below(held, release, snap)):
-        descent = kin.line_path(release)
-    return hover_q if descent is not None else None
+        descent = kin.line(release)
+    return Lowering(hover_q if descent.path is not None else None, descent.blocked_by)
 
 
 def lower_and_release(
@@ -238,9 +251,9 @@ def lower_and_release(
     held: Held,
     release: np.ndarray,
     landmark: tuple[str, Box] | None = None,
-) -> Done | None:
-    """From the hover the hand is at: straight down to ``release``, open, back off; None when the way down is
-    blocked now (the view changed on the way), before anything moves.
+) -> tuple[Done | None, frozenset[str]]:
+    """From the hover the hand is at: straight down to ``release``, open, back off; not done, with what it ran
+    into, when the way down is blocked now (the view changed on the way), before anything moves.
 
     ``landmark``: the object it goes relative to, as seen before the held
     object hung over it (from above, the camera sees little of a plate under
@@ -249,8 +262,8 @@ def lower_and_release(
     if landmark is not None:
         kin.set_obstacles({**snap.obstacles(skip={held.object_id}), landmark[0]: landmark[1]})
     with kin.tolerating(kin.held_body or held.object_id, flat_below(held, release, snap)):
-        descent = kin.straight_line(release)
-    if descent is None:
+        descent = kin.line(release)
+    if descent.path is None:
         log.info(
             "the way down to %s is blocked now; objects seen: %s",
             np.round(release[:3], 3),
@@ -259,8 +272,8 @@ def lower_and_release(
                 for k, o in snap.objects.items()
             },
         )
-        return None
-    body.go(arm, descent)
+        return None, descent.blocked_by
+    body.go(arm, kin.timed(descent.path, careful=True))
     body.grip(arm, OPEN_WIDTH)
     body.set_held(arm, None)
     kin, _ = body.ready(arm)
@@ -268,4 +281,4 @@ def lower_and_release(
     trajectory = kin.straight_line(back, check_collisions=False)
     if trajectory is not None:
         body.go(arm, trajectory)
-    return Done()
+    return Done(), frozenset()

@@ -93,7 +93,7 @@ def blocked_place(
     relation: str,
     object: str,
     words: str,
-    blocked_by: set[str],
+    blocked_by: frozenset[str],
 ) -> str:
     """Why a placement within the arm's length failed: what the arm ran into, and whether the other hand can."""
     blockers = sorted(refer(snap.objects, b) for b in blocked_by - {object, held.object_id} if b in snap.objects)
