@@ -128,3 +128,10 @@ def test_a_broken_transform_is_a_usage_error(tmp_path: Path, capsys: pytest.Capt
     with pytest.raises(SystemExit):
         decode_files(["--mllr", str(bad), str(tmp_path / "any.wav")])
     assert "is not a usable MLLR transform" in capsys.readouterr().err
+
+
+def test_missing_tools_are_named_with_their_packages(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr("services.speech.adapt.TOOL_DIRS", ())
+    monkeypatch.setenv("PATH", str(tmp_path))
+    with pytest.raises(AdaptationError, match=r"bw \(Debian package sphinxtrain\)"):
+        find_tools()
