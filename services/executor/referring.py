@@ -11,8 +11,8 @@ from __future__ import annotations
 import logging
 
 from services.executor.grounding import kind_words
-from services.nlu.referring import ground_phrase
-from services.nlu.refexp import Scene as ReferringScene
+from services.nlu.language.referring import ground_phrase
+from services.nlu.language.refexp import Scene as ReferringScene
 from services.nlu.world import WorldError, parse_world
 from shared.messages import PerceivedObject
 

@@ -16,13 +16,14 @@ from dataclasses import replace
 
 import numpy as np
 
-from services.nlu import hands, meant, modifiers, relational, sayings
+from services.nlu import hands, meant, modifiers, sayings
 from services.nlu.commands import NUMBER, PROCEDURES, Command
-from services.nlu.language import Match
+from services.nlu.index import Match
+from services.nlu.language import relational
+from services.nlu.language.phrasing import command_text, not_seen, parameter_question, rephrase_question
+from services.nlu.language.refexp import Scene
 from services.nlu.lexicon import OBJECT_SLOTS
-from services.nlu.phrasing import command_text, not_seen, parameter_question, rephrase_question
 from services.nlu.prior import History
-from services.nlu.refexp import Scene
 from services.nlu.results import Clarify, CommandResult, Result
 from services.nlu.situation import Situation
 from services.nlu.tokens import Term, Utterance, slots_said

@@ -13,8 +13,8 @@ import re
 
 from services.nlu import pairs, tokens
 from services.nlu.commands import Command
+from services.nlu.language.phrasing import command_text
 from services.nlu.lexicon import LANDMARK_PHRASES, OBJECT_SLOTS, PHRASES
-from services.nlu.phrasing import command_text
 from services.nlu.prior import History
 from services.nlu.results import Clarify, CommandResult, Result
 from services.nlu.situation import Situation, Step, stepped

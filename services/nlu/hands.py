@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from services.nlu.commands import Command
-from services.nlu.language import Match, relation_at
+from services.nlu.index import Match, relation_at
 from services.nlu.prior import History
 from services.nlu.situation import Situation
 from services.nlu.tokens import slots_said

@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from services.nlu.commands import NUMBER, PROCEDURES, Command, enumerate_commands
+from services.nlu.language.refexp import Scene
 from services.nlu.lexicon import LANDMARK_PHRASES, OBJECT_SLOTS, PLACE, Meaning
-from services.nlu.refexp import Scene
 from services.nlu.tokens import Term
 from services.nlu.weights import LANGUAGE
 from services.nlu.world import ARMS, World

@@ -13,10 +13,10 @@ from __future__ import annotations
 
 from services.nlu import argmax, compound, meant, pairs, pushing, questions, sayings, skills, stacking
 from services.nlu.commands import Command
-from services.nlu.language import Index
-from services.nlu.phrasing import command_text
+from services.nlu.index import Index
+from services.nlu.language.phrasing import command_text
+from services.nlu.language.refexp import Scene
 from services.nlu.prior import History
-from services.nlu.refexp import Scene
 from services.nlu.results import Answer, Clarify, CommandResult, Result
 from services.nlu.situation import Situation
 from services.nlu.unsupported import unsupported

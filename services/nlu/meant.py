@@ -22,8 +22,8 @@ from __future__ import annotations
 
 import re
 
+from services.nlu.language.phrasing import not_seen
 from services.nlu.lexicon import NUMBER_WORDS
-from services.nlu.phrasing import not_seen
 from services.nlu.results import Clarify, CommandResult, Result
 from services.nlu.situation import Situation
 from services.nlu.tokens import read, slots_said

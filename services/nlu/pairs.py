@@ -16,8 +16,8 @@ import re
 
 from services.nlu import hands
 from services.nlu.commands import Command
+from services.nlu.language.phrasing import command_text
 from services.nlu.lexicon import PLURAL_TYPE_WORDS
-from services.nlu.phrasing import command_text
 from services.nlu.plurals import plain, the_two
 from services.nlu.results import Clarify, CommandResult, Result
 from services.nlu.situation import Situation

@@ -12,9 +12,10 @@ from __future__ import annotations
 import re
 from typing import cast
 
-from services.nlu import relational, relations_asked
+from services.nlu import relations_asked
+from services.nlu.language import relational
+from services.nlu.language.phrasing import either
 from services.nlu.lexicon import NUMBER_WORDS
-from services.nlu.phrasing import either
 from services.nlu.relations_asked import RELATION_WORDS
 from services.nlu.results import Answer
 from services.nlu.situation import Situation

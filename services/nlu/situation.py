@@ -17,10 +17,10 @@ from dataclasses import replace
 import numpy as np
 
 from services.nlu.commands import Command
-from services.nlu.language import Index
+from services.nlu.index import Index
+from services.nlu.language.referring import ground_phrase
+from services.nlu.language.refexp import Scene
 from services.nlu.prior import History, history_scores, side_scores, situation_scores
-from services.nlu.referring import ground_phrase
-from services.nlu.refexp import Scene
 from services.nlu.results import Result
 from services.nlu.world import RobotState, World
 from shared.contract import ARMS, BOTH

@@ -27,7 +27,8 @@ from dataclasses import dataclass, field
 from itertools import combinations
 
 from services.nlu.commands import PROCEDURES
-from services.nlu.refexp import LABELS, Scene
+from services.nlu.language.labels import LABELS
+from services.nlu.language.refexp import Scene
 from services.nlu.templates import sentence_templates
 from services.nlu.world import WorldError, parse_world
 from services.speech.vocabulary import OBJECT, Implied, SpeechVocabulary

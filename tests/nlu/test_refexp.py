@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from services.nlu.infer import Model
-from services.nlu.refexp import Scene
+from services.nlu.language.refexp import Scene
 from services.nlu.tokens import read
 from services.nlu.world import parse_world
 from tests.nlu.scenes import obj, random_scene, table_scene, world

@@ -9,7 +9,7 @@ expression for the object so the description fits the scene as it is now.
 from __future__ import annotations
 
 from services.nlu.commands import NUMBER, Command
-from services.nlu.refexp import Scene
+from services.nlu.language.refexp import Scene
 from services.nlu.tokens import Term
 from services.nlu.world import World
 from shared.contract import BOTH, PROCEDURES, arm_words, distance_words

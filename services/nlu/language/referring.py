@@ -2,19 +2,19 @@
 
 The NLU's ``ground`` and the executor, when it finds again on replay the
 object the user's words named, read a phrase the same way; the other
-direction (the words that single an object out) is ``Scene.describe_all``.
+direction (the words that single an object out) is ``refexp.Scene.describe_all``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from services.nlu import relational
-from services.nlu.refexp import Scene
+from services.nlu.language import relational
+from services.nlu.language.labels import Labels
 from services.nlu.tokens import read
 
 
-def ground_phrase(scene: Scene, text: str) -> np.ndarray:
+def ground_phrase(scene: Labels, text: str) -> np.ndarray:
     """P(object | ``text``), in the scene's object order (paper Fig. 3); relational phrases resolved first."""
     terms = relational.resolve(scene, read(text).terms, scene.last_object, phrase=True)
     return scene.ground(terms)

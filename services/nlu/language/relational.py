@@ -18,8 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from services.nlu.language.labels import Labels
 from services.nlu.lexicon import MOVE, OBJECT_SLOTS, PLACE, REFERRING_PHRASES, Meaning
-from services.nlu.refexp import Scene
 from services.nlu.tokens import Term
 from services.nlu.weights import LANGUAGE, MARGINS
 from shared.contract import RELATIONS, VALUE_WORDS
@@ -31,7 +31,7 @@ _ORDER_AXES = {"left": ("y", -1), "right": ("y", +1), "front": ("x", +1), "back"
 
 
 def resolve(
-    scene: Scene,
+    scene: Labels,
     terms: tuple[Term, ...],
     referent: int | None,
     within: frozenset[int] | None = None,
@@ -83,7 +83,7 @@ def resolve(
 _BESIDE = frozenset({"next_to", "left_of", "right_of", "in_front_of", "behind", "near"})
 
 
-def _refers_before_another(scene: Scene, terms: list[Term], i: int, referent: int | None) -> bool:
+def _refers_before_another(scene: Labels, terms: list[Term], i: int, referent: int | None) -> bool:
     """Whether the relation at ``i`` is part of the theme's description, a later one being the command's.
 
     "Put the cup next to the box on the plate": the first relation follows
@@ -113,7 +113,7 @@ _DESCRIBED = {
 }
 
 
-def describe(scene: Scene, index: int) -> str | None:
+def describe(scene: Labels, index: int) -> str | None:
     """The shortest "the <type> <relation> <landmark>" that means only object ``index`` (None when none does)."""
     kind = scene.types[index]
     noun = kind if kind != "unknown" else "object"
@@ -131,7 +131,7 @@ def describe(scene: Scene, index: int) -> str | None:
     return min(found, key=lambda text: len(text.split()), default=None)
 
 
-def _ordinals_and_others(scene: Scene, terms: list[Term], referent: int | None) -> list[Term]:
+def _ordinals_and_others(scene: Labels, terms: list[Term], referent: int | None) -> list[Term]:
     """ "the second cup from the left", "the other one": resolved within the objects the words describe."""
     out = list(terms)
     i = 0
@@ -161,7 +161,7 @@ def _ordinals_and_others(scene: Scene, terms: list[Term], referent: int | None) 
     return out
 
 
-def _nth(scene: Scene, group: frozenset[int], ordinal: int, order: str) -> frozenset[int]:
+def _nth(scene: Labels, group: frozenset[int], ordinal: int, order: str) -> frozenset[int]:
     axis, sign = _ORDER_AXES[order]
     members = sorted(group, key=lambda j: sign * scene.features[axis][j])
     if ordinal == -1:
@@ -174,7 +174,7 @@ def _nth(scene: Scene, group: frozenset[int], ordinal: int, order: str) -> froze
     return frozenset({members[k]}) if apart else frozenset()
 
 
-def _related(scene: Scene, candidates: frozenset[int], landmarks: frozenset[int], relation: str) -> frozenset[int]:
+def _related(scene: Labels, candidates: frozenset[int], landmarks: frozenset[int], relation: str) -> frozenset[int]:
     """The candidate(s) that stand in ``relation`` to the landmarks: the best, with any within the margin of it."""
     if not candidates or not landmarks:
         return frozenset()
@@ -212,7 +212,7 @@ def _segment_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
 
 
 def _group(
-    scene: Scene, phrase: Sequence[Term], referent: int | None, within: frozenset[int] | None = None
+    scene: Labels, phrase: Sequence[Term], referent: int | None, within: frozenset[int] | None = None
 ) -> frozenset[int]:
     """The objects a plain object phrase fits best (all of them when it says nothing)."""
     refer = next((m.value for t in phrase for r in t.readings for m in r if m.slot == "refer"), None)
