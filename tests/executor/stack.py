@@ -24,6 +24,8 @@ from hfpbd.tasks.observer import Stillness
 from shared.messages import TruthObject
 from tests.processes import Launcher, new_network
 
+NOTHING_TO_STOP = "There is nothing to stop."  # the executor's answer to a stop when it is idle
+
 
 class Stack:
     def __init__(self, log_dir: Path, data_dir: Path, sim_args: tuple[str, ...] = ()) -> None:
@@ -44,7 +46,8 @@ class Stack:
         self.hub.subscribe(keys.executor_state, self._on_state, history=True)
         self.truth_at = 0.0  # when the newest truth arrived (monotonic seconds)
         self.hub.subscribe(keys.truth, self._on_truth, latest_only=True)
-        self.hub.subscribe(keys.sim_state, lambda m: self._store("robot", m), latest_only=True)
+        self.robot_at = 0.0  # when the newest robot state arrived (monotonic seconds)
+        self.hub.subscribe(keys.sim_state, self._on_robot, latest_only=True)
         self.table: dict[str, Any] | None = None  # perception's latest view of the table
         self.hub.subscribe(keys.objects, self._on_objects, latest_only=True, history=True)
 
@@ -63,11 +66,6 @@ class Stack:
         self.hub.close()
 
     # -- observations -------------------------------------------------------------------
-    def _store(self, name: str, value: Any) -> None:
-        with self._changed:
-            setattr(self, name, value)
-            self._changed.notify_all()
-
     def _on_objects(self, message: dict[str, Any]) -> None:
         with self._changed:
             self.objects = {o["id"]: o for o in message["objects"]}
@@ -77,6 +75,11 @@ class Stack:
     def _on_truth(self, message: dict[str, Any]) -> None:
         with self._changed:
             self.truth, self.truth_at = {o["id"]: o for o in message["objects"]}, time.monotonic()
+            self._changed.notify_all()
+
+    def _on_robot(self, message: dict[str, Any]) -> None:
+        with self._changed:
+            self.robot, self.robot_at = message, time.monotonic()
             self._changed.notify_all()
 
     def _on_state(self, message: dict[str, Any]) -> None:
@@ -167,14 +170,7 @@ class Stack:
     ) -> list[dict[str, Any]]:
         """Send a command as the NLU does (``then``: further steps); return what the robot said about it."""
         start, runs = len(self.lines), self.runs
-        message = {
-            "kind": "command",
-            "procedure": procedure,
-            "args": args or {},
-            "phrases": phrases or {},
-            "text": utterance,
-            "utterance": utterance or procedure.replace("_", " "),
-        }
+        message = _result(procedure, args or {}, phrases or {}, utterance)
         if then is not None:
             message["then"] = then
         self.hub.publish(self.hub.keys.nlu_result, message)
@@ -187,17 +183,52 @@ class Stack:
             f"{procedure} to start",
         )
         self.idle(timeout)
-        time.sleep(0.3)  # the last line and the next truth sample arrive just after the state
+        self.caught_up()
         return self.lines[start:]
+
+    def caught_up(self) -> None:
+        """Wait until every line the executor said so far has arrived, and a truth and robot sample newer than that.
+
+        Lines and states come on different keys, each handled on its own
+        thread, so the state that says "idle" may overtake the last line.
+        A "stop" sent when nothing runs is answered at once with "There is
+        nothing to stop." on the same key as every other line: once that
+        answer is here, every line said before it is too (it is then dropped).
+        """
+        start = len(self.lines)
+        self.hub.publish(self.hub.keys.nlu_result, _result("stop", {}, {}, "stop"))
+        found = self.wait_for(
+            lambda: next(
+                (i + 1 for i, line in enumerate(self.lines[start:], start) if line["text"] == NOTHING_TO_STOP), 0
+            ),
+            10,
+            "the executor's answer to a stop when idle",
+        )
+        asked = time.monotonic()
+        with self._changed:
+            del self.lines[found - 1]
+        self.wait_for(lambda: self.truth_at > asked and self.robot_at > asked, 10, "fresh truth and robot samples")
 
     @contextmanager
     def unchanged_arms(self, tolerance: float = 0.01) -> Iterator[None]:
         """Assert that the arms did not move during the block (a refused command moves nothing)."""
         before = {arm: self.ee(arm) for arm in ("right", "left")}
         yield
-        time.sleep(0.5)
+        self.caught_up()
         for arm, pose in before.items():
             assert np.linalg.norm(self.ee(arm)[:3] - pose[:3]) < tolerance, f"the {arm} arm moved"
+
+
+def _result(procedure: str, args: dict[str, Any], phrases: dict[str, str], utterance: str) -> dict[str, Any]:
+    """A command as the NLU publishes it on ``nlu/result``."""
+    return {
+        "kind": "command",
+        "procedure": procedure,
+        "args": args,
+        "phrases": phrases,
+        "text": utterance,
+        "utterance": utterance or procedure.replace("_", " "),
+    }
 
 
 def texts(lines: list[dict[str, Any]], kind: str | None = None) -> list[str]:

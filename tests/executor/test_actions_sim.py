@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import time
 from pathlib import Path
 
 import numpy as np
@@ -83,12 +82,13 @@ def test_stop_interrupts_a_motion_midway(stack: Stack) -> None:
     cup = stack.position("obj1")
     stack.command("move_rel_dest", {"arm": "left", "relation": "above", "object": stack.pid("obj1")}, wait=False)
     stack.wait_for(lambda: stack.robot["moving"]["left"], 10, "the left arm to start moving")
-    time.sleep(0.4)
+    started = stack.ee("left")[:3]
+    stack.wait_for(lambda: np.linalg.norm(stack.ee("left")[:3] - started) > 0.02, 10, "the left hand to be on its way")
     start = len(stack.lines)
     stack.command("stop", utterance="stop", wait=False)
     stack.wait_for(lambda: "Stopped." in texts(stack.lines[start:], "info"), 5, "the stop to be confirmed")
     stack.idle()
-    time.sleep(0.5)
+    stack.caught_up()
     assert not stack.robot["moving"]["left"]
     above = cup + [0.0, 0.0, 0.05 + 0.10]
     assert np.linalg.norm(stack.ee("left")[:3] - above) > 0.10, "the hand got above the cup although it was stopped"

@@ -6,8 +6,6 @@ physically are, and what the simulator's pad contacts say a gripper holds.
 
 from __future__ import annotations
 
-import time
-
 import pytest
 
 from services.sim.layout import TABLE_TOP_Z, TABLE_X
@@ -83,5 +81,5 @@ def test_two_hands_squeeze_the_box_and_lift_it(stack: Stack, box: list[float]) -
     assert grippers["right"]["holding"] is None and grippers["left"]["holding"] is None, (
         "a box squeezed between two hands is held by neither gripper alone"
     )
-    time.sleep(1.0)
+    stack.settled()
     assert bottom(stack, "obj0") > 0.10, "the box slipped"

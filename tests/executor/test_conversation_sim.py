@@ -92,7 +92,7 @@ def test_nothing_to_repeat_nothing_to_undo_and_answers_move_nothing(stack: Stack
             stack.hub.keys.nlu_result,
             {"kind": "answer", "topic": "scene", "utterance": "what do you see", "text": "I see a red cup."},
         )
-        time.sleep(1.5)
+        stack.caught_up()
         assert stack.lines[start:] == [], "the executor said something about an answer"
         assert stack.state["robot"]["busy"] is None and stack.state["robot"]["actions"] == counts
 
@@ -124,7 +124,7 @@ def test_a_question_during_a_motion_is_answered_at_once_and_moves_nothing_else(s
     assert spoken == [answer["text"]]
 
     stack.idle()
-    time.sleep(0.5)
+    stack.caught_up()
     assert texts(stack.lines[start:], "error") == [] and texts(stack.lines[start:], "narration") == []
     assert np.linalg.norm(stack.ee("right")[:3] - right) < 0.01, "the right arm moved"
     assert len(steps_of(stack)) == 1, "the question was recorded as a step"
@@ -156,7 +156,7 @@ def test_a_compound_puts_the_red_cup_on_the_plate_as_two_steps(stack: Stack) -> 
     ok(said)
     narrated = texts(said, "narration")
     assert [line.split()[0] for line in narrated] == ["Picking", "Placing"] and "plate" in narrated[1]
-    time.sleep(1.0)
+    stack.settled()
     red, dish = stack.truth["obj0"], stack.truth["obj3"]
     assert np.linalg.norm(np.asarray(red["position"][:2]) - dish["position"][:2]) < dish["dimensions"][0] / 2
     assert red["aabb"][0][2] > dish["aabb"][1][2] - 0.005, "the cup is not standing on the plate"
@@ -238,7 +238,7 @@ def test_undo_puts_a_picked_cup_back_and_picks_a_placed_one_up_again(stack: Stac
     assert stack.robot["grippers"]["left"]["holding"] == "obj1"
     said = stack.command("undo", utterance="undo")
     ok(said)
-    time.sleep(1.0)
+    stack.settled()
     assert stack.robot["grippers"]["left"]["holding"] is None
     back = stack.position("obj1")
     assert np.linalg.norm(back[:2] - stood[:2]) < 0.02, f"the cup is {np.linalg.norm(back[:2] - stood[:2]):.3f} m off"
@@ -325,12 +325,12 @@ def test_the_box_rises_level_between_both_hands_and_comes_back_down(stack: Stack
                 utterance="both hands up 15 centimetres",
             )
         )
-        time.sleep(1.0)
+        stack.settled()
     lifted = stack.truth["obj0"]["aabb"][0][2] - resting
     assert lifted > 0.10, f"the box rose only {lifted:.3f} m"
     worst = max(tilt(o["pose"]) for t in recorder.truths for o in t["objects"] if o["id"] == "obj0")
     assert worst < 5.0, f"the box tilted {worst:.1f} degrees on the way up"
 
     ok(stack.command("undo", utterance="undo"))  # both hands go back down, still squeezing: the box is set down
-    time.sleep(1.0)
+    stack.settled()
     assert stack.truth["obj0"]["aabb"][0][2] - resting < 0.01, "the box was not set back down"
