@@ -33,7 +33,7 @@ from hfpbd.tasks.stack import LocalStack
 from shared.bus import Bus
 from shared.codec import decode, encode
 from shared.config import free_port, loopback_options
-from shared.messages import TYPES, Objects, SimState, Truth, Utterance
+from shared.messages import TYPES, ActionList, Objects, Parsed, SimState, Truth, Utterance
 
 # stream key (under pbd/<ns>/) -> the schema its readers hold it to
 STREAMS: dict[str, str] = {
@@ -217,9 +217,8 @@ def logged_rejections(children: Sequence[ServiceProcess], cloud_key: str) -> dic
 
 def _snapshot(bus: Bus) -> dict[str, Any]:
     """The answers that must not change: the actions, a parse on the live world, perception's objects."""
-    parse = bus.request(bus.keys.nlu_query("parse"), {"text": PROBE_TEXT}, timeout=10)
-    parse.pop("stamp", None)
-    actions = bus.request(bus.keys.executor_control("actions"), {"op": "list"}, timeout=10)
+    parse = bus.request(bus.keys.nlu_query("parse"), {"text": PROBE_TEXT}, reply=Parsed, timeout=10)
+    actions = bus.request(bus.keys.executor_control("actions"), {"op": "list"}, reply=ActionList, timeout=10)
     return {"parse": parse, "actions": actions}
 
 

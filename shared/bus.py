@@ -46,6 +46,10 @@ class RemoteError(RuntimeError):
     """The service answered the request with an error message."""
 
 
+class MalformedReply(RemoteError):
+    """The service answered with a reply that does not fit the reply's type: as good as an error from it."""
+
+
 class Publisher:
     """Publishes typed messages (``shared.messages``) on one key."""
 
@@ -333,15 +337,21 @@ class Bus:
         """Send a query and return the first reply; raise on error or timeout.
 
         With a ``reply`` type the answer is that type, checked all the way
-        down: an answer that does not fit raises :class:`MessageError` naming
-        the field, so an asker never reads a field the service did not send.
+        down: an answer that does not fit raises :class:`MalformedReply`
+        naming the field (a :class:`RemoteError`, which askers already
+        handle), so an asker never reads a field the service did not send.
         Without one it is the decoded map.
         """
         replies = self.session.get(key, payload=encode(message or {}), timeout=timeout)
         for answer in replies:
             if answer.ok is not None:
                 decoded = decode(answer.ok.payload.to_bytes())
-                return read(reply, decoded) if reply is not None else decoded
+                if reply is None:
+                    return decoded
+                try:
+                    return read(reply, decoded)
+                except MessageError as exc:
+                    raise MalformedReply(f"malformed reply on {key}: {exc}") from None
             refusal = answer.err
             if refusal is None:
                 continue

@@ -420,6 +420,18 @@ class ActionStarted(Reply):
     message: str
 
 
+# ``executor/control/actions``: each operation's reply
+ACTIONS_REPLIES: dict[str, type[Reply]] = {
+    "list": ActionList,
+    "show": ActionShown,
+    "rename": ActionRenamed,
+    "delete": ActionDeleted,
+    "delete_step": StepDeleted,
+    "move_step": StepMoved,
+    "execute": ActionStarted,
+}
+
+
 class ByObject(Message):
     """A reply that is a map keyed by object id, as ``hfpbd nlu ground`` and ``describe`` print it.
 

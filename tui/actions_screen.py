@@ -23,13 +23,14 @@ from textual.screen import Screen
 from textual.widgets import DataTable, Footer, Header, Input, Static
 
 from shared.bus import BusTimeout, RemoteError
+from shared.messages import ActionList, ActionRenamed, ActionSummary, Reply
 from tui.bridge import Bridge
 
 
 class ActionsReplied(Message):
     """The executor answered a request made on this screen."""
 
-    def __init__(self, request: dict[str, Any], reply: dict[str, Any]) -> None:
+    def __init__(self, request: dict[str, Any], reply: Reply) -> None:
         super().__init__()
         self.request = request
         self.reply = reply
@@ -68,7 +69,7 @@ class ActionsScreen(Screen[None]):
         super().__init__()
         self.bridge = bridge
         self.namespace = namespace
-        self.actions: list[dict[str, Any]] = []
+        self.actions: list[ActionSummary] = []
         self._armed: tuple[str, int, int] | None = None  # a delete waiting for its second key press
         self._listed = False
 
@@ -101,7 +102,7 @@ class ActionsScreen(Screen[None]):
         self.ask({"op": "list"})
 
     # -- what is selected ------------------------------------------------------
-    def selected_action(self) -> dict[str, Any] | None:
+    def selected_action(self) -> ActionSummary | None:
         table = self.query_one("#actions-table", DataTable)
         if not self.actions or table.cursor_row >= len(self.actions):
             return None
@@ -115,7 +116,7 @@ class ActionsScreen(Screen[None]):
         self.query_one("#actions-note", Static).update(Text(text, style=style))
 
     # -- showing ---------------------------------------------------------------
-    def show_list(self, actions: list[dict[str, Any]]) -> None:
+    def show_list(self, actions: list[ActionSummary]) -> None:
         """Redraw the actions table, keeping the cursor on the same row where it still exists."""
         self.actions = actions
         table = self.query_one("#actions-table", DataTable)
@@ -123,12 +124,12 @@ class ActionsScreen(Screen[None]):
         table.clear()
         for action in actions:
             table.add_row(
-                Text("▶" if action.get("current") else "", style="bold yellow"),
-                str(action["number"]),
-                action.get("name") or Text("(unnamed)", style="dim"),
-                str(action["steps"]),
-                created_text(action.get("created")),
-                key=str(action["number"]),
+                Text("▶" if action.current else "", style="bold yellow"),
+                str(action.number),
+                action.name or Text("(unnamed)", style="dim"),
+                str(action.steps),
+                created_text(action.created),
+                key=str(action.number),
             )
         if actions:
             table.move_cursor(row=min(row, len(actions) - 1))
@@ -142,7 +143,7 @@ class ActionsScreen(Screen[None]):
         if action is None:
             self.note("no actions yet: say “create a new action”, then teach it some steps")
             return
-        words = action.get("words") or []
+        words = action.words
         for n, said in enumerate(words, start=1):
             steps.add_row(str(n), said, key=str(n))
         if words:
@@ -162,7 +163,7 @@ class ActionsScreen(Screen[None]):
         if action is None:
             return
         rename = self.query_one("#actions-rename", Input)
-        rename.value = action.get("name") or ""
+        rename.value = action.name or ""
         rename.display = True
         rename.focus()
 
@@ -172,10 +173,10 @@ class ActionsScreen(Screen[None]):
         self.query_one("#actions-table").focus()
         action = self.selected_action()
         name = event.value.strip()
-        if action is None or not name or name == action.get("name"):
+        if action is None or not name or name == action.name:
             self.note("name kept")
             return
-        self.ask({"op": "rename", "number": action["number"], "name": name})
+        self.ask({"op": "rename", "number": action.number, "name": name})
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         """Letter keys belong to the name being typed while renaming."""
@@ -187,49 +188,49 @@ class ActionsScreen(Screen[None]):
         action = self.selected_action()
         if action is None:
             return
-        if self._confirmed("action", action["number"], 0):
-            self.ask({"op": "delete", "number": action["number"]})
+        if self._confirmed("action", action.number, 0):
+            self.ask({"op": "delete", "number": action.number})
             return
         self.note(
-            f"press d again to delete action {action['number']} ({_name(action)}, {action['steps']} steps); "
+            f"press d again to delete action {action.number} ({_name(action)}, {action.steps} steps); "
             "any other key keeps it",
             "bold yellow",
         )
 
     def action_delete_step(self) -> None:
         action = self.selected_action()
-        if action is None or not action["steps"]:
+        if action is None or not action.steps:
             return
         step = self.selected_step()
-        if self._confirmed("step", action["number"], step):
-            self.ask({"op": "delete_step", "number": action["number"], "step": step})
+        if self._confirmed("step", action.number, step):
+            self.ask({"op": "delete_step", "number": action.number, "step": step})
             return
         self.note(
-            f"press x again to delete step {step} of action {action['number']} "
-            f"(“{action['words'][step - 1]}”); any other key keeps it",
+            f"press x again to delete step {step} of action {action.number} "
+            f"(“{action.words[step - 1]}”); any other key keeps it",
             "bold yellow",
         )
 
     def action_move_step(self, by: int) -> None:
         action = self.selected_action()
-        if action is None or not action["steps"]:
+        if action is None or not action.steps:
             return
         step = self.selected_step()
         to = step + by
-        if not 1 <= to <= action["steps"]:
+        if not 1 <= to <= action.steps:
             self.note(f"step {step} is already the {'first' if by < 0 else 'last'}")
             return
         self.query_one("#steps-table", DataTable).move_cursor(row=to - 1)
-        self.ask({"op": "move_step", "number": action["number"], "step": step, "to": to})
+        self.ask({"op": "move_step", "number": action.number, "step": step, "to": to})
 
     def action_execute(self) -> None:
         action = self.selected_action()
         if action is None:
             return
-        if not action["steps"]:
-            self.note(f"action {action['number']} has no steps to execute yet", "bold red")
+        if not action.steps:
+            self.note(f"action {action.number} has no steps to execute yet", "bold red")
             return
-        self.ask({"op": "execute", "number": action["number"], "step": self.selected_step()})
+        self.ask({"op": "execute", "number": action.number, "step": self.selected_step()})
 
     def _confirmed(self, what: str, number: int, step: int) -> bool:
         """True on the second press of the same delete; the first press only arms it."""
@@ -261,13 +262,14 @@ class ActionsScreen(Screen[None]):
         if op == "list":
             first = not self._listed
             self._listed = True
-            self.show_list(list(reply.get("actions") or []))
+            assert isinstance(reply, ActionList)
+            self.show_list(reply.actions)
             if first and self.actions:  # later lists follow a change, whose note stays
                 self.note(f"{len(self.actions)} action(s); the current one is marked ▶")
             return
         number = event.request.get("number")
         done = {
-            "rename": f"renamed action {number} to “{reply.get('name')}”",
+            "rename": f"renamed action {number} to “{reply.name if isinstance(reply, ActionRenamed) else ''}”",
             "delete": f"deleted action {number}; later actions moved down by one",
             "delete_step": f"deleted step {event.request.get('step')} of action {number}",
             "move_step": f"moved step {event.request.get('step')} of action {number} to {event.request.get('to')}",
@@ -286,5 +288,5 @@ class ActionsScreen(Screen[None]):
         self.ask({"op": "list"})
 
 
-def _name(action: dict[str, Any]) -> str:
-    return f"“{action['name']}”" if action.get("name") else "unnamed"
+def _name(action: ActionSummary) -> str:
+    return f"“{action.name}”" if action.name else "unnamed"

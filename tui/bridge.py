@@ -16,7 +16,23 @@ from textual.message import Message
 
 from shared.bus import Bus, BusTimeout, RemoteError
 from shared.config import SessionOptions
-from shared.messages import Cloud, ExecutorState, NluResult, Objects, Say, SimState, Utterance
+from shared.messages import (
+    ACTIONS_REPLIES,
+    Cloud,
+    CommandReply,
+    Descriptions,
+    ExecutorState,
+    NluResult,
+    Objects,
+    PttReply,
+    Reply,
+    Say,
+    SimState,
+    SnapshotReply,
+    SpeechPtt,
+    Utterance,
+    Vocabulary,
+)
 from tui import events
 
 # A cheap, side-effect-free request per service, timed for the status bar.
@@ -121,9 +137,12 @@ class Bridge:
         """Ask the executor to run a direct command; returns its message."""
         bus = self._bus()
         reply = bus.request(
-            bus.keys.executor_control("command"), {"procedure": procedure, "args": args or {}}, timeout=timeout
+            bus.keys.executor_control("command"),
+            {"procedure": procedure, "args": args or {}},
+            reply=CommandReply,
+            timeout=timeout,
         )
-        return str(reply.get("message") or "")
+        return reply.message
 
     def stop(self) -> str:
         """Stop the robot: through the executor, or straight at the simulator when it is gone.
@@ -141,28 +160,27 @@ class Bridge:
     def talk(self, on: bool) -> bool:
         """Press (``on``) or release push-to-talk on the speech service; returns whether it now listens."""
         bus = self._bus()
-        reply = bus.request(bus.keys.speech("ptt"), {"on": on}, timeout=2.0)
-        return bool(reply.get("listening"))
+        return bus.request(bus.keys.speech("ptt"), SpeechPtt(on=on), reply=PttReply, timeout=2.0).listening
 
-    def actions(self, request: dict[str, Any]) -> dict[str, Any]:
-        """One request on the executor's actions queryable (list, rename, delete, steps, execute)."""
+    def actions(self, request: dict[str, Any]) -> Reply:
+        """One request on the executor's actions queryable (list, rename, delete, steps, execute), read as its op's reply."""
         bus = self._bus()
-        return bus.request(bus.keys.executor_control("actions"), request, timeout=3.0)
+        kind = ACTIONS_REPLIES.get(request["op"], Reply)
+        return bus.request(bus.keys.executor_control("actions"), request, reply=kind, timeout=3.0)
 
     def snapshot(self) -> bytes:
         """A PNG of the whole robot from the simulator's overview camera (rendering takes a moment)."""
         bus = self._bus()
-        return bytes(bus.request(bus.keys.sim_control("snapshot"), {}, timeout=20.0)["png"])
+        return bus.request(bus.keys.sim_control("snapshot"), {}, reply=SnapshotReply, timeout=20.0).png
 
     def describe(self) -> dict[str, str]:
         bus = self._bus()
-        reply = bus.request(bus.keys.nlu_query("describe"), {}, timeout=3.0)
-        return {str(k): str(v) for k, v in reply.items() if k not in ("v", "ok") and isinstance(v, str)}
+        return bus.request(bus.keys.nlu_query("describe"), {}, reply=Descriptions, timeout=3.0).by_id
 
     def vocabulary(self) -> tuple[list[str], list[str]]:
         bus = self._bus()
-        reply = bus.request(bus.keys.nlu_query("vocabulary"), {}, timeout=3.0)
-        return [str(w) for w in reply.get("words", [])], [str(p) for p in reply.get("phrases", [])]
+        reply = bus.request(bus.keys.nlu_query("vocabulary"), {}, reply=Vocabulary, timeout=3.0)
+        return reply.words, reply.phrases
 
     def ping(self, service: str) -> float | None:
         """Round-trip seconds of the service's probe request, None if it did not answer."""

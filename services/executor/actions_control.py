@@ -17,10 +17,8 @@ from services.executor.actions_cli import apply_action_op
 from services.executor.grounding import describe_kind
 from services.executor.store import ActionStore, StoreError
 from shared.messages import (
-    ActionDeleted,
+    ACTIONS_REPLIES,
     ActionList,
-    ActionRenamed,
-    ActionShown,
     ActionStarted,
     Reply,
     StepDeleted,
@@ -32,8 +30,6 @@ from shared.messages import (
 Runner = Callable[[int, int], tuple[bool, str]]
 
 OPERATIONS = "list, show, rename, delete, delete_step, move_step or execute"
-# the reply type of each operation shared with the command line (``actions_cli``, which answers in maps)
-CLI_REPLIES: dict[str, type[Reply]] = {"show": ActionShown, "rename": ActionRenamed, "delete": ActionDeleted}
 
 
 def step_words(step: dict[str, Any]) -> str:
@@ -70,7 +66,7 @@ def apply(store: ActionStore, request: dict[str, Any], run: Runner | None = None
             item["words"] = [step_words(s) for s in store.get(item["number"])["steps"]]
         return reply_from(ActionList, listed)
     if op in ("show", "rename", "delete"):
-        return reply_from(CLI_REPLIES[op], apply_action_op(store, request))
+        return reply_from(ACTIONS_REPLIES[op], apply_action_op(store, request))  # the command line's maps, typed
     if op not in ("delete_step", "move_step", "execute"):
         raise StoreError(f"unknown actions operation {op!r}; use {OPERATIONS}")
     number = _whole(request.get("number"), "number")

@@ -22,7 +22,21 @@ from services.nlu.nbest import NOT_MADE_OUT, Decision, most_plausible
 from services.nlu.templates import sentence_templates
 from services.nlu.world import COLORS, TYPES, WorldError, parse_world
 from shared.bus import Bus
-from shared.messages import ExecutorState, NluResult, Objects, PerceivedObject, Robot, Say, Skill, Utterance
+from shared.messages import (
+    Descriptions,
+    ExecutorState,
+    Grounding,
+    NluResult,
+    Objects,
+    Parsed,
+    PerceivedObject,
+    Robot,
+    Say,
+    Skill,
+    Utterance,
+    Vocabulary,
+    reply_from,
+)
 from shared.service import run_service, wait_until_stopped
 
 log = logging.getLogger("hfpbd.nlu")
@@ -166,21 +180,22 @@ class NluService:
         with self.live.lock:
             return self.live.model(), self.live.dialogue
 
-    def serve_parse(self, request: dict[str, Any]) -> dict[str, Any]:
+    def serve_parse(self, request: dict[str, Any]) -> Parsed:
         text = _text(request)
         model, dialogue = self._model_for(request)
         history = dialogue.history if dialogue is not None else None
-        return model.parse(text, history).to_json()
+        return reply_from(Parsed, model.parse(text, history).to_json())
 
-    def serve_ground(self, request: dict[str, Any]) -> dict[str, Any]:
-        return self._model_for(request)[0].ground(_text(request))
+    def serve_ground(self, request: dict[str, Any]) -> Grounding:
+        return Grounding(by_id=self._model_for(request)[0].ground(_text(request)))
 
-    def serve_describe(self, request: dict[str, Any]) -> dict[str, Any]:
-        return self._model_for(request)[0].describe()
+    def serve_describe(self, request: dict[str, Any]) -> Descriptions:
+        return Descriptions(by_id=self._model_for(request)[0].describe())
 
     @staticmethod
-    def serve_vocabulary(_request: dict[str, Any]) -> dict[str, Any]:
-        return {**vocabulary(), "templates": sentence_templates()}
+    def serve_vocabulary(_request: dict[str, Any]) -> Vocabulary:
+        understood = vocabulary()
+        return Vocabulary(words=understood["words"], phrases=understood["phrases"], templates=sentence_templates())
 
 
 def _text(request: dict[str, Any]) -> str:

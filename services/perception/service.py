@@ -39,7 +39,7 @@ from services.perception.table_edges import TableExtent, widest
 from services.perception.tracking import Tracker, TrackSettings
 from shared.bus import Bus
 from shared.codec import MessageError
-from shared.messages import Cloud, SimState, as_received, typed
+from shared.messages import Cloud, RecordReply, SimState, as_received, reply_from, typed
 
 log = logging.getLogger("hfpbd.perception")
 
@@ -184,7 +184,7 @@ class PerceptionService:
             self._changed.notify_all()
 
     # -- record ------------------------------------------------------------
-    def on_record(self, _request: Mapping[str, Any]) -> dict:
+    def on_record(self, _request: Mapping[str, Any]) -> RecordReply:
         """Objects from two consecutive good frames rendered after the request that agree."""
         deadline = time.monotonic() + self.record_timeout
         now = _sim_time(self._states[-1]) if self._states else None
@@ -194,12 +194,8 @@ class PerceptionService:
                 fresh = [f for f in self._frames if f.number > after and _rendered_since(f, now)]
                 settled = _settled(fresh)
                 if settled is not None:
-                    return {
-                        "ok": True,
-                        "objects": settled.objects,
-                        "settled": True,
-                        **({"table": self._table} if self._table else {}),
-                    }
+                    table = {"table": self._table} if self._table else {}
+                    return reply_from(RecordReply, {"ok": True, "objects": settled.objects, "settled": True, **table})
                 left = deadline - time.monotonic()
                 if left <= 0:
                     raise RuntimeError(_record_failure(fresh, self.record_timeout))

@@ -43,7 +43,19 @@ from services.sim.scene_file import (
 )
 from services.sim.world import ARMS, Capture, PictureInFlight, SimWorld
 from shared.bus import Bus
-from shared.messages import Cloud, SimEvent, as_received
+from shared.messages import (
+    Cloud,
+    MotionReply,
+    MotionsReply,
+    PauseReply,
+    SceneReply,
+    SimEvent,
+    SnapshotReply,
+    StepReply,
+    StopReply,
+    as_received,
+    reply_from,
+)
 
 log = logging.getLogger("hfpbd.sim")
 
@@ -249,22 +261,22 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
             runner.replaced(world.move_joints(side, names, goal, motion_id), motion_id)
         return motion_id
 
-    def arm(request: dict) -> dict:
+    def arm(request: dict) -> MotionReply:
         side, names, goal = control.arm_request(request, joints)
         contact = control.contact_flag(request)
         if contact and not isinstance(goal, tuple):
             raise ValueError("contact applies to timed waypoints ('points' and 'times'), not to 'positions'")
-        return {"ok": True, "motion_id": runner.call(lambda: start_arm(side, names, goal, contact))}
+        return MotionReply(ok=True, motion_id=runner.call(lambda: start_arm(side, names, goal, contact)))
 
-    def arms(request: dict) -> dict:
+    def arms(request: dict) -> MotionsReply:
         motions = control.arms_request(request, joints)
         # one call on the simulation thread: every arm starts before the next physics step
         ids = runner.call(
             lambda: {side: start_arm(side, names, goal, contact) for side, names, goal, contact in motions}
         )
-        return {"ok": True, "motion_ids": ids}
+        return MotionsReply(ok=True, motion_ids=ids)
 
-    def gripper(request: dict) -> dict:
+    def gripper(request: dict) -> MotionReply:
         side, width, force = control.gripper_request(request)
 
         def start() -> str:
@@ -272,9 +284,9 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
             runner.replaced(world.move_gripper(side, width, force, motion_id), motion_id)
             return motion_id
 
-        return {"ok": True, "motion_id": runner.call(start)}
+        return MotionReply(ok=True, motion_id=runner.call(start))
 
-    def head(request: dict) -> dict:
+    def head(request: dict) -> MotionReply:
         goal = control.head_request(request, joints)
 
         def start() -> str:
@@ -286,9 +298,9 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
             )
             return motion_id
 
-        return {"ok": True, "motion_id": runner.call(start)}
+        return MotionReply(ok=True, motion_id=runner.call(start))
 
-    def torso(request: dict) -> dict:
+    def torso(request: dict) -> MotionReply:
         height = control.torso_request(request, joints)
 
         def start() -> str:
@@ -299,9 +311,9 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
             )
             return motion_id
 
-        return {"ok": True, "motion_id": runner.call(start)}
+        return MotionReply(ok=True, motion_id=runner.call(start))
 
-    def stop(request: dict) -> dict:
+    def stop(request: dict) -> StopReply:
         parts = control.stop_parts(request)
 
         def halt() -> list[str]:
@@ -310,9 +322,9 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
                 runner.publish_event(motion.motion_id, "stopped", "stopped on request")
             return [m.motion_id for m in stopped]
 
-        return {"ok": True, "stopped": runner.call(halt)}
+        return StopReply(ok=True, stopped=runner.call(halt))
 
-    def scene(request: dict) -> dict:
+    def scene(request: dict) -> SceneReply:
         spec = resolve_scene(request)
 
         def load() -> list[dict]:
@@ -323,9 +335,9 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
             runner.publish_truth()
             return world.truth()
 
-        return {"ok": True, "scene": spec.name, "objects": runner.call(load)}
+        return reply_from(SceneReply, {"ok": True, "scene": spec.name, "objects": runner.call(load)})
 
-    def pause(request: dict) -> dict:
+    def pause(request: dict) -> PauseReply:
         paused = request.get("paused", True)
         if not isinstance(paused, bool):
             raise ValueError("paused must be true or false")
@@ -334,9 +346,9 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
             runner.paused = paused
             return world.sim_time
 
-        return {"ok": True, "paused": paused, "sim_time": runner.call(apply)}
+        return PauseReply(ok=True, paused=paused, sim_time=runner.call(apply))
 
-    def step(request: dict) -> dict:
+    def step(request: dict) -> StepReply:
         steps = int(control.number(request, "steps", 1, 25000, 1))
 
         def apply() -> float:
@@ -347,11 +359,11 @@ def serve_controls(bus: Bus, runner: SimRunner) -> None:
             runner.publish_truth()
             return sim_time
 
-        return {"ok": True, "sim_time": runner.call(apply)}
+        return StepReply(ok=True, sim_time=runner.call(apply))
 
-    def snapshot(request: dict) -> dict:
+    def snapshot(request: dict) -> SnapshotReply:
         image = runner.call(world.overview_rgb)
-        return {"ok": True, "png": png_bytes(image)}
+        return SnapshotReply(ok=True, png=png_bytes(image))
 
     handlers = {
         "arm": arm,

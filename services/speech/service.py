@@ -16,7 +16,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -29,8 +28,7 @@ from services.speech.vad import UtteranceSplitter
 from services.speech.vocabulary import SpeechVocabulary, nlu_vocabulary
 from services.speech.voice import Speaker
 from shared.bus import Bus, BusTimeout, RemoteError
-from shared.codec import MessageError
-from shared.messages import Objects, Say, SayKind, SpeechAudio, SpeechPtt, SpeechStatus, Utterance, typed
+from shared.messages import Objects, PttReply, Say, SayKind, SpeechAudio, SpeechPtt, SpeechStatus, Utterance
 
 log = logging.getLogger("hfpbd.speech")
 
@@ -80,7 +78,7 @@ class SpeechService:
     def start(self) -> None:
         self._worker.start()
         self.bus.subscribe(self.bus.keys.speech("audio"), self._on_stream, schema="speech_audio")
-        self.bus.serve(self.bus.keys.speech("ptt"), self._on_ptt)
+        self.bus.serve(self.bus.keys.speech("ptt"), self._on_ptt, request=SpeechPtt)
         self.bus.subscribe(self.bus.keys.objects, self._on_objects, schema="objects", latest_only=True, history=True)
         self.bus.watch_alive(self._on_alive)
         if self.speaker is not None:
@@ -177,14 +175,9 @@ class SpeechService:
             self.end_of_stream()
 
     # -- push to talk ----------------------------------------------------------
-    def _on_ptt(self, request: dict[str, Any]) -> dict[str, Any]:
-        try:
-            press = typed("speech_ptt", request)
-        except MessageError as exc:
-            raise ValueError(f"push-to-talk request: {exc}") from None
-        assert isinstance(press, SpeechPtt)
+    def _on_ptt(self, press: SpeechPtt) -> PttReply:
         self.set_talk(press.on)
-        return {"ok": True, "listening": press.on}
+        return PttReply(ok=True, listening=press.on)
 
     def set_talk(self, on: bool) -> None:
         """Press: collect all audio from now on. Release: decode it, after a short tail.

@@ -1,5 +1,8 @@
 """Subscriptions with a schema hand over typed messages; a wrong nested type never reaches the handler.
 
+Queryables answer with typed replies, read as their type by the asker; a
+request or a reply that does not fit its type is a clear error, never a crash.
+
 Two sessions in this process on a private loopback network: the hub
 publishes maps as any peer would, the other session subscribes.
 """
@@ -12,10 +15,24 @@ from typing import Any
 
 import pytest
 
-from shared.bus import Bus
-from shared.messages import Gripper, Objects, PerceivedObject, SimState
+from shared.bus import Bus, MalformedReply, RemoteError
+from shared.codec import decode, encode
+from shared.colours import COLOURS, rgb8
+from shared.contract import COLORS
+from shared.messages import (
+    CommandStep,
+    Descriptions,
+    Gripper,
+    NluResult,
+    Objects,
+    PerceivedObject,
+    PttReply,
+    SimState,
+    SpeechPtt,
+    StopReply,
+)
 from tests.processes import Network
-from tests.waiting import subscribed
+from tests.waiting import served, subscribed
 
 pytestmark = pytest.mark.unit
 
@@ -120,3 +137,57 @@ def test_without_a_schema_the_handler_gets_the_map_and_its_key(network: Network,
 def test_an_unknown_schema_is_refused_at_once(listener: Bus) -> None:
     with pytest.raises(ValueError, match="no message type"):
         listener.subscribe(listener.keys.say, print, schema="shout")
+
+
+def _serving(network: Network, listener: Bus, suffix: str, handler: Any, **options: Any) -> str:
+    """Serve ``handler`` on ``listener``, once the hub's requests reach it; returns the key."""
+    key = f"pbd/{network.namespace}/{suffix}"
+    listener.serve(key, handler, **options)
+    served(network.hub, key)
+    return key
+
+
+def test_a_typed_reply_is_read_as_its_type_and_sent_as_the_map_it_always_was(network: Network, listener: Bus) -> None:
+    key = _serving(network, listener, "sim/control/stop", lambda _request: StopReply(ok=True, stopped=["m1"]))
+    assert network.hub.request(key, {}, reply=StopReply) == StopReply(ok=True, stopped=["m1"])
+    assert network.hub.request(key, {}) == {"v": 1, "ok": True, "stopped": ["m1"]}
+
+
+def test_a_reply_keyed_by_object_is_the_flat_map_on_the_wire(network: Network, listener: Bus) -> None:
+    names = {"obj0": "the red cup", "obj1": "the plate"}
+    key = _serving(network, listener, "nlu/describe", lambda _request: Descriptions(by_id=names))
+    assert network.hub.request(key, {}) == {"v": 1, **names}
+    assert network.hub.request(key, {}, reply=Descriptions).by_id == names
+
+
+def test_a_reply_that_does_not_fit_its_type_is_an_error_naming_the_field(network: Network, listener: Bus) -> None:
+    key = _serving(network, listener, "speech/ptt", lambda _request: StopReply(ok=True, stopped=[]))
+    with pytest.raises(MalformedReply, match="listening") as refused:
+        network.hub.request(key, {"on": True}, reply=PttReply)
+    assert isinstance(refused.value, RemoteError)  # what askers already handle
+
+
+def test_a_malformed_request_is_refused_before_the_handler_and_counted(network: Network, listener: Bus) -> None:
+    pressed: list[SpeechPtt] = []
+
+    def press(request: SpeechPtt) -> PttReply:
+        pressed.append(request)
+        return PttReply(ok=True, listening=request.on)
+
+    key = _serving(network, listener, "speech/ptt", press, request=SpeechPtt)
+    with pytest.raises(RemoteError, match=r"malformed request: .*\$\.on"):
+        network.hub.request(key, {"on": "yes"})
+    assert pressed == [] and listener.rejected[key] == 1
+    assert network.hub.request(key, SpeechPtt(on=True), reply=PttReply).listening
+    assert pressed == [SpeechPtt(on=True)]
+
+
+def test_a_step_of_a_result_always_carries_its_args() -> None:
+    """DESIGN.md: a clarification's candidates are ``{"procedure", "args"}``, even a command with no arguments."""
+    result = NluResult(kind="clarify", utterance="record", candidates=[CommandStep(procedure="record")])
+    assert decode(encode(result))["candidates"] == [{"procedure": "record", "args": {}}]
+
+
+def test_every_colour_word_has_one_colour() -> None:
+    assert set(COLOURS) == set(COLORS) - {"unknown"}
+    assert rgb8("grey") == (128, 128, 128) and rgb8("red") == (217, 20, 20)

@@ -18,6 +18,7 @@ from services.executor.actions_control import apply
 from services.executor.store import ActionStore, atomic_write_text
 from shared.bus import Bus, Publisher
 from shared.config import SessionOptions
+from shared.messages import Descriptions, Vocabulary
 from tests.waiting import eventually, subscribed
 from tui.app import PbdApp
 from tui.bridge import Bridge, Poster
@@ -158,10 +159,12 @@ def stage_world(hub: Bus) -> list[Publisher]:
     """
     for service in ("sim", "perception", "nlu", "executor"):
         hub.declare_alive(service)
-    hub.serve(hub.keys.nlu_query("describe"), lambda _request: dict(DESCRIPTIONS))
+    hub.serve(hub.keys.nlu_query("describe"), lambda _request: Descriptions(by_id=dict(DESCRIPTIONS)))
     hub.serve(
         hub.keys.nlu_query("vocabulary"),
-        lambda _request: {"words": ["move", "pick", "place", "execute"], "phrases": ["move your right hand"]},
+        lambda _request: Vocabulary(
+            words=["move", "pick", "place", "execute"], phrases=["move your right hand"], templates={}
+        ),
     )
     objects = hub.publisher(hub.keys.objects, cached=True)
     objects.put({"stamp": 1.0, "objects": OBJECTS})

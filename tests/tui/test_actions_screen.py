@@ -83,7 +83,7 @@ async def test_rename_is_saved_in_the_store(tmp_path: Path) -> None:
         await pilot.press("down", "r")
         await pilot.press(*"lift the plate", "enter")
         await until(pilot, lambda: store.get(2)["name"] == "lift the plate", what="the new name")
-        await until(pilot, lambda: app.screen.actions[1]["name"] == "lift the plate", what="the list again")
+        await until(pilot, lambda: app.screen.actions[1].name == "lift the plate", what="the list again")
         assert "renamed action 2" in note(app)
 
 
@@ -118,7 +118,7 @@ async def test_a_step_is_deleted_and_another_moved(tmp_path: Path) -> None:
         await pilot.press("tab", "down", "x", "x")
         await until(pilot, lambda: len(store.get(1)["steps"]) == 3, what="the step delete")
         assert [s["utterance"] for s in store.get(1)["steps"]] == [said[0], said[2], said[3]]
-        await until(pilot, lambda: app.screen.actions[0]["steps"] == 3, what="the list again")
+        await until(pilot, lambda: app.screen.actions[0].steps == 3, what="the list again")
         await pilot.press("down", "down", "[")
         await until(pilot, lambda: store.get(1)["steps"][1]["utterance"] == said[3], what="the move")
         assert [s["utterance"] for s in store.get(1)["steps"]] == [said[0], said[3], said[2]]

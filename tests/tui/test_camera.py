@@ -13,7 +13,7 @@ import pytest
 from PIL import Image
 from textual_image import widget as image_widgets
 
-from shared.messages import Cloud, PerceivedObject, SimState, typed
+from shared.messages import Cloud, PerceivedObject, SimState, SnapshotReply, typed
 from tests.tui.camera_frame import FOCAL, HEIGHT, WIDTH, frame
 from tests.tui.helpers import DESCRIPTIONS, OBJECTS, SIM_STATE, fixed_network, hub_bridge, stage_world, until
 from tests.tui.test_snapshots import settled
@@ -223,7 +223,8 @@ async def test_f3_shows_the_simulators_overview_picture() -> None:
         world = stage_world(hub)
         asked: list[dict] = []
         hub.serve(
-            hub.keys.sim_control("snapshot"), lambda request: (asked.append(request), {"ok": True, "png": _png()})[1]
+            hub.keys.sim_control("snapshot"),
+            lambda request: (asked.append(request), SnapshotReply(ok=True, png=_png()))[1],
         )
         app = PbdApp(options, probe_seconds=None, camera_drawing="halfcell", bridge=hub_bridge(hub))
         async with app.run_test(size=(100, 30)) as pilot:

@@ -15,6 +15,7 @@ import pytest
 
 from shared.bus import Bus
 from shared.config import loopback_options
+from shared.messages import CommandReply, Descriptions, Reply, StopReply, Vocabulary
 from tests.processes import Network, free_port
 from tests.tui.helpers import DESCRIPTIONS, OBJECTS, REACH, ROBOT, SIM_STATE, connected, hub_bridge, until
 from tui.action_panel import ActionPanel
@@ -38,11 +39,11 @@ def collect(bus: Bus, key: str) -> queue.Queue[dict[str, Any]]:
     return received
 
 
-def serve_recording(bus: Bus, key: str, reply: dict[str, Any]) -> queue.Queue[dict[str, Any]]:
+def serve_recording(bus: Bus, key: str, reply: Reply) -> queue.Queue[dict[str, Any]]:
     """Answer requests on ``key`` with ``reply`` and keep every request."""
     requests: queue.Queue[dict[str, Any]] = queue.Queue()
 
-    def handle(request: dict[str, Any]) -> dict[str, Any]:
+    def handle(request: dict[str, Any]) -> Reply:
         requests.put(request)
         return reply
 
@@ -188,7 +189,7 @@ async def test_a_number_without_such_an_answer_is_refused_and_nothing_is_sent(ne
 
 async def test_world_panel_shows_objects_with_names_reach_and_the_referred_object(network: Network) -> None:
     hub = network.hub
-    hub.serve(hub.keys.nlu_query("describe"), lambda _request: dict(DESCRIPTIONS))
+    hub.serve(hub.keys.nlu_query("describe"), lambda _request: Descriptions(by_id=dict(DESCRIPTIONS)))
     hub.declare_alive("nlu")
     objects = hub.publisher(hub.keys.objects, cached=True)
     objects.put({"stamp": time.time(), "objects": OBJECTS})
@@ -275,7 +276,9 @@ KEYS = [
 async def test_keys_send_direct_commands_even_while_typing(
     network: Network, key: str, procedure: str, args: dict[str, Any]
 ) -> None:
-    requests = serve_recording(network.hub, network.hub.keys.executor_control("command"), {"ok": True, "message": "ok"})
+    requests = serve_recording(
+        network.hub, network.hub.keys.executor_control("command"), CommandReply(ok=True, message="ok")
+    )
     app = PbdApp(network.client_options, probe_seconds=None, bridge=hub_bridge(network.hub))
     async with app.run_test(size=SIZE) as pilot:
         await connected(pilot, app)
@@ -287,7 +290,7 @@ async def test_keys_send_direct_commands_even_while_typing(
 
 
 async def test_stop_reaches_the_arms_directly_when_the_executor_is_gone(network: Network) -> None:
-    stops = serve_recording(network.hub, network.hub.keys.sim_control("stop"), {"ok": True})
+    stops = serve_recording(network.hub, network.hub.keys.sim_control("stop"), StopReply(ok=True, stopped=[]))
     app = PbdApp(network.client_options, probe_seconds=None, bridge=hub_bridge(network.hub))
     async with app.run_test(size=SIZE) as pilot:
         await connected(pilot, app)
@@ -306,7 +309,7 @@ async def test_a_key_without_an_executor_explains_why_nothing_happened(network: 
 
 
 async def test_executor_errors_are_shown_with_their_reason(network: Network) -> None:
-    def refuse(_request: dict[str, Any]) -> dict[str, Any]:
+    def refuse(_request: dict[str, Any]) -> CommandReply:
         raise ValueError("there is no next action")
 
     network.hub.serve(network.hub.keys.executor_control("command"), refuse)
@@ -322,9 +325,11 @@ async def test_history_and_vocabulary_completion(network: Network) -> None:
     hub = network.hub
     hub.serve(
         hub.keys.nlu_query("vocabulary"),
-        lambda _r: {"words": ["move", "pick", "right", "hand", "above"], "phrases": ["move your right hand"]},
+        lambda _r: Vocabulary(
+            words=["move", "pick", "right", "hand", "above"], phrases=["move your right hand"], templates={}
+        ),
     )
-    hub.serve(hub.keys.nlu_query("describe"), lambda _r: dict(DESCRIPTIONS))
+    hub.serve(hub.keys.nlu_query("describe"), lambda _r: Descriptions(by_id=dict(DESCRIPTIONS)))
     hub.declare_alive("nlu")
     app = PbdApp(network.client_options, probe_seconds=0.2, bridge=hub_bridge(network.hub))
     async with app.run_test(size=SIZE) as pilot:

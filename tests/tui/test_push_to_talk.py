@@ -13,6 +13,7 @@ import pytest
 from services.speech import espeak
 from services.speech.audio import silence
 from shared.bus import Bus
+from shared.messages import PttReply
 from tests.processes import Launcher, Network
 from tests.speech.helpers import stream
 from tests.tui.helpers import until
@@ -70,7 +71,7 @@ def refusing_speech(hub: Bus) -> None:
     """A speech service that refuses push-to-talk with its reason."""
     hub.declare_alive("speech")
 
-    def refuse(_request: dict[str, Any]) -> dict[str, Any]:
+    def refuse(_request: dict[str, Any]) -> PttReply:
         raise ValueError("the microphone is busy")
 
     hub.serve(hub.keys.speech("ptt"), refuse)

@@ -15,6 +15,7 @@ from typing import Any
 import pytest
 
 from services.executor.store import ActionStore
+from shared.messages import StopReply
 from tests.processes import ROOT, Network
 from tests.tui.camera_frame import frame
 from tests.tui.helpers import serve_actions, stage_world, teach
@@ -92,7 +93,7 @@ def test_a_person_at_the_terminal(network: Network, terminal: Terminal) -> None:
     heard: queue.Queue[dict[str, Any]] = queue.Queue()
     hub.subscribe(hub.keys.utterance, heard.put)
     stops: queue.Queue[dict[str, Any]] = queue.Queue()
-    hub.serve(hub.keys.sim_control("stop"), lambda request: (stops.put(request), {"ok": True})[1])
+    hub.serve(hub.keys.sim_control("stop"), lambda request: (stops.put(request), StopReply(ok=True, stopped=[]))[1])
 
     screen = terminal.wait_for("no service is running")
     assert "○ sim" in screen and "○ executor" in screen
