@@ -10,23 +10,11 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+from shared.colours import COLOURS, rgb8
 from shared.contract import ARMS
 from shared.messages import Gripper, PerceivedObject, Pose, Robot
 
-# Display colours for perception's colour words, used when an object carries
-# no measured ``rgb``.
-COLOR_WORDS: dict[str, tuple[int, int, int]] = {
-    "red": (220, 40, 40),
-    "green": (40, 170, 60),
-    "blue": (50, 90, 220),
-    "yellow": (230, 210, 40),
-    "orange": (240, 140, 30),
-    "purple": (140, 60, 180),
-    "white": (235, 235, 235),
-    "black": (40, 40, 40),
-    "grey": (128, 128, 128),
-    "unknown": (160, 160, 160),
-}
+UNKNOWN_RGB = (160, 160, 160)  # an object whose colour perception could not name: lighter than grey
 
 
 @dataclass
@@ -49,14 +37,14 @@ class WorldView:
 
 
 def object_rgb(obj: PerceivedObject) -> tuple[int, int, int]:
-    """The object's measured mean colour, else the colour of its colour word."""
+    """The object's measured mean colour, else the colour the simulator paints its colour word with."""
     rgb = obj.rgb
     if rgb is not None and len(rgb) == 3:
         values = [float(c) for c in rgb]
         if max(values) <= 1.0:  # a 0–1 colour
             values = [c * 255 for c in values]
         return tuple(int(max(0, min(255, c))) for c in values)  # type: ignore[return-value]
-    return COLOR_WORDS.get(obj.color, COLOR_WORDS["unknown"])
+    return rgb8(obj.color) if obj.color in COLOURS else UNKNOWN_RGB
 
 
 def hex_color(rgb: tuple[int, int, int]) -> str:

@@ -19,24 +19,13 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from services.perception.robot_mask import segments_from_state
+from shared.colours import rgb8
 from shared.messages import Cloud, SimState, typed
 from shared.robot import ROBOT
 from shared.robot.pr2 import TOOL_OFFSET
 
 RGB = tuple[int, int, int]
 
-# Colours a scene author would pick for each colour word.
-COLOURS: dict[str, RGB] = {
-    "red": (200, 30, 30),
-    "green": (40, 160, 50),
-    "blue": (30, 60, 200),
-    "yellow": (220, 200, 40),
-    "orange": (235, 120, 20),
-    "purple": (120, 40, 160),
-    "white": (235, 235, 235),
-    "black": (25, 25, 25),
-    "grey": (128, 128, 128),
-}
 TABLE_RGB: RGB = (150, 110, 70)
 FLOOR_RGB: RGB = (90, 90, 95)
 ARM_RGB: RGB = (210, 210, 215)
@@ -183,7 +172,7 @@ def render_map(
     take(_hit_plane(origin, rays, 0.0, None, None), FLOOR_RGB, up)
     take(_hit_plane(origin, rays, scene.table_height, scene.table_x, scene.table_y), TABLE_RGB, up)
     for shape in scene.objects:
-        rgb = COLOURS[shape.colour]
+        rgb = rgb8(shape.colour)
         if isinstance(shape, Box):
             t, normals = _hit_box(origin, rays, shape)
         else:

@@ -18,25 +18,12 @@ from typing import Any
 import numpy as np
 
 from services.sim.layout import TABLE_TOP_Z
+from shared.colours import COLOURS
 
 SCENES_DIR = Path(__file__).resolve().parent / "scenes"
 DEFAULT_SCENE = "default"
 
 OBJECT_TYPES = ("cup", "box", "plate", "bowl")
-
-# Reference colours, far apart in hue (or in value for white/grey/black) so a
-# colour-word classifier in HSV can tell them apart under the scene lights.
-COLOURS: dict[str, tuple[float, float, float]] = {
-    "red": (0.85, 0.08, 0.08),
-    "green": (0.10, 0.65, 0.15),
-    "blue": (0.08, 0.22, 0.85),
-    "yellow": (0.95, 0.85, 0.08),
-    "orange": (1.00, 0.45, 0.02),
-    "purple": (0.50, 0.12, 0.70),
-    "white": (0.95, 0.95, 0.95),
-    "black": (0.06, 0.06, 0.06),
-    "grey": (0.50, 0.50, 0.50),
-}
 
 DEFAULT_REGION = {"x": (0.45, 0.65), "y": (-0.18, 0.18)}  # reachable top-down by both arms
 

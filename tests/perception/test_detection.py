@@ -8,7 +8,8 @@ import pytest
 
 from services.perception.cloud import CloudError
 from services.perception.pipeline import detect
-from services.perception.synthetic import COLOURS, Box, Camera, Cylinder, Scene, reaching_arm, render
+from services.perception.synthetic import Box, Camera, Cylinder, Scene, reaching_arm, render
+from shared.colours import COLOURS
 from shared.messages import Cloud
 
 pytestmark = pytest.mark.unit

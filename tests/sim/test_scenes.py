@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 
 from services.sim.layout import TABLE_TOP_Z
-from services.sim.scene_file import COLOURS, SceneError, available_scenes, load_scene, parse_scene, randomized
+from services.sim.scene_file import SceneError, available_scenes, load_scene, parse_scene, randomized
+from shared.colours import COLOURS
 
 pytestmark = pytest.mark.unit
 
