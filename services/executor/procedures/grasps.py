@@ -20,8 +20,7 @@ from services.executor import targets
 from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics
 from services.executor.procedures.body import Body
-from services.executor.procedures.place import lowerable
-from services.executor.procedures.spots import on_free_spots
+from services.executor.procedures.place import placeable
 from services.executor.reach import sync
 from services.executor.scene import SceneSnapshot
 from services.executor.targets import EdgeGrasp
@@ -144,35 +143,12 @@ def suits(
     lift = grasp.lift[:3] - grasp.grasp[:3]
     grasped = targets.held_in_hand(obj.id, Box.of(obj), kin.fk(grasp_q), stood_on)
     held = replace(grasped, box=Box(grasped.box.center + lift, grasped.box.size), tool_pose=grasp.lift)
-    relation = "on_top_of" if coming["relation"] == "above" else coming["relation"]
-    on = (landmark.id,) if relation == "on_top_of" else ()
-    box = Box.of(landmark)
     # the placement's IK starts from the arm as the lift left it, as it will then
     lift_q = kin.ik(grasp.lift, seeds=[grasp_q], check_collisions=False)
     kin.set_obstacles(snap.obstacles(skip={obj.id}))
     kin.attach(obj.id, held.box, held.tool_pose)
-
-    def can_lower(pairs: list[tuple[np.ndarray, np.ndarray]]) -> tuple[bool, frozenset[str]]:
-        """Whether some free pair can be lowered from (tried in order, up to the first), and what the ways
-        down tried ran into."""
-        blocked_by: frozenset[str] = frozenset()
-        for hover, release in on_free_spots(body, held, pairs, snap, on):
-            lowering = lowerable(kin, snap, held, hover, release)
-            if lowering.hover_q is not None:
-                return True, blocked_by
-            blocked_by |= lowering.blocked_by
-        return False, blocked_by
-
     try:
         with kin.posed(grasp_q if lift_q is None else lift_q):
-            lowered, blocked_by = can_lower(targets.place_relation(relation, box, grasp.lift, held, snap.table_z))
-            if lowered:
-                return True
-            # as the placement does: the wider ones only when the way down ran into the landmark
-            return (
-                not on
-                and landmark.id in blocked_by
-                and can_lower(targets.place_relation_wider(relation, box, grasp.lift, held, snap.table_z))[0]
-            )
+            return placeable(body, kin, snap, held, coming["relation"], landmark, grasp.lift)
     finally:
         sync(kin, snap, None)

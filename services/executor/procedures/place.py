@@ -10,7 +10,9 @@ blocked is passed over instead of ending the step once the arm is there.
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 
@@ -33,10 +35,14 @@ from services.executor.referring import refer
 from services.executor.robot import Stopped
 from services.executor.scene import SceneSnapshot
 from services.executor.targets import Held
+from shared.messages import PerceivedObject
 
 log = logging.getLogger("hfpbd.executor.procedures")
 
 PLACE_PLANS = 3  # release candidates a placement may fail to plan a path to before it gives up
+
+Pair = tuple[np.ndarray, np.ndarray]  # a hover pose, and the release pose straight below it
+R = TypeVar("R")
 
 
 def place_abs(body: Body, arm: str, destination: str) -> Done:
@@ -90,13 +96,8 @@ def place_abs(body: Body, arm: str, destination: str) -> Done:
 
 
 def place_rel(body: Body, arm: str, relation: str, object: str) -> Done:
-    """Put the held object ``relation`` the landmark; placed "above" it, the object is set down on it.
-
-    A hand only hovers above a landmark ("move to the plate"); a release
-    there would drop the object from the hover's height.
-    """
-    if relation == "above":
-        relation = "on_top_of"
+    """Put the held object ``relation`` the landmark; placed "above" it, the object is set down on it."""
+    relation = released_relation(relation)
     kin, snap = body.ready(arm)
     held = body.refresh_held(body.holding(arm, snap), snap, kin)
     obj = body.object(snap, object)
@@ -104,20 +105,15 @@ def place_rel(body: Body, arm: str, relation: str, object: str) -> Done:
     if object == held.object_id:
         raise StepFailed(wording.sentence(f"I can't place {words} relative to itself"))
     box = Box.of(obj)
-    # only where it stands clear of everything else (next to a cup, not half on the plate beside it)
-    on = (object,) if relation in ("above", "on_top_of") else ()
+    on = _on(relation, object)
     no_path = wording.sentence(f"I can't find a clear path to carry it {wording.RELATION_WORDS[relation]} {words}")
 
-    candidates = targets.place_relation(relation, box, kin.fk(), held, snap.table_z)
-    pairs = on_free_spots(body, held, candidates, snap, on)
-    done, blocked_by = _carry_and_lower(body, arm, kin, snap, held, pairs, no_path, (object, box))
-    if done is None and object in blocked_by and not on:
-        # every way down ran into the landmark: swing the forearm past its side, or release further out
-        wider = targets.place_relation_wider(relation, box, kin.fk(), held, snap.table_z)
-        done, also = _carry_and_lower(
-            body, arm, kin, snap, held, on_free_spots(body, held, wider, snap, on), no_path, (object, box)
-        )
-        blocked_by |= also
+    def carry_and_lower(pairs: list[Pair]) -> tuple[Done | None, frozenset[str]]:
+        return _carry_and_lower(body, arm, kin, snap, held, pairs, no_path, (object, box))
+
+    done, blocked_by, candidates, pairs = _relative_releases(
+        body, snap, held, relation, object, box, kin.fk, carry_and_lower
+    )
     if done is None:
         log.info(
             "no placement %s %s: %d candidates, %d on a free spot; objects seen: %s",
@@ -141,13 +137,89 @@ def place_rel(body: Body, arm: str, relation: str, object: str) -> Done:
     return done
 
 
+def released_relation(relation: str) -> str:
+    """The relation an object is released in: "above" a landmark it is set down on it.
+
+    A hand only hovers above a landmark ("move to the plate"); a release
+    there would drop the object from the hover's height.
+    """
+    return "on_top_of" if relation == "above" else relation
+
+
+def _on(relation: str, landmark: str) -> tuple[str, ...]:
+    """What the held object is set down on (its footprint is where it goes): the landmark, placed on top of it.
+
+    Otherwise only where it stands clear of everything else (next to a
+    cup, not half on the plate beside it).
+    """
+    return (landmark,) if relation == "on_top_of" else ()
+
+
+def _relative_releases(
+    body: Body,
+    snap: SceneSnapshot,
+    held: Held,
+    relation: str,
+    landmark: str,
+    box: Box,
+    tool: Callable[[], np.ndarray],
+    attempt: Callable[[list[Pair]], tuple[R | None, frozenset[str]]],
+) -> tuple[R | None, frozenset[str], list[Pair], list[Pair]]:
+    """The (hover, release) pairs ``relation`` the landmark, on free spots, given to ``attempt`` in two rounds:
+    the near ones; then, only when every way down ran into the landmark itself, the wider ones (the forearm
+    swung past its side, or the release further out).
+
+    Returns what ``attempt`` made of them (None: nothing), every obstacle
+    the ways down ran into, and the first round's candidates and free pairs
+    (what a refusal tells of crowding). ``tool``: the tool pose now, each
+    round's headings starting from it.
+    """
+    on = _on(relation, landmark)
+    candidates = targets.place_relation(relation, box, tool(), held, snap.table_z)
+    pairs = on_free_spots(body, held, candidates, snap, on)
+    done, blocked_by = attempt(pairs)
+    if done is None and landmark in blocked_by and not on:
+        wider = targets.place_relation_wider(relation, box, tool(), held, snap.table_z)
+        done, also = attempt(on_free_spots(body, held, wider, snap, on))
+        blocked_by |= also
+    return done, blocked_by, candidates, pairs
+
+
+def placeable(
+    body: Body,
+    kin: ArmKinematics,
+    snap: SceneSnapshot,
+    held: Held,
+    relation: str,
+    landmark: PerceivedObject,
+    tool: np.ndarray,
+) -> bool:
+    """Whether :func:`place_rel` could lower ``held`` ``relation`` the landmark from where the model's arm is,
+    the tool at ``tool``: the same candidates in the same rounds, judged by :func:`lowerable` (nothing moves)."""
+
+    def first_lowerable(pairs: list[Pair]) -> tuple[np.ndarray | None, frozenset[str]]:
+        blocked_by: frozenset[str] = frozenset()
+        for hover, release in pairs:
+            lowering = lowerable(kin, snap, held, hover, release)
+            if lowering.hover_q is not None:
+                return lowering.hover_q, blocked_by
+            blocked_by |= lowering.blocked_by
+        return None, blocked_by
+
+    relation = released_relation(relation)
+    hover_q, *_ = _relative_releases(
+        body, snap, held, relation, landmark.id, Box.of(landmark), lambda: tool, first_lowerable
+    )
+    return hover_q is not None
+
+
 def _carry_and_lower(
     body: Body,
     arm: str,
     kin: ArmKinematics,
     snap: SceneSnapshot,
     held: Held,
-    pairs: list[tuple[np.ndarray, np.ndarray]],
+    pairs: list[Pair],
     no_path: str,
     landmark: tuple[str, Box] | None = None,
 ) -> tuple[Done | None, frozenset[str]]:
