@@ -42,9 +42,9 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from functools import partial
-from typing import Any, TypeVar
+from typing import Any
 
 import msgspec
 import numpy as np
@@ -73,11 +73,11 @@ from shared.messages import (
     NluResult,
     Objects,
     PerceivedObject,
+    RecordReply,
     Reply,
     Say,
     SayKind,
     SimState,
-    Table,
     as_received,
 )
 from shared.robot import ROBOT
@@ -96,8 +96,6 @@ ADMIN_DOING = {
     "name_action": "naming an action",
     "repeat": "repeating the last command",
 }
-
-T = TypeVar("T")
 
 
 class Executor:
@@ -925,25 +923,23 @@ class Executor:
     def _record_objects(self) -> list[PerceivedObject]:
         """A fresh settled observation from perception, taken into the scene at once.
 
-        The reply is a map (a request's answer has no stream type); its
-        objects and table are typed here one by one, and one that does not
-        fit is left out as a malformed object in a stream message would be.
+        A reply that does not fit its type (an object with a field out of
+        range) is as good as perception failing: the step stops and says so.
         """
         losses = self._perception_losses
         try:
-            reply = self.bus.request(self.bus.keys.record, {}, timeout=RECORD_TIMEOUT)
+            reply = self.bus.request(self.bus.keys.record, {}, reply=RecordReply, timeout=RECORD_TIMEOUT)
         except BusTimeout as exc:
             if self._perception_losses != losses or "perception" not in self.bus.alive_services(timeout=0.5):
                 raise StepFailed(
                     "I couldn't finish looking at the table: the perception service stopped, so it was interrupted."
                 ) from exc
             raise StepFailed("I can't see anything: the perception service is not answering.") from exc
-        except RemoteError as exc:
+        except RemoteError as exc:  # MalformedReply included
             raise StepFailed(wording.sentence(f"I couldn't get a clear view of the table: {exc}")) from exc
-        objects = [o for o in map(_typed_or_none(PerceivedObject), reply.get("objects") or []) if o is not None]
-        if self.scene.update_objects(objects, _typed_or_none(Table)(reply.get("table"))):
+        if self.scene.update_objects(reply.objects, reply.table):
             self._reach_stale.set()
-        return objects
+        return reply.objects
 
     def _on_control_actions(self, request: dict[str, Any]) -> Reply:
         """Manage actions for the TUI (``actions_control``; errors become error replies)."""
@@ -1034,18 +1030,6 @@ class Executor:
                 self._state_publisher.put(as_received("executor_state", self.state_message()))
             except StoreError as exc:
                 log.error("cannot publish state: %s", exc)
-
-
-def _typed_or_none(kind: type[T]) -> Callable[[Any], T | None]:
-    """A converter of a reply's part to ``kind``: None for one that does not fit it."""
-
-    def convert(value: Any) -> T | None:
-        try:
-            return msgspec.convert(value, kind)
-        except (msgspec.ValidationError, TypeError):
-            return None
-
-    return convert
 
 
 def _coming(procedure: str, args: dict[str, Any], after: str, after_args: dict[str, Any]) -> dict[str, str] | None:
