@@ -17,7 +17,8 @@ BOTH = "both"
 
 # procedures that may run on both arms at once (``args.arm == "both"``); elsewhere ``both`` is refused
 BOTH_ARM_PROCEDURES = frozenset({"open", "close", "move_abs_dir", "move_abs_dest"})
-GRIPPER_STATES = ("open", "closed", "holding")
+GripperState = Literal["open", "closed", "holding"]
+GRIPPER_STATES: tuple[str, ...] = get_args(GripperState)
 
 
 def other_arm(arm: str) -> str:

@@ -9,9 +9,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
 
-GripperState = Literal["open", "closed", "holding"]
+from shared.contract import GripperState
 
 
 @dataclass(frozen=True)

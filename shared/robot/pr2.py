@@ -12,11 +12,11 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from shared.contract import ARMS
 from shared.robot.description import RobotDescription, register_robot
 from shared.robot.parts import CameraSpec, GripperSpec, Keyframe
 
 ROBOT_DIR = Path(__file__).resolve().parent
-ARMS = ("right", "left")
 ARM_PREFIX = {"right": "r", "left": "l"}
 ARM_JOINT_SUFFIXES = (
     "shoulder_pan_joint",
