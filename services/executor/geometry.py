@@ -47,7 +47,6 @@ SIDE_GRASP_PITCH = 0.35  # rad: the tilted-down variant of each side grasp
 ANGLED_PITCH = 0.8  # rad: the angled grasps, between a side grasp and a top-down one
 AROUND_YAWS = (0.8, -0.8, 1.4, -1.4)  # rad off the robot's direction: side grasps from around the object
 
-RELATIONS = ("above", "next_to", "left_of", "right_of", "in_front_of", "behind", "on_top_of", "near")
 DIRECTIONS = {
     "up": (0.0, 0.0, 1.0),
     "down": (0.0, 0.0, -1.0),

@@ -22,11 +22,10 @@ from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics
 from services.executor.scene import SceneSnapshot
 from services.executor.targets import Held
+from shared.contract import REACH_KEYS
 from shared.messages import PerceivedObject
 
 HELD_MARGIN = 0.03  # metres around the carried box within which a sighting marked held may lie
-RELATION_KEYS = ("above", "next_to", "left_of", "right_of", "in_front_of", "behind", "on_top_of", "near")
-REACH_KEYS = ("pick_up", "place", *RELATION_KEYS, "towards", "away_from")
 SIDES = ("left_of", "right_of", "in_front_of", "behind")
 
 

@@ -26,6 +26,7 @@ from services.executor.reach import REACH_KEYS, reach_map, sync
 from services.executor.scene import Scene, measured, perceived
 from services.executor.targets import Held
 from services.sim.layout import TABLE_TOP_Z, table_truth
+from shared.contract import RELATIONS
 from shared.robot import ROBOT
 
 pytestmark = pytest.mark.unit
@@ -49,7 +50,7 @@ def scene_with(*objects: dict, pose: str = "untucked") -> Scene:
     return scene
 
 
-@pytest.mark.parametrize("relation", geo.RELATIONS)
+@pytest.mark.parametrize("relation", RELATIONS)
 def test_relation_poses_are_reached_exactly(arms: dict[str, ArmKinematics], relation: str) -> None:
     snap = scene_with(cup("c", 0.55, -0.10)).snapshot()
     kin = arms["right"]

@@ -85,7 +85,7 @@ def robot(tmp_path: Path) -> tuple[Executor, RecordingBus]:
 
 def command(executor: Executor, procedure: str, args: dict[str, Any]) -> None:
     """Run one checked command on the calling thread, as the command worker would."""
-    executor._run_command([Step(procedure, check(procedure, args), {}, "")], "")
+    executor.worker.run([Step(procedure, check(procedure, args), {}, "")], "")
 
 
 def taught(executor: Executor, *names: str | None) -> None:
@@ -214,15 +214,15 @@ def test_putting_back_is_refused_for_an_empty_hand_and_an_object_never_moved(
     snap = executor.scene.snapshot()
     executor.procedures.set_held("right", Held("obj0", Box.of(RED), np.zeros(7), seen_as=RED))
     with pytest.raises(StepFailed) as caught:
-        executor._origin({"arm": "right"}, snap)
+        executor.steps.origin({"arm": "right"}, snap)
     assert str(caught.value) == (
         f"I haven't moved {refer(snap.objects, 'obj0')} from anywhere else since I started, so I don't know "
         "where it was before; tell me where to put it."
     )
     with pytest.raises(StepFailed, match="My right hand is holding .*, not "):
-        executor._origin({"arm": "right", "object": "obj1"}, snap)
+        executor.steps.origin({"arm": "right", "object": "obj1"}, snap)
     executor.origins.picked(RED, snap.objects)
-    assert executor._origin({"arm": "right", "object": "obj0"}, snap) == ("obj0", {"center": list(RED.position)})
+    assert executor.steps.origin({"arm": "right", "object": "obj0"}, snap) == ("obj0", {"center": list(RED.position)})
 
 
 def replaying(executor: Executor, monkeypatch: pytest.MonkeyPatch, ran: list[tuple[str, dict[str, Any]]]) -> None:
@@ -232,8 +232,8 @@ def replaying(executor: Executor, monkeypatch: pytest.MonkeyPatch, ran: list[tup
         ran.append((procedure, args))
         return True
 
-    monkeypatch.setattr(executor, "_step", step)
-    monkeypatch.setattr(executor, "_record_objects", lambda: list(executor.scene.snapshot().objects.values()))
+    monkeypatch.setattr(executor.steps, "run", step)
+    monkeypatch.setattr(executor.perception, "record", lambda: list(executor.scene.snapshot().objects.values()))
 
 
 def test_a_replayed_step_whose_effect_does_not_hold_stops_the_replay_saying_what_differs(
@@ -265,8 +265,8 @@ def test_a_skill_runs_with_the_objects_said_and_is_recorded_in_another_action_as
         runs.append((number, kwargs.get("bound")))
         return True
 
-    monkeypatch.setattr(executor, "_replay", replay)
-    executor._run_command(
+    monkeypatch.setattr(executor.replay, "replay", replay)
+    executor.worker.run(
         [Step("run_skill", {"skill": "serve", "objects": {"carried": "obj1"}}, {}, "serve the blue cup")],
         "serve the blue cup",
     )
@@ -292,7 +292,7 @@ def test_each_object_gets_its_own_run_in_the_order_said_and_the_first_failure_en
         runs.append(kwargs["bound"])
         return len(runs) < 2  # the second run fails (it says why itself)
 
-    monkeypatch.setattr(executor, "_replay", replay)
+    monkeypatch.setattr(executor.replay, "replay", replay)
     third = PerceivedObject(id="obj3", color="green", type="cup", position=(0.45, 0.0, 0.80), size=CUP)
     executor.scene.update_objects([RED, BLUE, PLATE_0, third])
     snap = executor.scene.snapshot()
@@ -319,7 +319,7 @@ def test_an_action_that_calls_a_skill_replays_it_with_the_objects_it_was_called_
     )
     ran: list[tuple[str, dict[str, Any]]] = []
     replaying(executor, monkeypatch, ran)
-    monkeypatch.setattr(executor, "_effect_problem", lambda *args: None)
+    monkeypatch.setattr(executor.checks, "problem", lambda *args: None)
     command(executor, "execute", {})
     assert [(p, a.get("object")) for p, a in ran] == [("record", None), ("pick_up", "obj1"), ("place_rel", "obj2")]
     assert bus.said()[-1] == ("narration", "Completed action 2.")
@@ -335,7 +335,7 @@ def test_a_skill_that_runs_the_action_being_taught_is_run_but_not_recorded_in_it
     executor.store.append_step({"procedure": "run_skill", "args": {"skill": 2}, "bound": {}})
     executor.store.rename(wrapper, "wrap")
     executor.store.switch(2)
-    monkeypatch.setattr(executor, "_replay", lambda *args, **kwargs: True)
+    monkeypatch.setattr(executor.replay, "replay", lambda *args, **kwargs: True)
     command(executor, "run_skill", {"skill": "wrap"})
     assert executor.store.step_counts() == [2, 0, 1]
     assert bus.said() == [
@@ -352,7 +352,9 @@ def test_a_last_step_whose_effect_does_not_hold_is_reported_instead_of_completed
     replaying(executor, monkeypatch, ran)
     held = RED  # the hand holds the red cup before the placement ...
     executor.procedures.set_held("right", Held("obj0", Box.of(held), np.zeros(7), seen_as=held))
-    executor._replay_step("action 1", executor.store.get(1)["steps"], 2, executor._ground(SERVE, 2, {}), (1,))
+    executor.replay.replay_step(
+        "action 1", executor.store.get(1)["steps"], 2, executor.replay.ground(SERVE, 2, {}), (1,)
+    )
     snap = executor.scene.snapshot()  # ... and sees it standing where it stood, off the plate
     assert ran == [("place_rel", {"arm": "right", "relation": "on_top_of", "object": "obj2"})]
     kind, text = bus.said()[-1]
@@ -385,8 +387,8 @@ def test_an_object_hidden_under_the_hand_that_let_go_is_looked_at_again_with_tha
         aside.append(arm)
         executor.scene.update_objects([on_plate, BLUE, PLATE_0], TABLE)  # seen once the hand is out of the way
 
-    monkeypatch.setattr(executor, "_record_objects", lambda: list(executor.scene.snapshot().objects.values()))
+    monkeypatch.setattr(executor.perception, "record", lambda: list(executor.scene.snapshot().objects.values()))
     monkeypatch.setattr(executor.procedures, "move_abs_dest", move_aside)
     args = {"arm": "right", "relation": "on_top_of", "object": "obj2"}
-    assert executor._effect_problem("place_rel", args, held, executor.scene.snapshot()) is None
+    assert executor.checks.problem("place_rel", args, held, executor.scene.snapshot()) is None
     assert aside == ["right"]
