@@ -24,8 +24,9 @@ from pathlib import Path
 import numpy as np
 
 from services.speech import espeak
+from services.speech.bench_enrolled import enrol
 from services.speech.corpus import Item, corpus
-from services.speech.enrol import Enrolment, EnrolmentError, Recording, padded
+from services.speech.enrol import EnrolmentError, padded
 from services.speech.grammar import SceneWords
 from services.speech.prompts import PROMPTS
 from services.speech.recogniser import Recogniser
@@ -101,15 +102,6 @@ def score(recogniser: Recogniser, items: list[Item], audio: list[np.ndarray]) ->
     return result
 
 
-def enrol(talker: Talker, root: Path) -> tuple[Path, int]:
-    """The talker reads the prompts and is enrolled; the transform and how many readings passed their checks."""
-    enrolment = Enrolment("bench", root)
-    readings = [Recording(n, talker.say(text)) for n, text in enumerate(PROMPTS, 1)]
-    usable = [r for r in readings if enrolment.problem(r) is None]
-    adaptation = enrolment.adapt(usable)
-    return adaptation.matrix, len(adaptation.aligned)
-
-
 def _row(name: str, used: str, before: Score, after: Score) -> str:
     return (
         f"  {name:<30} {used:>7}  {before.word_accuracy:6.1%} -> {after.word_accuracy:6.1%}"
@@ -134,15 +126,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     for talker in TALKERS[: args.talkers]:
         with tempfile.TemporaryDirectory(prefix="hfpbd-bench-enrol-") as folder:
             try:
-                matrix, used = enrol(talker, Path(folder))
+                adaptation = enrol(talker, Path(folder))
             except EnrolmentError as exc:
                 print(f"  {talker.name:<30} enrolment failed: {exc}")
                 continue
-            adapted = Recogniser(nlu_vocabulary(), mllr=matrix)
+            adapted = Recogniser(nlu_vocabulary(), mllr=adaptation.matrix)
         audio = [padded(talker.say(item.text)) for item in items]
         before, after = score(shipped, items, audio), score(adapted, items, audio)
         total_before += before
         total_after += after
-        print(_row(talker.name, f"{used}/{len(PROMPTS)}", before, after), flush=True)
+        print(_row(talker.name, f"{len(adaptation.aligned)}/{len(PROMPTS)}", before, after), flush=True)
     print(_row("all", "", total_before, total_after))
     return 0 if total_after.word_accuracy >= total_before.word_accuracy else 1

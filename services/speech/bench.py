@@ -24,6 +24,11 @@ and 120 per cent of their normal length (another synthesiser) and
 espeak-ng's held-out voices and speeds -- clean, in brown noise at 15 dB,
 in quiet babble at 15 dB and in white noise at 20 dB (noise kinds and
 levels not used for tuning), and non-speech from seeds 10000 up.
+
+With ``--enrolled`` the same audio is heard again after each talker has
+enrolled its voice (:mod:`services.speech.bench_enrolled`), and the two runs
+are printed side by side; the exit status then says whether the enrolled
+run met the targets, since that is the condition being asked about.
 """
 
 from __future__ import annotations
@@ -33,8 +38,9 @@ import statistics
 import sys
 import time
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -44,6 +50,7 @@ from services.nlu.nbest import ACT_SHARE, CONFIRM_SHARE, Choice, Decision, Readi
 from services.nlu.results import Answer
 from services.nlu.world import parse_world
 from services.speech import espeak, sounds
+from services.speech.adapt import AdaptationError, find_tools
 from services.speech.audio import RATE, silence
 from services.speech.corpus import HELD_OUT_SPEEDS, HELD_OUT_VOICES, SCENES, STATES, VOICES, Item, corpus
 from services.speech.gate import judge
@@ -64,6 +71,7 @@ ACT_SHARES = (0.5, 0.7, 0.8, 0.9, 0.95)
 CONFIRM_SHARES = (0.1, 0.2, 0.3, 0.5)
 TARGET_RIGHT, TARGET_WRONG = 0.95, 0.01
 NON_SPEECH_SCENE = "cups"
+SPEECH_OUTCOMES = ("right", "wrong", "asked", "not caught")
 
 
 @dataclass
@@ -109,8 +117,10 @@ def outcome(heard: Heard, act: float = ACT_SHARE, confirm: float = CONFIRM_SHARE
 class Listener:
     """The chain under test: gate, recogniser, NLU choice, with the scene set per utterance."""
 
-    def __init__(self, vocabulary: str) -> None:
-        self.recogniser = Recogniser(nlu_vocabulary(), per_meaning=None if vocabulary == "full" else PER_MEANING)
+    def __init__(self, vocabulary: str, mllr: Path | None = None) -> None:
+        """``mllr``: a talker's enrolled transform (``hfpbd speech enrol``), as ``hfpbd speech --speaker`` loads it."""
+        per_meaning = None if vocabulary == "full" else PER_MEANING
+        self.recogniser = Recogniser(nlu_vocabulary(), per_meaning=per_meaning, mllr=mllr)
         self._models: dict[str, Model] = {}
 
     def hear(self, pcm: np.ndarray, world: dict[str, Any], key: str) -> tuple[Choice | None, float]:
@@ -142,16 +152,34 @@ def speech_set(held_out: bool, limit: int | None) -> list[tuple[Item, Talker, No
     return chosen
 
 
-def run_speech(listener: Listener, chosen: list[tuple[Item, Talker, Noise]], seed: int) -> list[Heard]:
-    heard = []
+@dataclass(frozen=True)
+class Spoken:
+    """One spoken command as the microphone hears it, made once so that every listener compared hears the same."""
+
+    item: Item
+    talker: Talker
+    noise: Noise
+    pcm: np.ndarray
+
+
+def recorded(chosen: list[tuple[Item, Talker, Noise]], seed: int) -> list[Spoken]:
+    """Each command said by its talker between short silences, in its noise, cut at a random sample to start."""
+    spoken = []
     rng = np.random.default_rng(seed)
     for n, (item, talker, noise) in enumerate(chosen):
         pcm = np.concatenate([silence(0.3), talker.say(item.text), silence(0.3)])
         if noise is not None:
             pcm = sounds.mixed(pcm, sounds.sound(noise[0], seed + n, len(pcm) / RATE + 0.5), noise[1])
         pcm = pcm[int(rng.integers(0, 160)) :]  # not always on a frame boundary
-        choice, cpu = listener.hear(pcm, item.world, f"{item.scene}/{item.world['robot']}")
-        heard.append(Heard(talker.name, _noise_name(noise), item.expected, choice, len(pcm) / RATE, cpu))
+        spoken.append(Spoken(item, talker, noise, pcm))
+    return spoken
+
+
+def run_speech(listener: Listener, spoken: Iterable[Spoken]) -> list[Heard]:
+    heard = []
+    for s in spoken:
+        choice, cpu = listener.hear(s.pcm, s.item.world, f"{s.item.scene}/{s.item.world['robot']}")
+        heard.append(Heard(s.talker.name, _noise_name(s.noise), s.item.expected, choice, len(s.pcm) / RATE, cpu))
     return heard
 
 
@@ -180,12 +208,17 @@ def run_non_speech(listener: Listener, minutes: float, seed: int) -> list[Heard]
     return heard
 
 
-def _table(title: str, heard: list[Heard], by: str, columns: tuple[str, ...]) -> None:
+def grouped(heard: list[Heard], by: str) -> list[tuple[str, list[Heard]]]:
+    """``heard`` by talker or noise (the field ``by`` of :class:`Heard`), sorted by name, then all of it."""
     groups: dict[str, list[Heard]] = {}
     for h in heard:
         groups.setdefault(getattr(h, by), []).append(h)
+    return [*sorted(groups.items()), ("all", heard)]
+
+
+def _table(title: str, heard: list[Heard], by: str, columns: tuple[str, ...]) -> None:
     print(f"  {title:<28} {'n':>4} " + " ".join(f"{c:>10}" for c in columns))
-    for name, members in [*sorted(groups.items()), ("all", heard)]:
+    for name, members in grouped(heard, by):
         counts = Counter(outcome(h) for h in members)
         print(f"  {name:<28} {len(members):>4} " + " ".join(f"{counts[c]:>10}" for c in columns))
 
@@ -200,11 +233,10 @@ def _cpu(heard: list[Heard]) -> str:
 
 
 def report(speech: list[Heard], non_speech: list[Heard], title: str, sweep: bool) -> bool:
-    columns = ("right", "wrong", "asked", "not caught")
     print(f"{title}: {len(speech)} spoken commands, {sum(h.seconds for h in non_speech) / 60:.1f} min of non-speech")
     if speech:
-        _table("talker", speech, "talker", columns)
-        _table("condition", speech, "noise", columns)
+        _table("talker", speech, "talker", SPEECH_OUTCOMES)
+        _table("condition", speech, "noise", SPEECH_OUTCOMES)
     counts = Counter(outcome(h) for h in speech)
     n = max(1, len(speech))
     right, wrong = counts["right"] / n, counts["wrong"] / n
@@ -251,14 +283,36 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--non-speech-minutes", type=float, default=10.0, help="minutes of non-speech (default 10)")
     parser.add_argument("--held-out", action="store_true", help="the held-out talkers, noises and sounds")
     parser.add_argument("--sweep", action="store_true", help="print the decision thresholds' trade-off")
+    parser.add_argument(
+        "--enrolled",
+        action="store_true",
+        help="then again with each talker enrolled first (hfpbd speech enrol), and both side by side",
+    )
     args = parser.parse_args(argv)
     for program, package in ((espeak.ESPEAK, "espeak-ng"), *([(FLITE, "flite")] if args.held_out else [])):
         if not available(program):
             print(f"hfpbd bench speech: {program} is not installed (Debian package {package})", file=sys.stderr)
             return 2
+    if args.enrolled:
+        try:
+            find_tools()
+        except AdaptationError as exc:
+            print(f"hfpbd bench speech: {exc}", file=sys.stderr)
+            return 2
     seed = HELD_OUT_SEED if args.held_out else 0
+    title = "held-out set" if args.held_out else "tuning set"
+    spoken = recorded(speech_set(args.held_out, args.limit), seed)
     listener = Listener(args.vocabulary)
-    speech = run_speech(listener, speech_set(args.held_out, args.limit), seed)
+    speech = run_speech(listener, spoken)
     non_speech = run_non_speech(listener, args.non_speech_minutes, seed)
-    met = report(speech, non_speech, "held-out set" if args.held_out else "tuning set", args.sweep)
+    met = report(speech, non_speech, title, args.sweep)
+    if not args.enrolled:
+        return 0 if met else 1
+    from services.speech.bench_enrolled import compare, run_enrolled  # it builds on this module
+
+    enrolled, enrolled_non_speech, voice = run_enrolled(args.vocabulary, spoken, args.non_speech_minutes, seed)
+    print()
+    met = report(enrolled, enrolled_non_speech, f"{title}, each talker enrolled (non-speech: {voice})", args.sweep)
+    print()
+    compare(speech, enrolled, non_speech, enrolled_non_speech)
     return 0 if met else 1
