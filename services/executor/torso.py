@@ -24,6 +24,7 @@ from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics
 from services.executor.scene import SceneSnapshot
 from services.executor.targets import Held
+from shared.contract import released_relation
 from shared.robot import ROBOT
 from shared.robot.pr2 import CAMERA_LINK
 
@@ -116,7 +117,7 @@ def _first_pose(
     if procedure == "place_rel" and held is not None:
         # the hover pose and the straight way down from it to the release: at the far edge the hand may get
         # over the spot but not down to it, or only with the forearm through what stands beside it
-        relation = "on_top_of" if args["relation"] == "above" else args["relation"]
+        relation = released_relation(args["relation"])
         for hover, release in targets.place_relation(relation, Box.of(obj), kin.fk(), held, snap.table_z):
             hover_q = kin.ik(hover)
             if hover_q is None:

@@ -69,9 +69,11 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
     ),
     # "lift it" with the object in hand raises the hand; with an empty hand, naming an object picks it up
     (("lift",), ((verb(_procs("pick_up")),), (verb(_procs("move_abs_dir")), option("direction", "up", W.weak)))),
-    (("place", "set", "lay", "drop", "deposit", "stack", "place down", "set down", "lay down"), ((verb(PLACE),),)),
     (("put",), ((verb(PLACE),), (verb(MOVE, W.weak),))),
+    (("place", "set", "lay", "drop", "deposit", "stack", "place down", "set down", "lay down"), ((verb(PLACE),),)),
     (("put down",), ((verb(PLACE), option("destination", "table", W.weak)),)),
+    # the usual words of a meaning come first: the speech grammar keeps each meaning's first phrases
+    (("open", "open up"), ((verb(_procs("open")),),)),
     (("release", "let go", "let go of", "let it go"), ((verb(_procs("open")),), (verb(PLACE, W.weak),))),
     # looking and pointing
     (
@@ -89,12 +91,27 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
         ("counterclockwise", "counter clockwise", "anticlockwise", "anti clockwise", "ccw"),
         ((option("direction", "ccw"),),),
     ),
-    (("open", "ungrip", "unclench", "open up"), ((verb(_procs("open")),),)),
+    (("ungrip", "unclench"), ((verb(_procs("open")),),)),
     (("close", "shut", "grip", "clench", "squeeze", "close up"), ((verb(_procs("close")),),)),
     # the system itself
     (
         ("record", "scan", "rescan", "look around", "detect", "refresh", "update", "record objects", "scan the table"),
         ((verb(_procs("record")),),),
+    ),
+    (
+        (
+            "create",
+            "new action",
+            "make",
+            "new",
+            "begin",
+            "create action",
+            "create new action",
+            "make new action",
+            "start new action",
+            "start a new action",
+        ),
+        ((verb(_procs("create_action")),),),
     ),
     (
         (
@@ -105,21 +122,6 @@ _ENTRIES: list[tuple[tuple[str, ...], tuple[Reading, ...]]] = [
             "start from scratch",
             "start afresh",
             "begin again",
-        ),
-        ((verb(_procs("create_action")),),),
-    ),
-    (
-        (
-            "create",
-            "new",
-            "make",
-            "begin",
-            "create action",
-            "new action",
-            "create new action",
-            "make new action",
-            "start new action",
-            "start a new action",
         ),
         ((verb(_procs("create_action")),),),
     ),

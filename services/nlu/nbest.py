@@ -59,6 +59,7 @@ from services.nlu.infer import Clarify, CommandResult, Model, Result
 from services.nlu.meant import asking
 from services.nlu.prior import History
 from services.nlu.results import Answer
+from shared.contract import released_relation
 
 NLU_WEIGHT = 0.1  # λ: weight of the model's log score against the recogniser's log probability
 ACT_SHARE = 0.9  # the chosen command's least share of the n-best probability mass to act on it at once
@@ -168,7 +169,7 @@ def choose(readings: Iterable[Reading], nlu_weight: float = NLU_WEIGHT) -> Choic
     groups: dict[tuple[Command, ...] | str, list[Reading]] = {}
     for reading in usable:
         if isinstance(reading.result, CommandResult):
-            groups.setdefault(reading.result.commands, []).append(reading)
+            groups.setdefault(_as_carried_out(reading.result.commands), []).append(reading)
         elif isinstance(reading.result, Answer):
             groups.setdefault(reading.result.topic, []).append(reading)
     searches = sum(r.first for r in usable)
@@ -184,6 +185,19 @@ def choose(readings: Iterable[Reading], nlu_weight: float = NLU_WEIGHT) -> Choic
         best = max(groups.values(), key=lambda group: _log_sum(r.weight(nlu_weight) for r in group))
     agreed = searches > 1 and sum(r.first for r in best) == searches
     return Choice(max(best, key=lambda r: r.weight(nlu_weight)), sum(r.probability for r in best) / total, agreed)
+
+
+def _as_carried_out(commands: tuple[Command, ...]) -> tuple[Command, ...]:
+    """Commands as the robot carries them out: "put it above the plate" and "on the plate" are heard as one.
+
+    Why: the two searches often hear a placement in two such words; counted
+    as two commands, they would seem to disagree and the robot would ask
+    about a command it is sure of.
+    """
+    return tuple(
+        c.with_arg("relation", released_relation(str(c.arg("relation")))) if c.procedure == "place_rel" else c
+        for c in commands
+    )
 
 
 def _log_sum(logs: Iterable[float]) -> float:

@@ -137,7 +137,8 @@ def nlu_vocabulary(phrases: Iterable[str] | None = None) -> SpeechVocabulary:
                 options.setdefault((head.slot, str(head.value)), []).append(phrase)
 
     def plain_first(phrases: list[str]) -> tuple[str, ...]:
-        return tuple(sorted(phrases, key=lambda p: len(PHRASES[p])))  # stable: lexicon order within a rank
+        """Phrases with fewer meanings first (a weak, rare reading does not count); lexicon order within a rank."""
+        return tuple(sorted(phrases, key=lambda p: sum(r[0].weight != LANGUAGE.weak for r in PHRASES[p])))
 
     numbers: dict[int, str] = {}
     for word, value in NUMBER_WORDS.items():  # cardinals come first, ordinals ("third") are left out

@@ -67,6 +67,14 @@ def test_a_command_every_search_ranked_first_with_most_of_the_mass_is_acted_on(m
     assert choice.decision(act=0.99) is Decision.CONFIRM
 
 
+def test_a_placement_heard_above_and_on_the_plate_is_one_command_both_searches_agree_on() -> None:
+    holding = Model(parse_world(table_scene(last_object="obj0", grippers={"right": "holding", "left": "open"})))
+    choice = pick(holding, ("put it on the plate", 0.97, 1), ("put it above the plate", 0.03, 1))
+    assert choice.agreed and choice.decision() is Decision.ACT
+    # the command is the one heard likelier, in its own words: ``on_top_of`` as said, not rewritten
+    assert command(choice)["args"]["relation"] == "on_top_of"
+
+
 def test_a_command_with_little_support_in_the_nbest_is_not_caught(model: Model) -> None:
     choice = pick(model, ("the", 0.95, 2), ("pick up the red cup", 0.05))
     assert command(choice)["procedure"] == "pick_up"

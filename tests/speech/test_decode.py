@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from services.nlu.infer import CommandResult, Model
+from services.nlu.nbest import Decision, Reading, choose
 from services.nlu.world import parse_world
 from services.speech import espeak
 from services.speech.audio import AudioError, read_wav, seconds, silence, write_wav
@@ -100,9 +101,16 @@ def test_spoken_command_decodes_to_its_text_and_command(recogniser, tmp_path, te
 )
 def test_the_conversation_forms_are_heard_and_understood(recogniser, text, voice, speed, expected):
     pcm = np.concatenate([silence(0.3), espeak.synthesise(text, voice, speed), silence(0.3)])
-    hypotheses = recogniser.decode(pcm)
-    # the words may differ ("both arms" for "both hands"), the command may not
-    assert meaning(Model(parse_world(WORLD)).parse(hypotheses[0].text)) == expected, hypotheses[0].text
+    model = Model(parse_world(WORLD))
+    readings = [Reading(h.text, h.score, model.parse(h.text), h.first) for h in recogniser.decode(pcm)]
+    choice = choose(readings)
+    assert choice is not None, "nothing heard"
+    # the words may differ ("both arms" for "both hands"); the command acted on or asked about may not. Heard
+    # too unsure ("put it on top this" for a British "open both hands"), it is not caught, and nothing moves.
+    if choice.decision() is not Decision.REJECT:
+        assert meaning(choice.reading.result) == expected, choice.reading.text
+    else:
+        assert meaning(choice.reading.result) in (expected, None), choice.reading.text
 
 
 def test_voice_activity_splits_a_stream_into_its_utterances():
@@ -187,3 +195,25 @@ def test_every_search_first_choice_travels_with_the_nbest(recogniser):
     hypotheses = recogniser.decode(np.concatenate([silence(0.3), said, silence(0.3)]))
     assert sum(h.first for h in hypotheses) == 2  # the grammar search's and the n-gram search's
     assert all(set(h.to_json()) == {"text", "score", "first"} for h in hypotheses)
+
+
+@pytest.mark.parametrize("voice", ["en-gb", "en-us"])
+def test_put_it_on_the_plate_is_heard_as_the_placement_people_mean(recogniser, voice):
+    """ "put" is the verb people place with; the grammar once kept only "place", "set" and "lay"."""
+    holding = {
+        "objects": [{**o, "held_by": "right"} if o["id"] == "obj0" else o for o in WORLD["objects"]]
+        + [{"id": "obj3", "color": "white", "type": "plate", "position": [0.63, 0.0, 0.76], "size": [0.2, 0.2, 0.02]}],
+        "robot": {"grippers": {"right": "holding", "left": "open"}, "last_arm": "right", "last_object": "obj0"},
+    }
+    recogniser.set_scene(SceneWords.of(holding["objects"]))
+    try:
+        pcm = np.concatenate([silence(0.3), espeak.synthesise("put it on the plate", voice, 150), silence(0.3)])
+        model = Model(parse_world(holding))
+        choice = choose([Reading(h.text, h.score, model.parse(h.text), h.first) for h in recogniser.decode(pcm)])
+    finally:
+        recogniser.set_scene(SceneWords.of(WORLD["objects"]))
+    assert choice is not None and choice.decision() is not Decision.REJECT
+    assert meaning(choice.reading.result) == {
+        "procedure": "place_rel",
+        "args": {"arm": "right", "relation": "on_top_of", "object": "obj3"},
+    }, choice.reading.text

@@ -35,6 +35,7 @@ from services.executor.referring import refer
 from services.executor.robot import Stopped
 from services.executor.scene import SceneSnapshot
 from services.executor.targets import Held
+from shared.contract import released_relation
 from shared.messages import PerceivedObject
 
 log = logging.getLogger("hfpbd.executor.procedures")
@@ -135,15 +136,6 @@ def place_rel(body: Body, arm: str, relation: str, object: str) -> Done:
         )
     done.landmark = descriptor(obj)
     return done
-
-
-def released_relation(relation: str) -> str:
-    """The relation an object is released in: "above" a landmark it is set down on it.
-
-    A hand only hovers above a landmark ("move to the plate"); a release
-    there would drop the object from the hover's height.
-    """
-    return "on_top_of" if relation == "above" else relation
 
 
 def _on(relation: str, landmark: str) -> tuple[str, ...]:
