@@ -11,7 +11,6 @@ action" must put them where they were put while teaching.
 from __future__ import annotations
 
 import time
-import uuid
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -20,13 +19,11 @@ import pytest
 
 from hfpbd.manipulation_judge import placed
 from hfpbd.tasks.runner import TaskRunner
-from hfpbd.tasks.stack import LocalStack
 from services.speech import espeak
 from services.speech.audio import silence
-from shared.bus import Bus
-from shared.config import free_port, loopback_options
 from shared.messages import NluResult
 from tests.speech.helpers import stream
+from tests.system.conftest import robot_services
 
 pytestmark = [
     pytest.mark.slow,
@@ -43,21 +40,8 @@ NOT_CAUGHT = "not caught"
 
 @pytest.fixture
 def voiced(tmp_path: Path) -> Iterator[TaskRunner]:
-    namespace, port = "v" + uuid.uuid4().hex[:10], free_port()
-    hub = Bus(loopback_options(namespace, port, listen=True))
-    stack = LocalStack(hub, tmp_path / "logs")
-    session = loopback_options(namespace, port, listen=False).to_argv()
-    try:
-        for name in ("sim", "perception", "nlu"):
-            stack.start(name, session)
-        stack.start("executor", session, "--data-dir", str(tmp_path / "actions"))
-        stack.start("speech", session, "--microphone", "off", "--no-voice")
-        runner = TaskRunner(hub)
-        runner.wait_for_services()
+    with robot_services(tmp_path, ("speech", "--microphone", "off", "--no-voice")) as runner:
         yield runner
-    finally:
-        stack.stop()
-        hub.close()
 
 
 def speak(runner: TaskRunner, text: str) -> None:
