@@ -10,10 +10,11 @@ import numpy as np
 import pytest
 
 from services.speech import espeak, sounds
-from services.speech.audio import RATE, read_wav, silence
+from services.speech.audio import RATE, AudioError, read_wav, silence
 from shared.bus import RemoteError
 from shared.keys import Keys
 from tests.speech.helpers import stream
+from tests.waiting import eventually
 
 pytestmark = pytest.mark.skipif(not espeak.available(), reason="espeak-ng is not installed")
 
@@ -131,13 +132,16 @@ def test_robot_words_are_spoken(network, launcher, tmp_path: Path):
     folder = tmp_path / "voice"
     launcher.start("speech", "--microphone", "off", "--voice-dir", str(folder))
     network.hub.publish(network.hub.keys.say, {"text": "I picked up the green box.", "kind": "narration"})
-    deadline = time.monotonic() + 20
-    while time.monotonic() < deadline and not list(folder.glob("say-*.wav")):
-        time.sleep(0.2)
-    spoken = sorted(folder.glob("say-*.wav"))
-    assert len(spoken) == 1
-    time.sleep(0.5)  # let espeak-ng finish writing
-    assert len(read_wav(spoken[0])) / RATE > 0.8
+
+    def spoken_seconds() -> float:
+        """How long the sentence written so far lasts (0 while espeak-ng has not written a readable file)."""
+        try:
+            return sum(len(read_wav(path)) / RATE for path in folder.glob("say-*.wav"))
+        except AudioError:
+            return 0.0
+
+    eventually(lambda: spoken_seconds() > 0.8, 20, "the sentence spoken into a WAV file")
+    assert len(list(folder.glob("say-*.wav"))) == 1
 
 
 def test_wav_files_wait_for_the_nlu_grammar_before_decoding(network, launcher, tmp_path: Path):
