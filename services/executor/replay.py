@@ -20,13 +20,13 @@ from services.executor import other_hand, said, skills, wording
 from services.executor.actions_control import step_words
 from services.executor.effect_check import EffectCheck
 from services.executor.grounding import Regrounding, descriptor, reground
-from services.executor.phrasing import capital, listed
 from services.executor.procedures import Procedures
 from services.executor.referring import refer
 from services.executor.scene import Scene
 from services.executor.status import Outlet, Status
 from services.executor.steps import StepRunner, coming
 from services.executor.store import ActionStore, StoreError
+from services.nlu.language.phrasing import capital, listed
 from shared.contract import CARRIED
 
 

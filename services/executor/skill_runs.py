@@ -13,7 +13,6 @@ from typing import Any
 from services.executor import said, skills
 from services.executor.commands import Step
 from services.executor.grounding import descriptor
-from services.executor.phrasing import capital, listed
 from services.executor.procedures import Procedures
 from services.executor.referring import refer
 from services.executor.replay import Replay
@@ -22,6 +21,7 @@ from services.executor.skills import SkillError
 from services.executor.status import Outlet
 from services.executor.store import ActionStore
 from services.executor.undo import before_state
+from services.nlu.language.phrasing import capital, listed
 from shared.contract import CARRIED
 
 

@@ -23,6 +23,7 @@ from typing import Any
 
 from services.executor.commands import RECORDED, CommandError, check
 from services.executor.store import ActionStore, StoreError
+from services.nlu.language.phrasing import listed
 from services.nlu.lexicon import PHRASES
 from shared import contract
 from shared.messages import Skill
@@ -107,7 +108,7 @@ def find(store: ActionStore, skill: str | int) -> int:
         if item["name"] and _key(item["name"]) == _key(skill):
             return int(item["number"])
     names = [f"\u201c{s.name}\u201d" for s in skills(store)]
-    known = f"the actions with names are {_listed(names)}" if names else "no action has a name yet"
+    known = f"the actions with names are {listed(names)}" if names else "no action has a name yet"
     raise SkillError(f"I don't know an action called \u201c{skill}\u201d; {known}.")
 
 
@@ -123,7 +124,7 @@ def listing(store: ActionStore) -> str:
     if not items:
         return "there are no actions yet"
     words = [f"{i['number']} (\u201c{i['name']}\u201d)" if i["name"] else str(i["number"]) for i in items]
-    return f"the only action is {words[0]}" if len(words) == 1 else f"the actions are {_listed(words)}"
+    return f"the only action is {words[0]}" if len(words) == 1 else f"the actions are {listed(words)}"
 
 
 def roles(steps: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
@@ -204,8 +205,3 @@ def unrunnable(store: ActionStore, number: int, start: int = 1, chain: tuple[int
 
 def _lower(text: str) -> str:
     return text[:1].lower() + text[1:]
-
-
-def _listed(words: list[str]) -> str:
-    """ "a", "a and b", "a, b and c"."""
-    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} and {words[-1]}"

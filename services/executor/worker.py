@@ -25,7 +25,6 @@ from services.executor import skills, wording
 from services.executor.actions_control import step_words
 from services.executor.commands import ADMIN, Step
 from services.executor.interrupted import InProgress, interrupted_sentence
-from services.executor.phrasing import listed
 from services.executor.procedures import Procedures, StepFailed
 from services.executor.referring import refer
 from services.executor.replay import Replay
@@ -37,6 +36,7 @@ from services.executor.status import Outlet, Status
 from services.executor.steps import StepRunner, coming, context
 from services.executor.store import ActionStore, StoreError
 from services.executor.undo import reverse
+from services.nlu.language.phrasing import listed
 
 log = logging.getLogger("hfpbd.executor")
 

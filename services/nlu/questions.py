@@ -14,7 +14,7 @@ from typing import cast
 
 from services.nlu import relations_asked
 from services.nlu.language import relational
-from services.nlu.language.phrasing import either
+from services.nlu.language.phrasing import capital, either, listed
 from services.nlu.lexicon import NUMBER_WORDS
 from services.nlu.relations_asked import RELATION_WORDS
 from services.nlu.results import Answer
@@ -186,7 +186,7 @@ def _scene(situation: Situation) -> str:
         return "I don't see any objects on the table."
     names = [_named(situation, i) + (f" in my {o.held_by} hand" if o.held_by else "") for i, o in enumerate(objects)]
     count = f"{len(names)} object{'s' if len(names) > 1 else ''}"
-    return f"I see {count}: {_listed(names)}."
+    return f"I see {count}: {listed(names)}."
 
 
 def _where(situation: Situation, phrase: str) -> str:
@@ -194,9 +194,9 @@ def _where(situation: Situation, phrase: str) -> str:
     if isinstance(best, str):
         return best
     if len(best) == 1:
-        return _capital(f"{_named(situation, best[0])} is {_where_is(situation, best[0])}.")
+        return capital(f"{_named(situation, best[0])} is {_where_is(situation, best[0])}.")
     places = [f"{_named(situation, i)} {_where_is(situation, i)}" for i in best]
-    return f"I see {len(best)}: {_listed(places)}."
+    return f"I see {len(best)}: {listed(places)}."
 
 
 def _meant(situation: Situation, phrase: str) -> list[int] | str:
@@ -243,13 +243,13 @@ def _is_related(situation: Situation, subject: str, words: str, landmark: str) -
     related = [i for i in subjects if i != mark and relations_asked.holds(objects[i], relation, objects[mark])]
     if related:
         verb = "is" if len(related) == 1 else "are"
-        return f"Yes: {_listed([_named(situation, i) for i in related])} {verb} {said}."
+        return f"Yes: {listed([_named(situation, i) for i in related])} {verb} {said}."
     if len(subjects) == 1:
         return f"No: {_named(situation, subjects[0])} is {_where_is(situation, subjects[0])}, not {said}."
     names = [_named(situation, i) for i in subjects]
     if len(names) == 2:
         return f"No: neither {names[0]} nor {names[1]} is {said}."
-    return f"No: none of {_listed(names)} is {said}."
+    return f"No: none of {listed(names)} is {said}."
 
 
 def _what_is(situation: Situation, words: str, landmark: str) -> str:
@@ -261,10 +261,8 @@ def _what_is(situation: Situation, words: str, landmark: str) -> str:
     objects = situation.world.objects
     related = [i for i, obj in enumerate(objects) if i != mark and relations_asked.holds(obj, relation, objects[mark])]
     if not related:
-        return _capital(f"nothing is {said}.")
-    return _capital(
-        f"{_listed([_named(situation, i) for i in related])} {'is' if len(related) == 1 else 'are'} {said}."
-    )
+        return capital(f"nothing is {said}.")
+    return capital(f"{listed([_named(situation, i) for i in related])} {'is' if len(related) == 1 else 'are'} {said}.")
 
 
 def _names_an_object(phrase: str) -> bool:
@@ -300,7 +298,7 @@ def _reach(situation: Situation, phrase: str) -> str:
         return f"Which one do you mean: {either([_named(situation, i) for i in best])}?"
     obj, name = situation.world.objects[best[0]], _named(situation, best[0])
     if obj.held_by is not None:
-        return _capital(f"{name} is in my {obj.held_by} hand.")
+        return capital(f"{name} is in my {obj.held_by} hand.")
     known = {arm: obj.can(arm, "pick_up") for arm in ARMS}
     hands = [arm for arm, can in known.items() if can]
     if hands:
@@ -321,7 +319,7 @@ def _count(situation: Situation, phrase: str) -> str:
         return f"I don't see any {phrase.removeprefix('the ')}."
     places = [f"{_named(situation, i)} {_where_is(situation, i)}" for i in matching]
     kinds = " or ".join(f"{kind}{'' if len(matching) == 1 else 's'}" for kind in sorted(types)) or "objects"
-    return f"I see {len(matching)} {' '.join([*sorted(colors), kinds])}: {_listed(places)}."
+    return f"I see {len(matching)} {' '.join([*sorted(colors), kinds])}: {listed(places)}."
 
 
 def _holding(situation: Situation) -> str:
@@ -335,7 +333,7 @@ def _holding(situation: Situation) -> str:
             parts.append(f"my {arm} hand is holding something I can't see")
         else:
             parts.append(f"my {arm} hand is empty")
-    return _capital(" and ".join(parts) + ".")
+    return capital(" and ".join(parts) + ".")
 
 
 def _actions(situation: Situation, number_word: str | None) -> str:
@@ -397,13 +395,5 @@ def _steps(count: int) -> str:
     return f"{count} step{'' if count == 1 else 's'}"
 
 
-def _capital(text: str) -> str:
-    return text[0].upper() + text[1:]
-
-
 def _article(words: str) -> str:
     return "the" if words.startswith("the ") else "a"
-
-
-def _listed(items: list[str]) -> str:
-    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]

@@ -17,6 +17,7 @@ from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from services.nlu.commands import Command
+from services.nlu.language.phrasing import listed
 from services.nlu.prior import History
 from services.nlu.results import Clarify, CommandResult, Result
 from services.nlu.tokens import read as read_words
@@ -134,7 +135,7 @@ def _using(situation: Situation, skill: str | int, words: str, rest: str, histor
         members = _all_of(situation, each["what"])
         if not members:
             return Clarify([], f"I don't see any {each['what']}.")
-        names = _listed([situation.scene.describe(situation.world.index_of(m)).text for m in members])
+        names = listed([situation.scene.describe(situation.world.index_of(m)).text for m in members])
         command = Command("run_skill", base + (("each", tuple(members)),))
         return CommandResult(command, 1.0, f"{words} {names}, one at a time", {}, 0.0)
     readings = _readings(situation, rest, history, step)
@@ -244,7 +245,3 @@ def _all_of(situation: Situation, phrase: str) -> list[str]:
 def _names_an_object(phrase: str) -> bool:
     """Whether ``phrase`` names an object ("the box", "it"), not a place ("the left")."""
     return bool(slots_said(read_words(phrase).terms) & _NAMING_WORDS)
-
-
-def _listed(names: list[str]) -> str:
-    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"

@@ -25,6 +25,16 @@ SLOT_QUESTIONS = {
 }
 
 
+def listed(words: list[str], last: str = "and") -> str:
+    """ "a", "a and b", "a, b and c" (or "a, b or c"): how the robot lists objects, actions and steps."""
+    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} {last} {words[-1]}"
+
+
+def capital(text: str) -> str:
+    """``text`` with its first letter a capital, to begin a sentence with a name or a referring expression."""
+    return text[:1].upper() + text[1:]
+
+
 def command_text(command: Command, scene: Scene, phrases: dict[str, str] | None = None) -> str:
     """The sentence for ``command``, in the user's words where they gave them."""
     phrases = phrases or {}
