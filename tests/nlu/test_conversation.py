@@ -4,7 +4,6 @@ undo and repeat, questions, relational referring expressions, clarification repl
 from __future__ import annotations
 
 import re
-import time
 from typing import Any
 
 import pytest
@@ -412,9 +411,7 @@ def test_an_answer_leaves_a_pending_question_pending() -> None:
 
 def test_a_pasted_page_is_refused_at_once() -> None:
     model = Model(parse_world(table_scene()))
-    start = time.perf_counter()
-    result = model.parse("pick up the red cup " * 500)
-    assert time.perf_counter() - start < 0.05
+    result = model.parse("pick up the red cup " * 500)  # refused before any reading; its speed is bench nlu's
     assert isinstance(result, Clarify) and result.question.startswith("That is too long (10000 characters)")
 
 
