@@ -89,10 +89,11 @@ def choose(
     reference object) and only the look-alikes compete. A phrase that matches
     no word of any object ("it") names nothing and is passed over.
     """
-    naming = [words for words in said if _names_something(ground(dict(seen), words))]
     unique_as = desc.get(UNIQUE_AS)
+    read = {words: ground(dict(seen), words) for words in dict.fromkeys([*said, *([unique_as] if unique_as else [])])}
+    naming = [words for words in said if _names_something(read[words])]
     for words in [*naming, *([unique_as] if unique_as else [])]:
-        picked = _decisive(ground(dict(seen), words), alike)
+        picked = _decisive(read[words], alike)
         if picked is not None:
             return Choice(picked)
     if naming:
