@@ -14,7 +14,7 @@ from services.speech.audio import RATE, AudioError, read_wav, silence
 from shared.bus import RemoteError
 from shared.keys import Keys
 from tests.speech.helpers import stream
-from tests.waiting import eventually
+from tests.waiting import eventually, subscribed
 
 pytestmark = pytest.mark.skipif(not espeak.available(), reason="espeak-ng is not installed")
 
@@ -79,6 +79,7 @@ def test_a_command_heard_unsure_is_asked_about_and_yes_runs_it(network, launcher
     hub.publisher(hub.keys.objects, cached=True).put({"stamp": time.time(), "objects": OBJECTS})
     results = collect(hub, hub.keys.nlu_result)
     launcher.start("nlu")
+    subscribed(hub, hub.keys.utterance)  # the NLU's subscription is routed: the utterance is not lost
     # the two searches ranked different commands first: asked about
     hub.publish(
         hub.keys.utterance,
