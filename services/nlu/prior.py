@@ -106,6 +106,8 @@ def _situation(world: World, objects: dict[str, WorldObject], command: Command) 
             score += PRIOR.unreachable
     elif procedure == "pick_up":
         unreachable_if("pick_up")
+        if obj is not None and _beyond_both_on_other_side(obj, arm):
+            score += PRIOR.beyond_both
         if gripper == "holding" or (obj is not None and obj.held_by is not None):
             score += PRIOR.impossible
     elif procedure == "place_rel":
@@ -125,6 +127,14 @@ def _situation(world: World, objects: dict[str, WorldObject], command: Command) 
     if procedure in ("move_rel_dest", "move_rel_dir", "place_rel") and obj is not None and obj.held_by == arm:
         score += PRIOR.never  # relative to the very object in that hand
     return score
+
+
+def _beyond_both_on_other_side(obj: WorldObject, arm: str | None) -> bool:
+    """Whether neither hand reaches ``obj`` to pick it up and it lies beyond the middle on the side away from ``arm``."""
+    if arm not in ARMS or any(obj.can(a, "pick_up") is not False for a in ARMS):
+        return False
+    y = obj.position[1]
+    return abs(y) > MARGINS.side_m and ("right" if y < 0 else "left") != arm
 
 
 def _switch(world: World, target: object) -> float:

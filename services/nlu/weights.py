@@ -21,6 +21,10 @@ Prior P(C|S) (log scale, added to a command's score; 0 = no opinion):
   ``middle_side``: the same for an object in the middle, by the sign of its y
   (right at 0), just above the ``Decision.tie`` so a first "pick up the box"
   is done rather than answered with "Which hand?".
+- ``beyond_both``: neither hand reaches the object to pick it up (the executor
+  will lower the torso for it) and it lies on the other arm's side: that arm
+  is the further of two that both fall short. Larger than ``unused_arm``, so
+  the hand used last is not sent across the table for it.
 - ``never``: relative to the object the commanding hand holds (DESIGN.md:
   never its landmark); no words outweigh it.
 - ``impossible``: the command cannot make sense in this state (open an open
@@ -53,6 +57,7 @@ class PriorWeights:
     never: float = -50.0  # a landmark the commanding hand holds: no words can make it one
     far_side: float = -0.5  # no hand used yet: the arm on the other side of the object
     middle_side: float = -0.1  # ... of an object in the middle (|y| within ``Margins.side_m``): a tie-breaker
+    beyond_both: float = -1.0  # neither hand reaches it: the arm on the object's other side
 
 
 @dataclass(frozen=True)

@@ -153,6 +153,14 @@ def test_reach_decides_the_hand_before_the_side() -> None:
     assert steps("pick up the red cup", fresh) == [("pick_up", {"arm": "left", "object": "obj0"})]
 
 
+def test_an_object_beyond_both_hands_is_picked_up_by_the_hand_on_its_side_not_the_last_one() -> None:
+    # the executor lowers the torso for it; the hand on the far side of the table is the worse of two that fall short
+    last_left = table_scene(last_arm="left")
+    last_left["objects"][0]["reach"] = {arm: {"pick_up": False} for arm in ("right", "left")}
+    assert steps("pick up the red cup", last_left) == [("pick_up", {"arm": "right", "object": "obj0"})]
+    assert steps("pick up the red cup with your left hand", last_left) == [("pick_up", {"arm": "left", "object": "obj0"})]
+
+
 def test_an_empty_hand_place_loses_to_a_move_or_picks_up_first() -> None:
     assert steps("put your right hand over the green box") == [
         ("move_rel_dest", {"arm": "right", "relation": "above", "object": "obj2"})
