@@ -158,7 +158,9 @@ def test_an_object_beyond_both_hands_is_picked_up_by_the_hand_on_its_side_not_th
     last_left = table_scene(last_arm="left")
     last_left["objects"][0]["reach"] = {arm: {"pick_up": False} for arm in ("right", "left")}
     assert steps("pick up the red cup", last_left) == [("pick_up", {"arm": "right", "object": "obj0"})]
-    assert steps("pick up the red cup with your left hand", last_left) == [("pick_up", {"arm": "left", "object": "obj0"})]
+    assert steps("pick up the red cup with your left hand", last_left) == [
+        ("pick_up", {"arm": "left", "object": "obj0"})
+    ]
 
 
 def test_an_empty_hand_place_loses_to_a_move_or_picks_up_first() -> None:
