@@ -379,31 +379,38 @@ class SimWorld:
         return sorted(set().union(*self.contacts_by_link(links).values()))
 
     def squeezed(self, arm: str, contacts: Sequence[Any] | None = None) -> set[str]:
-        """Objects squeezed between the inner faces of both of ``arm``'s pads.
+        """Objects held between both of ``arm``'s pads.
 
         A pad touching an object with its tip (a hand pressed against a box's
-        side, fingertips on a plate) does not hold it: only contacts whose
-        normal runs along the closing axis count, so a box squeezed between
-        two hands is held by neither gripper alone. ``contacts`` as for
-        :meth:`contacts_by_link`.
+        side, fingertips on a plate) does not hold it: a contact counts as a
+        squeeze when its normal runs along the closing axis, so a box pressed
+        between two hands is held by neither gripper alone. An object both
+        pads touch at their edges (a box caught by its rims, deep between the
+        fingers) is held too when nothing but this gripper touches it: nothing
+        else carries it. ``contacts`` as for :meth:`contacts_by_link`.
         """
         tool = self.links[ROBOT.tool_frame(arm)].entity_pose
         closing = Rotation.from_quat(np.roll(tool.q, -1)).apply([0.0, 1.0, 0.0])
         pads = set(self.pad_links(arm))
+        gripper = f"{arm[0]}_gripper"
         faces: dict[str, set[str]] = {name: set() for name in pads}
+        touched: dict[str, set[str]] = {name: set() for name in pads}
+        carried_elsewhere: set[str] = set()
         for contact in self.scene.get_contacts() if contacts is None else contacts:
+            near = [point for point in contact.points if point.separation < 0.002]
+            if not near:
+                continue
             names = [body.entity.name for body in contact.bodies]
             for mine, other in (names, names[::-1]):
-                if (
-                    mine in pads
-                    and other in self.objects
-                    and any(
-                        point.separation < 0.002 and abs(float(np.dot(point.normal, closing))) > SQUEEZE_ALIGNMENT
-                        for point in contact.points
-                    )
-                ):
-                    faces[mine].add(other)
-        return set.intersection(*faces.values())
+                if other not in self.objects:
+                    continue
+                if mine in pads:
+                    touched[mine].add(other)
+                    if any(abs(float(np.dot(point.normal, closing))) > SQUEEZE_ALIGNMENT for point in near):
+                        faces[mine].add(other)
+                elif not mine.startswith(gripper):
+                    carried_elsewhere.add(other)
+        return set.intersection(*faces.values()) | (set.intersection(*touched.values()) - carried_elsewhere)
 
     def gripper_width(self, arm: str) -> float:
         return float(self.qpos(ROBOT.finger_joint_names(arm)).sum())
