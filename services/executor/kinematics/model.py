@@ -19,6 +19,7 @@ from __future__ import annotations
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 
 import mplib
@@ -54,6 +55,13 @@ def _part_name(link_or_object: str) -> str:
 
 def _to_pose(pose: np.ndarray) -> Pose:
     return Pose(np.asarray(pose[:3], float), np.asarray(pose[3:7], float))
+
+
+@dataclass
+class Met:
+    """What the collision checks inside :meth:`ArmModel.noting` ran into."""
+
+    other_arm: bool = False
 
 
 class ArmModel:
@@ -99,8 +107,7 @@ class ArmModel:
         self._shoulder_link = self.planner.link_name_2_idx[f"{PREFIX[arm]}_shoulder_pan_link"]
         self._obstacles: set[str] = set()
         self._obstacle_boxes: dict[str, Box] = {}
-        # whether a pose checked since last cleared touched the other arm: that arm standing aside may help
-        self.other_arm_met = False
+        self._noting: list[Met] = []  # the records of what collision checks met, innermost last
         self._other_arm_prefix = f"{PREFIX[next(a for a in PREFIX if a != arm)]}_"
         self.held: str | None = None
         lo, hi = self.limits[self.arm_idx, 0].copy(), self.limits[self.arm_idx, 1].copy()
@@ -224,9 +231,26 @@ class ArmModel:
         world = self.planner.planning_world
         self.planner.robot.set_qpos(self.full(arm_q), True)
         pairs = [(c.link_name1 or c.object_name1, c.link_name2 or c.object_name2) for c in world.check_collision()]
-        if any(name.startswith(self._other_arm_prefix) for pair in pairs for name in pair):
-            self.other_arm_met = True
+        if self._noting and any(name.startswith(self._other_arm_prefix) for pair in pairs for name in pair):
+            for met in self._noting:
+                met.other_arm = True
         return pairs
+
+    @contextmanager
+    def noting(self) -> Iterator[Met]:
+        """What every collision check inside the block met, returned to the caller when it is over.
+
+        A step that failed before moving asks whether its poses and paths
+        ran into the other arm (standing that arm aside may help): the answer
+        belongs to that one attempt, so it is handed back for the block
+        instead of kept on the model for someone to read and clear later.
+        """
+        met = Met()
+        self._noting.append(met)
+        try:
+            yield met
+        finally:
+            self._noting.remove(met)
 
     def within_limits(self, arm_q: np.ndarray) -> bool:
         lim = self.limits[self.arm_idx]

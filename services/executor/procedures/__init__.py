@@ -72,22 +72,22 @@ class Procedures(Body):
     def run(self, procedure: str, args: dict[str, Any]) -> Done:
         """Run ``procedure``; when it failed before moving, make room or raise or lower the torso, and try once more.
 
-        Whether the planner met the other arm is read from the arm's model
-        after the failure (:mod:`services.executor.procedures.recovery`).
+        Whether the attempt's checks met the other arm is what the arm's
+        model noted during it (:mod:`services.executor.procedures.recovery`).
         """
         run = PROCEDURES[procedure]
         arm = args.get("arm")
         if procedure not in recovery.MAKES_ROOM_FOR or arm not in ARMS:
             return run(self, **args)
-        kin = self.arms[arm]
-        kin.other_arm_met = False
         before = self.snapshot().joints()
-        try:
-            return run(self, **args)
-        except StepFailed as failed:
-            if not recovery.still(self, arm, before):
-                raise
-            remedy = recovery.remedy(self, procedure, args, kin.other_arm_met, failed)
+        with self.arms[arm].noting() as met:
+            try:
+                return run(self, **args)
+            except StepFailed as caught:
+                failed = caught
+        if not recovery.still(self, arm, before):
+            raise failed
+        remedy = recovery.remedy(self, procedure, args, met.other_arm, failed)
         done: Done = run(self, **args)
         done.message = " ".join(filter(None, [remedy, done.message]))
         return done
