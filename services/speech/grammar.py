@@ -58,6 +58,14 @@ QUESTION_WEIGHT = 0.2
 # "no" may go on with the command meant instead
 REPLIES = ("yes", "yes please", "that is right", "no", "no thanks", "cancel")
 REPLY_WEIGHT = 0.2
+# skills (DESIGN.md "Skills"): a taught action's name said as a verb on the objects named ("serve the blue cup",
+# "serve the red cup on the plate", "serve every cup"), and an action done again on another object ("do it
+# again with the blue cup"); the words around the objects are those the NLU's skills reader takes
+SKILL_LANDMARK_WORDS = ("on", "in", "next to", "behind", "in front of", "on top of")
+SKILL_EACH = ("every", "each")
+REDO = ("do it again", "do that again", "execute it", "repeat the action")
+REDO_OBJECT_WORDS = ("with", "for", "on")
+SKILL_WEIGHT = 0.5
 _RULE_WORD = re.compile(r"<[^>]*>|/[0-9.]+/|[()\[\]|;=*+]")
 _SLOT = re.compile(r"<(\w+)>")
 _TOKEN = re.compile(r"<[^>]+>|/[0-9.]+/|[()\[\]|]|[^\s()\[\]|<>/]+")
@@ -238,6 +246,25 @@ class _Builder:
             return [value]
         return [value, _optional(self.distance)] if last else [_optional(self.distance), value]
 
+    def skill(self, names: frozenset[str]) -> str | None:
+        """A skill's name used as a verb, and an action done again with another object (none without skills)."""
+        name = self.rules.define("skill_name", sorted(names))
+        if name is None or self.described is None:
+            return None
+        landmark = self.rules.define("skill_landmark", SKILL_LANDMARK_WORDS)
+        each = self.rules.define("skill_each", SKILL_EACH)
+        noun = "<noun>" if "noun" in self.rules.bodies else None
+        redo = self.rules.define("redo", REDO)
+        redo_with = self.rules.define("redo_with", REDO_OBJECT_WORDS)
+        return self.rules.define(
+            "skill",
+            [
+                _seq(name, self.object, _optional(_seq(landmark, self.described))),
+                _seq(name, each, noun),
+                _seq(redo, redo_with, self.described),
+            ],
+        )
+
     def question(self) -> str | None:
         """Every spoken question of the NLU's question reader, objects named as in commands."""
         return self.rules.define(
@@ -280,8 +307,11 @@ class _Builder:
         return out
 
 
-def build_jsgf(vocabulary: SpeechVocabulary, scene: SceneWords = SceneWords()) -> str:
-    """The grammar text; every word in it is a word of ``vocabulary`` or of :data:`REPLIES`."""
+def build_jsgf(
+    vocabulary: SpeechVocabulary, scene: SceneWords = SceneWords(), skills: frozenset[str] = frozenset()
+) -> str:
+    """The grammar text; every word in it is a word of ``vocabulary``, of :data:`REPLIES`, of a skill's name
+    in ``skills`` or of the words around a skill (:func:`skill_words`)."""
     builder = _Builder(vocabulary, scene)
     bodies = [body for procedure in PROCEDURES if (body := builder.command(procedure))]
     step = builder.rules.define("step", bodies)
@@ -295,6 +325,7 @@ def build_jsgf(vocabulary: SpeechVocabulary, scene: SceneWords = SceneWords()) -
         (QUESTION_WEIGHT, question),
         (REPLY_WEIGHT, reply),
         (REPLY_WEIGHT, _seq("no", step)),
+        (SKILL_WEIGHT, builder.skill(skills)),
     )
     said = " | ".join(f"/{weight:g}/ {form}" for weight, form in forms if form)
     lines = [
@@ -304,6 +335,11 @@ def build_jsgf(vocabulary: SpeechVocabulary, scene: SceneWords = SceneWords()) -
     ]
     lines += [f"<{name}> = {body};" for name, body in builder.rules.bodies.items()]
     return "\n".join(lines) + "\n"
+
+
+def skill_words() -> set[str]:
+    """The words a skill sentence adds around the skill's name and its objects."""
+    return {w for phrase in (*SKILL_LANDMARK_WORDS, *SKILL_EACH, *REDO, *REDO_OBJECT_WORDS) for w in phrase.split()}
 
 
 def grammar_words(jsgf: str) -> set[str]:

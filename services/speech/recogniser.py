@@ -39,9 +39,11 @@ the n-best search wanders the whole lattice and yields nothing usable.
 from __future__ import annotations
 
 import itertools
+import logging
 import math
 import tempfile
 from collections import Counter
+from collections.abc import Iterable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -50,9 +52,11 @@ from pocketsphinx import Decoder
 
 from services.nlu.compound import SPOKEN_JOINS
 from services.speech.audio import dither
-from services.speech.grammar import SceneWords, build_jsgf, in_grammar, sentence_matcher
+from services.speech.grammar import SceneWords, build_jsgf, in_grammar, sentence_matcher, skill_words
 from services.speech.ngram import arpa, sample_sentences
 from services.speech.vocabulary import SpeechVocabulary
+
+log = logging.getLogger("hfpbd.speech")
 
 NBEST = 5
 FRAME_RATES = (100,)  # frames per second of the front ends whose hypotheses are pooled
@@ -134,6 +138,8 @@ class Recogniser:
         self._version = 0
         self.vocabulary = vocabulary
         self.scene = scene
+        self.skills: frozenset[str] = frozenset()  # the taught skills' names the grammar takes as verbs
+        self._ngram_skills: frozenset[str] | None = None
         self.unpronounceable: set[str] = set()
         self.jsgf = ""
         self.set_vocabulary(vocabulary, scene)
@@ -145,11 +151,13 @@ class Recogniser:
         whole = vocabulary.restricted(words - self.unpronounceable).without_homophones(self._sound)
         usable = whole.core(self._per_meaning) if self._per_meaning else whole
         scene = self.scene if scene is None else scene
-        jsgf = build_jsgf(usable, scene)
+        jsgf = build_jsgf(usable, scene, self.skills)
         if jsgf == self.jsgf:
             return
         self._version += 1
-        if self._use_ngram and (vocabulary is not self.vocabulary or self._ngram_search is None):
+        if self._use_ngram and (
+            vocabulary is not self.vocabulary or self._ngram_search is None or self._ngram_skills != self.skills
+        ):
             self._set_ngram(whole)
         name = f"commands{self._version}"
         try:
@@ -168,7 +176,7 @@ class Recogniser:
         name = f"ngram{self._version}"
         with tempfile.TemporaryDirectory(prefix="hfpbd-lm-") as folder:
             path = Path(folder) / "commands.arpa"
-            path.write_text(arpa(sample_sentences(build_jsgf(vocabulary))))
+            path.write_text(arpa(sample_sentences(build_jsgf(vocabulary, skills=self.skills))))
             try:
                 self._decoder.config["bestpath"] = True
                 self._decoder.add_lm_file(name, str(path))
@@ -176,7 +184,7 @@ class Recogniser:
                 raise RecogniserError(f"the generated n-gram model does not load: {exc}") from None
         if self._ngram_search is not None:
             self._decoder.remove_search(self._ngram_search)
-        self._ngram_search = name
+        self._ngram_search, self._ngram_skills = name, self.skills
 
     def _pronounceable(self, word: str) -> bool:
         """Whether the dictionary has ``word``, adding compounds of two known words ("left" + "most")."""
@@ -195,6 +203,26 @@ class Recogniser:
     def set_scene(self, scene: SceneWords) -> None:
         if scene != self.scene:
             self.set_vocabulary(self.vocabulary, scene)
+
+    def set_skills(self, names: Iterable[str]) -> None:
+        """Take the taught skills' names as verbs; a name with a word the dictionary lacks is left out (logged).
+
+        The words around a skill ("do it again with", "every") must all be
+        pronounceable, or no skill sentence is heard at all.
+        """
+        if not all(self._pronounceable(word) for word in skill_words()):
+            log.warning("the speech dictionary lacks a word of the skill sentences: skills can be typed, not said")
+            return
+        sayable = set()
+        for name in names:
+            spoken = " ".join(name.lower().replace("-", " ").split())
+            if spoken and all(word.isalpha() and self._pronounceable(word) for word in spoken.split()):
+                sayable.add(spoken)
+            else:
+                log.info("the skill name %r has a word the speech dictionary lacks: it can be typed, not said", name)
+        if frozenset(sayable) != self.skills:
+            self.skills = frozenset(sayable)
+            self.set_vocabulary(self.vocabulary, self.scene)
 
     def decode(self, pcm: np.ndarray, acoustic_scale: float | None = None) -> list[Hypothesis]:
         """Decode one utterance (16 kHz int16); best first, empty when nothing in the grammar was heard.

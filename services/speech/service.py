@@ -28,7 +28,17 @@ from services.speech.vad import UtteranceSplitter
 from services.speech.vocabulary import SpeechVocabulary, nlu_vocabulary
 from services.speech.voice import Speaker
 from shared.bus import Bus, BusTimeout, RemoteError
-from shared.messages import Objects, PttReply, Say, SayKind, SpeechAudio, SpeechPtt, SpeechStatus, Utterance
+from shared.messages import (
+    ExecutorState,
+    Objects,
+    PttReply,
+    Say,
+    SayKind,
+    SpeechAudio,
+    SpeechPtt,
+    SpeechStatus,
+    Utterance,
+)
 
 log = logging.getLogger("hfpbd.speech")
 
@@ -63,6 +73,7 @@ class SpeechService:
         self._splitter = UtteranceSplitter()
         self._audio_lock = threading.Lock()
         self._talk: list[np.ndarray] | None = None  # audio captured while push-to-talk is held
+        self._skills: frozenset[str] = frozenset()  # the skills' names last taken into the grammar
         self._streamed_at: float | None = None  # when the last speech/audio chunk came, while the stream is open
         self._tasks: queue.Queue[Callable[[], None] | None] = queue.Queue()
         self._worker = threading.Thread(target=self._work, name="decoder", daemon=True)
@@ -80,6 +91,9 @@ class SpeechService:
         self.bus.subscribe(self.bus.keys.speech("audio"), self._on_stream, schema="speech_audio")
         self.bus.serve(self.bus.keys.speech("ptt"), self._on_ptt, request=SpeechPtt)
         self.bus.subscribe(self.bus.keys.objects, self._on_objects, schema="objects", latest_only=True, history=True)
+        self.bus.subscribe(
+            self.bus.keys.executor_state, self._on_executor, schema="executor_state", latest_only=True, history=True
+        )
         self.bus.watch_alive(self._on_alive)
         if self.speaker is not None:
             self.bus.subscribe(self.bus.keys.say, self._on_say, schema="say")
@@ -281,6 +295,13 @@ class SpeechService:
         """The grammar's object words come from the NLU's world-state reading, so the objects go in as that JSON."""
         scene = SceneWords.of([o.world_state() for o in message.objects])
         self._tasks.put(lambda: self.recogniser.set_scene(scene))
+
+    def _on_executor(self, message: ExecutorState) -> None:
+        """The taught skills' names become verbs of the grammar ("serve the blue cup")."""
+        names = frozenset(skill.name for skill in message.skills)
+        if names != self._skills:
+            self._skills = names
+            self._tasks.put(lambda: self.recogniser.set_skills(names))
 
     # -- output -------------------------------------------------------------------
     def _on_say(self, message: Say) -> None:

@@ -154,3 +154,56 @@ def test_every_spoken_question_and_distance_means_what_the_nlu_reads_from_it(ful
         )
         assert extract(f"move up {phrase}").distance == pytest.approx(centimetres / 100), phrase
     assert extract("open both hands").both
+
+
+SKILLS = frozenset({"serve", "tidy up"})
+
+
+@pytest.mark.parametrize(
+    ("sentence", "member"),
+    [
+        ("serve the red cup", True),
+        ("serve the leftmost cup on the rightmost cup", True),
+        ("tidy up the red mug", True),
+        ("serve every cup", True),
+        ("do it again with the leftmost cup", True),
+        ("execute it with the red cup", True),
+        ("serve", False),  # a skill is used on something
+        ("serve the blue box", False),  # not in this scene
+        ("stack the red cup", False),  # no skill of that name
+    ],
+)
+def test_a_taught_skill_is_a_verb_of_the_grammar(full, sentence, member):
+    jsgf = build_jsgf(full.core(3), SceneWords.of(TWO_CUPS), SKILLS)
+    assert in_grammar(sentence_matcher(jsgf), sentence) is member
+    assert not in_grammar(sentence_matcher(build_jsgf(full.core(3), SceneWords.of(TWO_CUPS))), "serve the red cup")
+
+
+def test_every_skill_sentence_of_the_grammar_is_read_by_the_nlu_as_that_skill_run(full):
+    jsgf = build_jsgf(full.core(3), SceneWords.of(TWO_CUPS), SKILLS)
+    without = sentence_matcher(build_jsgf(full.core(3), SceneWords.of(TWO_CUPS)))
+    skill_sentences = [s for s in set(sample_sentences(jsgf, 3000)) if not in_grammar(without, s)]
+    assert len(skill_sentences) > 20
+    world = parse_world(
+        {
+            "objects": TWO_CUPS,
+            "robot": {"grippers": {"right": "open", "left": "open"}, "action": 1, "actions": [3]},
+            "skills": [{"name": "serve", "action": 1}, {"name": "tidy up", "action": 1}],
+        }
+    )
+    model = Model(world)
+    for sentence in skill_sentences:
+        result = model.parse(sentence)
+        procedures = [c.procedure for c in getattr(result, "commands", ())]
+        # a run, or a question back where the words leave a role open: never another command
+        assert procedures in (["run_skill"], []), (sentence, result)
+
+
+def test_the_recogniser_takes_skill_names_it_can_pronounce(full):
+    recogniser = Recogniser(full, SCENE)
+    recogniser.set_skills(["serve", "Tidy-up", "zqxwv"])
+    assert recogniser.skills == {"serve", "tidy up"}
+    assert {"serve", "tidy", "again"} <= grammar_words(recogniser.jsgf)
+    assert "zqxwv" not in grammar_words(recogniser.jsgf)
+    recogniser.set_skills([])
+    assert "serve" not in grammar_words(recogniser.jsgf)
