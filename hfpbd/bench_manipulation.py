@@ -16,6 +16,7 @@ every failure's and refusal's reason.
 from __future__ import annotations
 
 import argparse
+import itertools
 import re
 import tempfile
 import time
@@ -56,6 +57,11 @@ class Outcome:
     reason: str
     replay: str = ""  # "achieved", "failed", "" (not replayed)
     replay_reason: str = ""
+
+    def line(self) -> str:
+        """The outcome as one line of the running log."""
+        why = self.replay_reason if self.replay == "failed" else self.reason
+        return f"{self.kind} {self.result} / replay {self.replay or '-'}: {why}"
 
 
 def random_object(rng: np.random.Generator, index: int) -> dict[str, Any]:
@@ -364,7 +370,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         else seed_ranges(args.tasks, args.seed, args.fresh)
     )
     namespace, port = "manip" + uuid.uuid4().hex[:8], free_port()
-    results: list[tuple[str, list[Outcome]]] = []
+    results: list[tuple[str, list[Outcome]]] = [(title, []) for title, _ in ranges]
     with Bus(loopback_options(namespace, port, listen=True)) as bus, tempfile.TemporaryDirectory() as data:
         session = loopback_options(namespace, port, listen=False).to_argv()
         stack = LocalStack(bus, args.logs or Path(data) / "logs")
@@ -373,17 +379,15 @@ def main(argv: Sequence[str] | None = None) -> int:
                 stack.start(name, session)
             stack.start("executor", session, "--data-dir", data)
             driver = Driver(bus)
-            for title, seeds in ranges:
-                outcomes: list[Outcome] = []
-                results.append((title, outcomes))
-                for seed in seeds:
-                    outcome = run_task(driver, seed)
-                    why = outcome.replay_reason if outcome.replay == "failed" else outcome.reason
-                    print(
-                        f"seed {seed}: {outcome.kind} {outcome.result} / replay {outcome.replay or '-'}: {why}",
-                        flush=True,
-                    )
-                    outcomes.append(outcome)
+            try:
+                # the ranges take turns, seed by seed: a run cut short still compares them on as many tables
+                for turn in itertools.zip_longest(*(seeds for _, seeds in ranges)):
+                    for (_, outcomes), seed in zip(results, turn, strict=True):
+                        if seed is not None:
+                            outcomes.append(run_task(driver, seed))
+                            print(f"seed {seed}: {outcomes[-1].line()}", flush=True)
+            except KeyboardInterrupt:
+                print("interrupted: the figures so far", flush=True)
         finally:
             stack.stop()
     for title, outcomes in results:
