@@ -16,6 +16,7 @@ BENCHMARKS: dict[str, str] = {
     "skills": "hfpbd.bench_skills",
     "tasks": "hfpbd.tasks.bench",
     "speech": "services.speech.bench",
+    "speech-latency": "services.speech.bench_latency",
     "enrol": "hfpbd.bench_enrol",
     "fuzz": "hfpbd.fuzz",
 }
