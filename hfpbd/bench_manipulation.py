@@ -16,7 +16,6 @@ every failure's and refusal's reason.
 from __future__ import annotations
 
 import argparse
-import itertools
 import re
 import tempfile
 import time
@@ -29,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from hfpbd import seed_ranges
 from hfpbd.manipulation_judge import Verdict, placed
 from hfpbd.tasks.judge import box
 from hfpbd.tasks.observer import Observer, WaitTimeout
@@ -46,7 +46,6 @@ JITTER_GAP = 0.01  # metres the moved objects' outlines stay apart
 STEP_TIMEOUT = 180.0
 KINDS = ("pick_up", "on_top_of", "next_to", "left_of", "right_of", "in_front_of", "behind", "down", "move_down")
 MOVES = ("up", "left", "right", "forward", "backward")
-FRESH_SEEDS = (100_000, 10_000_000)  # where a fresh range starts: no run before drew from here
 INTERNAL_ID = re.compile(r"\bobj\d+\b|replaced by")
 
 
@@ -321,20 +320,6 @@ def summary(outcomes: list[Outcome]) -> str:
     )
 
 
-def seed_ranges(tasks: int, first: int, fresh: int | None) -> list[tuple[str, list[int]]]:
-    """The ranges one run covers: ``tasks`` seeds from ``first`` and as many never run before, side by side.
-
-    Figures on seeds the project was tuned on flatter it; the fresh range,
-    drawn far above any seed a run ever used unless ``fresh`` names its
-    start (to run it again), says how it does on tables nobody saw.
-    """
-    start = fresh if fresh is not None else int(np.random.default_rng().integers(FRESH_SEEDS[0], FRESH_SEEDS[1]))
-    return [
-        (f"seeds {first}-{first + tasks - 1}", list(range(first, first + tasks))),
-        (f"fresh seeds {start}-{start + tasks - 1} (again: --fresh {start})", list(range(start, start + tasks))),
-    ]
-
-
 def _seed_list(text: str) -> list[int]:
     try:
         return [int(seed) for seed in text.split(",")]
@@ -346,31 +331,22 @@ def _seed_list(text: str) -> list[int]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="hfpbd bench manipulation", description=__doc__.splitlines()[0])
-    parser.add_argument(
-        "--tasks", type=int, default=100, help="how many seeded tasks in each range (default: %(default)s)"
-    )
-    parser.add_argument("--seed", type=int, default=0, help="first seed of the usual range (default: %(default)s)")
+    seed_ranges.add_arguments(parser, tasks=100)
     parser.add_argument(
         "--seeds",
         type=_seed_list,
         default=None,
-        help="these seeds only, comma-separated (e.g. a run's failures again), instead of --tasks from --seed",
-    )
-    parser.add_argument(
-        "--fresh",
-        type=int,
-        default=None,
-        help="start of the fresh range run beside --seed's (default: drawn anew each run, and printed)",
+        help="these seeds only, comma-separated (e.g. a run's failures again), instead of the two ranges",
     )
     parser.add_argument("--logs", type=Path, default=None, help="where the services' logs go (default: a temp dir)")
     args = parser.parse_args(argv)
     ranges = (
         [("seeds " + ",".join(map(str, args.seeds)), args.seeds)]
         if args.seeds
-        else seed_ranges(args.tasks, args.seed, args.fresh)
+        else seed_ranges.ranges(args.tasks, args.seed, args.fresh)
     )
     namespace, port = "manip" + uuid.uuid4().hex[:8], free_port()
-    results: list[tuple[str, list[Outcome]]] = [(title, []) for title, _ in ranges]
+    results: list[tuple[str, list[Outcome]]] = []
     with Bus(loopback_options(namespace, port, listen=True)) as bus, tempfile.TemporaryDirectory() as data:
         session = loopback_options(namespace, port, listen=False).to_argv()
         stack = LocalStack(bus, args.logs or Path(data) / "logs")
@@ -379,15 +355,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 stack.start(name, session)
             stack.start("executor", session, "--data-dir", data)
             driver = Driver(bus)
-            try:
-                # the ranges take turns, seed by seed: a run cut short still compares them on as many tables
-                for turn in itertools.zip_longest(*(seeds for _, seeds in ranges)):
-                    for (_, outcomes), seed in zip(results, turn, strict=True):
-                        if seed is not None:
-                            outcomes.append(run_task(driver, seed))
-                            print(f"seed {seed}: {outcomes[-1].line()}", flush=True)
-            except KeyboardInterrupt:
-                print("interrupted: the figures so far", flush=True)
+            results = seed_ranges.run_in_turns(ranges, lambda seed: run_task(driver, seed), Outcome.line)
         finally:
             stack.stop()
     for title, outcomes in results:

@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from hfpbd import seed_ranges
 from hfpbd.bench_manipulation import INTERNAL_ID, Driver, random_scene
 from hfpbd.manipulation_judge import Verdict, on_table, placed
 from hfpbd.tasks.observer import WaitTimeout
@@ -50,6 +51,10 @@ class Outcome:
     taught: str  # "achieved", "refused", "failed"
     used: str = ""  # "achieved", "refused", "reported" (a failure the robot said), "silent", "" (not used)
     reason: str = ""
+
+    def line(self) -> str:
+        """The outcome as one line of the running log."""
+        return f"{self.kind} taught {self.taught} / used {self.used or '-'}: {self.reason}"
 
 
 @dataclass(frozen=True)
@@ -166,29 +171,22 @@ def _judge(driver: Driver, skill: Skill, carried: str, landmark: str | None, sta
     return Verdict(True, f"{carried} went {went:.3f} m {skill.direction} and stands on the table")
 
 
-def report(outcomes: list[Outcome]) -> None:
+def report(outcomes: list[Outcome], title: str) -> None:
+    """Per kind of skill: taught, then each use's end; then every failure's and refusal's reason."""
     by_kind: dict[str, Counter] = defaultdict(Counter)
     for o in outcomes:
         by_kind[o.kind][f"taught {o.taught}"] += 1
         if o.used:
             by_kind[o.kind][o.used] += 1
     columns = ("achieved", "refused", "reported", "silent")
+    print(f"\n{title}")
     print(f"{'kind':<8} {'tasks':>5} {'taught':>6} " + " ".join(f"{c:>8}" for c in columns))
     for kind in KINDS:
         c = by_kind.get(kind)
         if c:
             total = sum(v for k, v in c.items() if k.startswith("taught"))
             print(f"{kind:<8} {total:>5} {c['taught achieved']:>6} " + " ".join(f"{c[col]:>8}" for col in columns))
-    used = [o for o in outcomes if o.used]
-    attempted = [o for o in used if o.used != "refused"]
-    achieved = sum(o.used == "achieved" for o in used)
-    share = f" ({100 * achieved / len(attempted):.1f}%)" if attempted else ""
-    print(
-        f"all: {len(outcomes)} skills, {len(used)} taught and used; {achieved}/{len(attempted)} uses not refused "
-        f"achieved{share}, {len(used) - len(attempted)} refused, "
-        f"{sum(o.used == 'reported' for o in used)} failures the robot reported, "
-        f"{sum(o.used == 'silent' for o in used)} silent"
-    )
+    print(f"all: {summary(outcomes)}")
     for o in outcomes:
         if o.taught != "achieved":
             print(f"  teaching {o.taught} ({o.kind}): {o.reason}")
@@ -196,31 +194,42 @@ def report(outcomes: list[Outcome]) -> None:
             print(f"  use {o.used} ({o.kind}): {o.reason}")
 
 
+def summary(outcomes: list[Outcome]) -> str:
+    """Uses achieved among those not refused, refusals, and failures reported or silent, as one line."""
+    used = [o for o in outcomes if o.used]
+    attempted = [o for o in used if o.used != "refused"]
+    achieved = sum(o.used == "achieved" for o in used)
+    share = f" ({100 * achieved / len(attempted):.1f}%)" if attempted else ""
+    return (
+        f"{len(outcomes)} skills, {len(used)} taught and used; {achieved}/{len(attempted)} uses not refused "
+        f"achieved{share}, {len(used) - len(attempted)} refused, "
+        f"{sum(o.used == 'reported' for o in used)} failures the robot reported, "
+        f"{sum(o.used == 'silent' for o in used)} silent"
+    )
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="hfpbd bench skills", description=__doc__.splitlines()[0])
-    parser.add_argument("--tasks", type=int, default=40, help="how many seeded skills (default: %(default)s)")
-    parser.add_argument("--seed", type=int, default=0, help="first seed (default: %(default)s)")
+    seed_ranges.add_arguments(parser, tasks=40)
     parser.add_argument("--logs", type=Path, default=None, help="where the services' logs go (default: a temp dir)")
     args = parser.parse_args(argv)
+    ranges = seed_ranges.ranges(args.tasks, args.seed, args.fresh)
     namespace, port = "skills" + uuid.uuid4().hex[:8], free_port()
+    results: list[tuple[str, list[Outcome]]] = []
     with Bus(loopback_options(namespace, port, listen=True)) as bus, tempfile.TemporaryDirectory() as data:
         session = loopback_options(namespace, port, listen=False).to_argv()
         stack = LocalStack(bus, args.logs or Path(data) / "logs")
-        outcomes: list[Outcome] = []
         try:
             for service in ("sim", "perception"):
                 stack.start(service, session)
             stack.start("executor", session, "--data-dir", data)
             driver = Driver(bus)
-            for seed in range(args.seed, args.seed + args.tasks):
-                outcome = run_task(driver, seed)
-                print(
-                    f"seed {seed}: {outcome.kind} taught {outcome.taught} / used {outcome.used or '-'}: "
-                    f"{outcome.reason}",
-                    flush=True,
-                )
-                outcomes.append(outcome)
+            results = seed_ranges.run_in_turns(ranges, lambda seed: run_task(driver, seed), Outcome.line)
         finally:
             stack.stop()
-    report(outcomes)
+    for title, outcomes in results:
+        report(outcomes, title)
+    print("\nside by side:")
+    for title, outcomes in results:
+        print(f"  {title}: {summary(outcomes)}")
     return 0

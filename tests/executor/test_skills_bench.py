@@ -37,9 +37,11 @@ def test_the_figures_count_refusals_apart_and_show_silent_failures(capsys: pytes
             Outcome("serve", "achieved", "refused", "I can't reach the plate."),
             Outcome("stack", "achieved", "silent", "obj0 is not over obj2"),
             Outcome("shift", "refused", "", "teaching pick_up: too wide"),
-        ]
+        ],
+        "seeds 0-3",
     )
     out = capsys.readouterr().out
+    assert out.startswith("\nseeds 0-3\n")
     assert "all: 4 skills, 3 taught and used; 1/2 uses not refused achieved (50.0%), 1 refused" in out
     assert "0 failures the robot reported, 1 silent" in out
     assert "  use silent (stack): obj0 is not over obj2" in out and "  teaching refused (shift)" in out
