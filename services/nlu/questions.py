@@ -46,7 +46,9 @@ _PATTERNS: tuple[tuple[str, re.Pattern[str]], ...] = tuple(
             r"|what (?:have|did) i (?:program|record|teach|make)|what is the current action|what(?:'s| is) "
             r"(?:the )?current action|show (?:me )?(?:the |my )?(?:actions|steps)|list (?:the |my |all )?steps"
             r"|what (?:are|were) (?:the|my) steps|what is (?:in|inside) (?:this|the|my|the current) (?:action|program)"
-            r"|are you (?:still )?recording|is (?:it|this) (?:being )?recorded|what are you recording)",
+            r"|are you (?:still )?recording|is (?:it|this) (?:being )?recorded|what are you recording"
+            r"|(?:what|which) (?:skills|names)|list (?:the |your |my |all )?skills|what (?:have you|did you) learn"
+            r"|what (?:can|do) you know how to do|what do you know how to do)",
         ),
         (
             "saved",
@@ -344,7 +346,10 @@ def _actions(situation: Situation, number_word: str | None) -> str:
     current = f" The current one is action {robot.action}." if robot.action is not None else ""
     number = _number(number_word)
     if number is None:
-        counts = ", ".join(f"action {i} has {_steps(n)}" for i, n in enumerate(steps, 1))
+        names = {skill.action: skill.name for skill in situation.world.skills}
+        counts = ", ".join(
+            f"action {i}{f' (“{names[i]}”)' if i in names else ''} has {_steps(n)}" for i, n in enumerate(steps, 1)
+        )
         return f"There {'is 1 action' if len(steps) == 1 else f'are {len(steps)} actions'}: {counts}.{current}" + (
             _step_list(robot.steps)
         )

@@ -45,9 +45,8 @@ _REBINDING = re.compile(
     rf" (?:it|that|this|the action|this action|the same action|action {_NUMBER})?(?: again)?"
     r" ?(?:with|for|on|using|to) (?P<rest>.+)$"
 )
-_HAND = re.compile(
-    r"\b(?:hand|arm|gripper)s?\b"
-)  # "do that again with the other hand": the last command, not the action
+_HAND = re.compile(r"\b(?:hand|arm|gripper)s?\b")  # "do that again with the other hand": no object, a hand
+_ACTION_WORD = re.compile(r"\b(?:execute|run|play|perform|action)\b")  # an action asked for, not the last command
 _EACH = re.compile(r"^(?:each|every|all)(?: of)?(?: the)? (?P<what>.+)$")
 _LANDMARK_WORD = re.compile(
     r" (?:on top of|onto|on|into|in|to|next to|beside|behind|in front of|near|by|over|above) "
@@ -70,6 +69,15 @@ def read(text: str, situation: Situation, history: History, step: Step) -> Resul
         found = pattern.match(said)
         if found is not None:
             return _naming(situation, found["name"], found.groupdict().get("number"))
+    again = _REBINDING.match(said)
+    if again is not None and _HAND.search(again["rest"]):  # neither takes a hand: the one said would be dropped
+        if again["number"] or _ACTION_WORD.search(said):
+            return _no_other_hand(f"action {again['number'] or situation.world.robot.action or 1}")
+        return Clarify(
+            [],
+            "“Again” does the last command as it was, with the same hand. To use another hand, say the "
+            "command with that hand, for example “pick it up with your left hand”.",
+        )
     rebinding = rebinds(said)
     if rebinding is not None:
         number = rebinding["number"]
@@ -85,8 +93,18 @@ def read(text: str, situation: Situation, history: History, step: Step) -> Resul
     return None
 
 
+def _no_other_hand(name: str) -> Clarify:
+    """The answer to a skill or action asked for with a hand: it has the hands it was taught with."""
+    return Clarify(
+        [],
+        f"I do {name} with the hands it was taught with; I can't do it with another hand. "
+        "Say it again without the hand, or teach it with that hand.",
+    )
+
+
 def rebinds(said: str) -> re.Match[str] | None:
-    """ "Do it again with the blue cup": the action again with other objects (not "... with the other hand")."""
+    """ "Do it again with the blue cup": the action again with other objects (not "... with the other hand",
+    which no action or repeat can honour)."""
     found = _REBINDING.match(said)
     return found if found is not None and not _HAND.search(found["rest"]) else None
 
@@ -128,6 +146,8 @@ def _using(situation: Situation, skill: str | int, words: str, rest: str, histor
     """
     rest = rest.strip()
     base: tuple[tuple[str, object], ...] = (("skill", skill),)
+    if _HAND.search(rest):  # a skill has no hand of its own to give: the hand said would be dropped
+        return _no_other_hand(f"“{skill}”" if isinstance(skill, str) else f"action {skill}")
     if not rest:
         return CommandResult(Command("run_skill", base), 1.0, words.removesuffix(" with"), {}, 0.0)
     each = _EACH.match(rest)

@@ -97,3 +97,29 @@ def test_hfpbd_nlu_parse_reads_skills_from_the_world_file(tmp_path: Path) -> Non
         [HFPBD, "nlu", "parse", "--world", str(path), "serve"], capture_output=True, text=True, timeout=60, cwd=ROOT
     )
     assert bad.returncode != 0 and len(bad.stderr.strip().splitlines()) == 1 and "skills" in bad.stderr
+
+
+@pytest.mark.unit
+@pytest.mark.parametrize(
+    ("text", "says"),
+    [
+        ("serve the blue cup with your left hand", "I do “serve” with the hands it was taught with"),
+        ("execute it with the blue cup using your left hand", "I do action 1 with the hands it was taught with"),
+        ("do that again with the other hand", "“Again” does the last command as it was, with the same hand."),
+    ],
+)
+def test_a_hand_said_with_a_skill_or_again_is_answered_not_dropped(text: str, says: str) -> None:
+    # neither a skill nor "again" takes a hand: run as taught, the hand said would silently not be the one used
+    result = model(skills=[{"name": "serve", "action": 1}]).parse(text)
+    assert isinstance(result, Clarify) and not result.candidates, result
+    assert result.question.startswith(says)
+
+
+@pytest.mark.unit
+def test_what_skills_the_robot_knows_is_answered_with_their_names() -> None:
+    result = model(skills=[{"name": "serve", "action": 1}]).parse("what skills do you know")
+    assert result.to_json() == {
+        "kind": "answer",
+        "topic": "actions",
+        "text": "There is 1 action: action 1 (“serve”) has 2 steps. The current one is action 1.",
+    }
