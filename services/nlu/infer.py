@@ -102,9 +102,11 @@ def read_steps(text: str, situation: Situation, history: History) -> Result:
 
 
 def parse_step(text: str, situation: Situation, history: History) -> Result:
-    """One step: two of a kind stacked or picked up, a request the robot cannot do, else the model's choice."""
+    """One step: a skill, two of a kind stacked or picked up, a request the robot cannot do, else the model's
+    choice."""
     return (
-        stacking.read(text, situation, history)
+        skills.read(text, situation, history, parse_step)
+        or stacking.read(text, situation, history)
         or pairs.read(text, situation)
         or _unsupported(text)
         or argmax.read(text, situation, history)

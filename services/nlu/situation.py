@@ -100,4 +100,5 @@ def after(world: World, command: Command) -> World:
         RobotState(
             **{**robot.__dict__, "grippers": grippers, "last_arm": history.last_arm, "last_object": history.last_object}
         ),
+        world.skills,
     )

@@ -16,6 +16,7 @@ import re
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
+from services.nlu import compound
 from services.nlu.commands import Command
 from services.nlu.language.phrasing import listed
 from services.nlu.prior import History
@@ -69,6 +70,8 @@ def read(text: str, situation: Situation, history: History, step: Step) -> Resul
         found = pattern.match(said)
         if found is not None:
             return _naming(situation, found["name"], found.groupdict().get("number"))
+    if len(compound.split(text.lower())) > 1:  # several steps: each is read on its own, a skill among them too
+        return None
     again = _REBINDING.match(said)
     if again is not None and _HAND.search(again["rest"]):  # neither takes a hand: the one said would be dropped
         if again["number"] or _ACTION_WORD.search(said):
