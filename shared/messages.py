@@ -242,6 +242,7 @@ class Robot(msgspec.Struct, kw_only=True):
     steps: list[str] = []
     progress: Progress | None = None
     holding: dict[str, str | None] = {}
+    moved: list[str] = []  # objects the robot moved this run and has not put back ("put everything back")
 
 
 class Skill(msgspec.Struct, kw_only=True):

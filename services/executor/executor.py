@@ -190,6 +190,7 @@ class Executor:
                 "steps": [step_words(s) for s in steps],
                 "progress": status.progress,
                 "holding": {arm: (h.object_id if h else None) for arm, h in self.procedures.held().items()},
+                "moved": self.origins.moved(snap.objects),
             }
             reach = {oid: per_arm for oid, per_arm in status.reach.items() if oid in snap.objects}
         named = msgspec.to_builtins(skills.skills(self.store))

@@ -12,6 +12,7 @@ next move starts from where it stands then.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -53,6 +54,11 @@ class Origins:
         """Where ``object_id`` stood before the robot moved it (None: not moved by the robot in this run)."""
         origin = self._spots.get(object_id)
         return None if origin is None else origin.center.copy()
+
+    def moved(self, seen: Iterable[str]) -> list[str]:
+        """The objects among ``seen`` that the robot moved and has not put back, first moved first."""
+        present = set(seen)
+        return [oid for oid in self._spots if oid in present]
 
     def returned(self, object_id: str) -> None:
         """``object_id`` was put back: its next move starts from there."""

@@ -41,7 +41,17 @@ from shared.service import run_service, wait_until_stopped
 
 log = logging.getLogger("hfpbd.nlu")
 
-_ROBOT_FIELDS = ("grippers", "last_arm", "last_object", "executing", "can_move", "action", "actions", "steps")
+_ROBOT_FIELDS = (
+    "grippers",
+    "last_arm",
+    "last_object",
+    "executing",
+    "can_move",
+    "action",
+    "actions",
+    "steps",
+    "moved",
+)
 
 
 class LiveWorld:

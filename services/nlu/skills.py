@@ -13,6 +13,7 @@ told apart is asked about, never guessed.
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
@@ -21,12 +22,14 @@ from services.nlu.commands import Command
 from services.nlu.language.phrasing import listed
 from services.nlu.prior import History
 from services.nlu.results import Clarify, CommandResult, Result
+from services.nlu.situation import stepped
 from services.nlu.tokens import read as read_words
 from services.nlu.tokens import slots_said
 from shared.contract import CARRIED, LANDMARK, RESERVED_SKILL_NAMES, SKILL_NAME_MAX_CHARS
 
 if TYPE_CHECKING:
     from services.nlu.situation import Situation, Step
+    from services.nlu.world import WorldObject
 
 _WORDS = re.compile(r"[a-z0-9']+")
 _POLITE = re.compile(r"^(?:(?:please|now|ok|okay|and|then|robot|so|right) )*")
@@ -60,6 +63,7 @@ _PUT_BACK = re.compile(
 _RETURN = re.compile(r"^return (?P<what>.+?) to (?:where (?:it|they) (?:was|were)|(?:its|their) (?:place|spot))$")
 _EVERYTHING = re.compile(r"^(?:everything|all|all of (?:it|them)|them all|all the \w+|every \w+|each \w+)$")
 _ANAPHOR = re.compile(r"^(?:it|that|this|that one|this one)$")
+MAX_PUT_BACK = 3  # objects put back by one "put everything back": six steps, as many as one sentence may ask for
 _NAMING_WORDS = frozenset({"color", "type", "label", "generic", "refer", "anaphor"})
 
 
@@ -207,7 +211,7 @@ def _reading_text(situation: Situation, words: str, reading: dict[str, str]) -> 
 def _putting_back(situation: Situation, what: str, history: History, step: Step) -> Result:
     """``place_back`` of the held object (a pick-up first when the object named is on the table)."""
     if _EVERYTHING.match(what):
-        return Clarify([], 'I put things back one at a time: say which, like "put the red cup back".')
+        return _all_back(situation, what, history, step)
     held = {obj.held_by: obj.id for obj in situation.world.objects if obj.held_by is not None}
     if _ANAPHOR.match(what):
         if not held:
@@ -222,6 +226,42 @@ def _putting_back(situation: Situation, what: str, history: History, step: Step)
         return found
     holder = next((arm for arm, obj in held.items() if obj == found), None)
     return _back(situation, holder, found) if holder is not None else _picked_then_back(situation, found, history, step)
+
+
+def _all_back(situation: Situation, what: str, history: History, step: Step) -> Result:
+    """Every object the robot moved (of the kind and colour said: "all the cups") put back, one after another.
+
+    Each is picked up by the hand the model chooses in the world the ones
+    before it leave; the executor stops at the first that fails and says
+    what was not done.
+    """
+    fits = _fitting(what)
+    objects = {obj.id: obj for obj in situation.world.objects}
+    moved = [oid for oid in situation.world.robot.moved if oid in objects and (fits is None or fits(objects[oid]))]
+    if not moved:
+        mine = [oid for oid in situation.world.robot.moved if oid in objects]
+        if not mine:
+            return Clarify([], "There is nothing to put back: I haven't moved anything since I started.")
+        names = listed([situation.scene.describe(situation.world.index_of(oid)).text for oid in mine])
+        return Clarify([], f"Of what I moved, nothing fits “{what.strip()}”: I moved {names}.")
+    if len(moved) > MAX_PUT_BACK:
+        return Clarify([], f"I moved {len(moved)} objects; I put back at most {MAX_PUT_BACK} at a time: say which.")
+    commands: list[Command] = []
+    texts: list[str] = []
+    current = situation
+    for object_id in moved:
+        holder = next((o.held_by for o in current.world.objects if o.id == object_id and o.held_by), None)
+        done = (
+            _back(current, holder, object_id)
+            if holder is not None
+            else _picked_then_back(current, object_id, history, step)
+        )
+        if not isinstance(done, CommandResult):
+            return done
+        commands.extend(done.commands)
+        texts.append(done.text)
+        current, history = stepped(current, history, done.commands)
+    return CommandResult(commands[0], 1.0, ", then ".join(texts), {}, 0.0, tuple(commands[1:]))
 
 
 def _back(situation: Situation, arm: str, object_id: str) -> CommandResult:
@@ -251,18 +291,22 @@ def _one_object(situation: Situation, phrase: str, history: History, step: Step)
 
 
 def _all_of(situation: Situation, phrase: str) -> list[str]:
-    """Every object the colour and kind words of ``phrase`` fit, leftmost first (the robot's left)."""
+    """Every object on the table the colour and kind words of ``phrase`` fit, leftmost first (the robot's left)."""
+    fits = _fitting(phrase)
+    if fits is None:
+        return []
+    fitting = [obj for obj in situation.world.objects if obj.held_by is None and fits(obj)]
+    return [obj.id for obj in sorted(fitting, key=lambda o: -o.position[1])]
+
+
+def _fitting(phrase: str) -> Callable[[WorldObject], bool] | None:
+    """Whether an object has the colours and kinds ``phrase`` says; None when it says neither ("everything")."""
     terms = read_words(phrase).terms
     colours = {m.value for t in terms for r in t.readings for m in r if m.slot == "color"}
     kinds = {m.value for t in terms for r in t.readings for m in r if m.slot == "type"}
-    fitting = [
-        obj
-        for obj in situation.world.objects
-        if obj.held_by is None and (not colours or obj.color in colours) and (not kinds or obj.type in kinds)
-    ]
     if not colours and not kinds:
-        return []
-    return [obj.id for obj in sorted(fitting, key=lambda o: -o.position[1])]
+        return None
+    return lambda obj: (not colours or obj.color in colours) and (not kinds or obj.type in kinds)
 
 
 def _names_an_object(phrase: str) -> bool:

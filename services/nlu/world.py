@@ -61,6 +61,7 @@ class RobotState:
     action: int | None = None
     actions: tuple[int, ...] = ()
     steps: tuple[str, ...] = ()  # the current action's steps in words (the executor's own field; may be absent)
+    moved: tuple[str, ...] = ()  # objects the robot moved and has not put back (the executor's own field)
 
 
 @dataclass(frozen=True)
@@ -198,6 +199,9 @@ def _parse_robot(raw: Any) -> RobotState:
     steps = raw.get("steps", []) or []
     if not isinstance(steps, list) or not all(isinstance(step, str) for step in steps):
         raise WorldError("robot.steps must be a list of the current action's steps in words")
+    moved = raw.get("moved", []) or []
+    if not isinstance(moved, list) or not all(isinstance(oid, str) for oid in moved):
+        raise WorldError("robot.moved must be a list of object ids")
     return RobotState(
         dict(grippers),
         last_arm,
@@ -207,6 +211,7 @@ def _parse_robot(raw: Any) -> RobotState:
         action,
         tuple(actions),
         tuple(steps),
+        tuple(moved),
     )
 
 

@@ -67,11 +67,13 @@ def test_an_object_carried_away_goes_back_where_it_stood(stack: Stack) -> None:
     ok(stack.command("pick_up", {"arm": "right", "object": stack.pid("obj0")}, utterance="pick up the red cup"))
     ok(stack.command("move_abs_dir", {"arm": "right", "direction": "right", "distance": 0.1}, utterance="move right"))
     assert np.linalg.norm(stack.position("obj0")[:2] - stood[:2]) > 0.05
+    assert stack.idle()["robot"]["moved"] == [stack.pid("obj0")]  # what "put everything back" would put back
     said = ok(stack.command("place_back", {"arm": "right"}, utterance="put it back where it was"))
     assert any("back where it was" in line for line in texts(said, "narration")), said
     verdict = stack.judged("obj0", "down")
     assert verdict.success, verdict
     assert np.linalg.norm(stack.position("obj0")[:2] - stood[:2]) < 0.03, stack.position("obj0")
+    assert stack.idle()["robot"]["moved"] == []
 
 
 @pytest.mark.slow

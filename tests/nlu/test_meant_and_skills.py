@@ -123,3 +123,19 @@ def test_what_skills_the_robot_knows_is_answered_with_their_names() -> None:
         "topic": "actions",
         "text": "There is 1 action: action 1 (“serve”) has 2 steps. The current one is action 1.",
     }
+
+
+@pytest.mark.unit
+def test_put_everything_back_puts_back_each_object_the_robot_moved_and_only_those() -> None:
+    # the executor publishes what it moved (robot.moved); the blue cup is still in the left hand
+    scene = table_scene(action=1, actions=[2], moved=["obj0", "obj1"], grippers={"right": "open", "left": "holding"})
+    scene["objects"][1]["held_by"] = "left"
+    result = Model(parse_world(scene)).parse("put everything back")
+    assert isinstance(result, CommandResult)
+    assert [(c.procedure, dict(c.args)) for c in result.commands] == [
+        ("pick_up", {"arm": "right", "object": "obj0"}),
+        ("place_back", {"arm": "right", "object": "obj0"}),
+        ("place_back", {"arm": "left", "object": "obj1"}),
+    ]
+    only_boxes = Model(parse_world(scene)).parse("put all the boxes back")
+    assert isinstance(only_boxes, Clarify) and "nothing fits “all the boxes”" in only_boxes.question
