@@ -280,6 +280,7 @@ class SpeechStatus(Message, kw_only=True):
     talking: bool = False
     grammar_words: int = 0
     grammar: str | None = None  # "nlu" once the NLU's vocabulary grammar is loaded, else "built-in"
+    skills: list[str] = []  # the taught skills' names the grammar takes as verbs (those the dictionary can say)
 
 
 class SpeechPtt(Message):

@@ -301,7 +301,11 @@ class SpeechService:
         names = frozenset(skill.name for skill in message.skills)
         if names != self._skills:
             self._skills = names
-            self._tasks.put(lambda: self.recogniser.set_skills(names))
+            self._tasks.put(lambda: self._take_skills(names))
+
+    def _take_skills(self, names: frozenset[str]) -> None:
+        self.recogniser.set_skills(names)
+        self._publish_status()  # says which names can now be said
 
     # -- output -------------------------------------------------------------------
     def _on_say(self, message: Say) -> None:
@@ -344,6 +348,7 @@ class SpeechService:
                 talking=self._talk is not None,
                 grammar_words=len(self.recogniser.vocabulary.words()),
                 grammar=self.grammar,
+                skills=sorted(self.recogniser.skills),
             )
         )
 
