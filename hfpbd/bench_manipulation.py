@@ -267,7 +267,10 @@ def _program_and_replay(
     driver.load(scene, jittered(scene, rng))
     _, errors, _ = driver.command("execute")
     time.sleep(1.0)
-    replay = Verdict(False, f"execute: {errors[0]}") if errors else _judge(driver, kind, moved, landmark, arm)
+    replay = _judge(driver, kind, moved, landmark, arm)
+    if errors:  # what the robot said counts; the table tells a false alarm from a failure it saw
+        seen = f" (yet by the simulator it worked: {replay.reason})" if replay.success else ""
+        replay = Verdict(False, f"execute: {errors[0]}{seen}")
     outcome.replay, outcome.replay_reason = ("achieved" if replay.success else "failed"), replay.reason
     return outcome
 
