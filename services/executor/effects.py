@@ -39,6 +39,7 @@ BESIDE_MAX = 0.15  # metres, edge to edge: farther than this is not beside any m
 BESIDE_OVERLAP = 0.03  # metres the two boxes as seen may overlap and still be side by side
 ALONG_SLACK = 0.06  # metres past the landmark's side an object beside it may stand along that side
 SAME_PLACE = 0.03  # metres: an object seen this close to where it stood has not been moved
+HIDDEN_CONTACT = 0.05  # metres between an object's bottom and the top of one right under it that the two hide
 # each side relation's outward direction, base frame (+x away from the robot, +y to its left): axis, sign
 SIDE_AXIS = {"left_of": 1, "right_of": 1, "behind": 0, "in_front_of": 0}
 SIDE_SIGN = {"left_of": 1.0, "right_of": -1.0, "behind": 1.0, "in_front_of": -1.0}
@@ -75,7 +76,7 @@ def judge(
         return wording.sentence(f"{words} is still in my {now.held_by} hand")
     if _tipped(moved, now):
         return wording.sentence(f"{words} has tipped over")
-    if not snap.supported(now.id) and not _inside_another(now, snap):
+    if not snap.supported(now.id) and not _inside_another(now, snap) and not _over_another(now, snap):
         return wording.sentence(f"{words} is not standing on anything I can see")
     if procedure == "place_rel":
         landmark = snap.objects.get(args["object"])
@@ -83,6 +84,26 @@ def judge(
             return wording.sentence(f"I can't see what I put {words} {VALUE_WORDS[args['relation']]} any more")
         return _in_relation(now, args["relation"], landmark, words, refer(snap.objects, landmark.id))
     return None
+
+
+def _over_another(obj: PerceivedObject, snap: SceneSnapshot) -> bool:
+    """Whether ``obj`` stands right over another supported object, a little above its top as seen.
+
+    From the head, a cup on a box hides the box's top face and the box's
+    front edge hides the cup's foot: the two boxes as seen end a few
+    centimetres apart where they touch. A cup let go of cannot hang there.
+    """
+    box = Box.of(obj)
+    for other_id, other in snap.objects.items():
+        under = Box.of(other)
+        if (
+            other_id != obj.id
+            and 0.0 <= box.bottom - under.top <= HIDDEN_CONTACT
+            and np.all(np.abs(box.center[:2] - under.center[:2]) < under.half[:2])
+            and snap.supported(other_id)
+        ):
+            return True
+    return False
 
 
 def _inside_another(obj: PerceivedObject, snap: SceneSnapshot) -> bool:

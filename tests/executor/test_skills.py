@@ -366,6 +366,21 @@ def test_a_placement_on_top_holds_over_the_landmark_and_not_off_it() -> None:
     )
 
 
+def test_a_cup_on_a_box_is_on_it_though_the_two_hide_where_they_touch() -> None:
+    # as seen from the head on seed 20 of the manipulation benchmark: the box's top and the cup's foot hidden,
+    # the cup's box 2.7 cm above the box's; a cup let go of cannot hang there
+    args = {"arm": "right", "relation": "on_top_of", "object": "obj2"}
+    held = obj("obj0", "red", "cup", 0.68, 0.26, CUP, z=0.9, held_by="right")
+    box = obj("obj2", "green", "box", 0.68, 0.257, (0.064, 0.064, 0.055))
+    on = obj("obj0", "red", "cup", 0.681, 0.258, (0.062, 0.063, 0.059), z=TABLE_Z + 0.055 + 0.027)
+    assert effects.judge("place_rel", args, held, {"obj0", "obj2"}, snapshot([on, box])) is None
+    floating = obj("obj0", "red", "cup", 0.681, 0.258, (0.062, 0.063, 0.059), z=TABLE_Z + 0.055 + 0.08)
+    seen = snapshot([floating, box])
+    assert effects.judge("place_rel", args, held, {"obj0", "obj2"}, seen) == words(
+        "{obj0} is not standing on anything I can see", seen
+    )
+
+
 @pytest.mark.parametrize(
     "relation, x, y, expected",
     [
