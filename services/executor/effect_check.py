@@ -50,15 +50,19 @@ class EffectCheck:
         """What differs, seen afresh, from the effect a replayed step was taught to have (None: it holds).
 
         A second look is taken before a step counts as not holding; when the
-        object was out of view under the hand that let go of it, that hand
-        first moves aside.
+        object was out of view, or the hand that let go of it is still close
+        over it, that hand first moves aside.
         """
         if procedure not in effects.CHECKED or moved is None:
             return None
         went = _went(args, before, self.scene.snapshot()) if procedure == "move_abs_dir" else None
         for look in range(LOOKS):
             try:
-                if look and procedure in effects.PLACEMENTS and effects.hidden(moved, self.scene.snapshot()):
+                if (
+                    look
+                    and procedure in effects.PLACEMENTS
+                    and effects.hand_may_hide(moved, args["arm"], self.scene.snapshot())
+                ):
                     self.procedures.move_abs_dest(args["arm"])
                 self.perception.record()
             except StepFailed as exc:

@@ -17,15 +17,17 @@ hand above it, so only differences a person would see count.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
+import msgspec
 import numpy as np
 
 from services.executor import wording
 from services.executor.geometry import Box
 from services.executor.grounding import REJECT, cost
 from services.executor.referring import refer
-from services.executor.scene import SceneSnapshot
+from services.executor.scene import SUPPORT_GAP, SceneSnapshot
 from shared.contract import DISTANCE, VALUE_WORDS
 from shared.messages import PerceivedObject
 
@@ -39,6 +41,7 @@ BESIDE_MAX = 0.15  # metres, edge to edge: farther than this is not beside any m
 BESIDE_OVERLAP = 0.03  # metres the two boxes as seen may overlap and still be side by side
 ALONG_SLACK = 0.06  # metres past the landmark's side an object beside it may stand along that side
 SAME_PLACE = 0.03  # metres: an object seen this close to where it stood has not been moved
+HAND_NEAR = 0.25  # metres, over the table, within which a hand above an object may hide part of it
 HIDDEN_CONTACT = 0.05  # metres between an object's bottom and the top of one right under it that the two hide
 # each side relation's outward direction, base frame (+x away from the robot, +y to its left): axis, sign
 SIDE_AXIS = {"left_of": 1, "right_of": 1, "behind": 0, "in_front_of": 0}
@@ -76,7 +79,7 @@ def judge(
         return wording.sentence(f"{words} is still in my {now.held_by} hand")
     if _tipped(moved, now):
         return wording.sentence(f"{words} has tipped over")
-    if not snap.supported(now.id) and not _inside_another(now, snap) and not _over_another(now, snap):
+    if not _standing(now, moved, snap):
         return wording.sentence(f"{words} is not standing on anything I can see")
     if procedure == "place_rel":
         landmark = snap.objects.get(args["object"])
@@ -84,6 +87,27 @@ def judge(
             return wording.sentence(f"I can't see what I put {words} {VALUE_WORDS[args['relation']]} any more")
         return _in_relation(now, args["relation"], landmark, words, refer(snap.objects, landmark.id))
     return None
+
+
+def _standing(now: PerceivedObject, moved: PerceivedObject, snap: SceneSnapshot) -> bool:
+    """Whether the object let go of stands on something: the table, a supported object, inside or right over one.
+
+    Seen shorter than it is (``moved``: how it was seen before the step, its
+    whole height), its foot is hidden from the head (behind the table's front,
+    a hand, another object): it is judged with its top where it is seen and
+    its whole height below that.
+    """
+    if float(moved.size[2]) > float(now.size[2]) + SUPPORT_GAP:
+        top = float(now.position[2]) + float(now.size[2]) / 2
+        height = float(moved.size[2])
+        whole = msgspec.structs.replace(
+            now,
+            position=(float(now.position[0]), float(now.position[1]), top - height / 2),
+            size=(float(now.size[0]), float(now.size[1]), height),
+        )
+        snap = replace(snap, objects={**snap.objects, now.id: whole})
+        now = whole
+    return snap.supported(now.id) or _inside_another(now, snap) or _over_another(now, snap)
 
 
 def _over_another(obj: PerceivedObject, snap: SceneSnapshot) -> bool:
@@ -159,10 +183,16 @@ def _carried(args: dict[str, Any], went: float | None, words: str) -> str | None
     )
 
 
-def hidden(moved: PerceivedObject, snap: SceneSnapshot) -> bool:
-    """Whether ``moved`` is out of view now (under the hand that let go of it): no judgement is sound then."""
+def hand_may_hide(moved: PerceivedObject, arm: str, snap: SceneSnapshot) -> bool:
+    """Whether the hand that let go of ``moved`` may hide it from the head: it is out of view, or the hand is
+    still close over it (an arm across part of a cup leaves it seen where it last was, in the hand)."""
     now = snap.objects.get(moved.id)
-    return now is not None and now.visible is False
+    if now is not None and now.visible is False:
+        return True
+    hand = snap.robot.ee.get(arm) if snap.robot is not None else None
+    if now is None or hand is None:
+        return False
+    return float(np.linalg.norm(np.asarray(hand[:2], float) - np.asarray(now.position[:2], float))) < HAND_NEAR
 
 
 def _in_relation(

@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import msgspec
 import numpy as np
 import pytest
 
@@ -370,7 +371,7 @@ def test_a_cup_on_a_box_is_on_it_though_the_two_hide_where_they_touch() -> None:
     # as seen from the head on seed 20 of the manipulation benchmark: the box's top and the cup's foot hidden,
     # the cup's box 2.7 cm above the box's; a cup let go of cannot hang there
     args = {"arm": "right", "relation": "on_top_of", "object": "obj2"}
-    held = obj("obj0", "red", "cup", 0.68, 0.26, CUP, z=0.9, held_by="right")
+    held = obj("obj0", "red", "cup", 0.68, 0.26, (0.062, 0.063, 0.059), z=0.9, held_by="right")
     box = obj("obj2", "green", "box", 0.68, 0.257, (0.064, 0.064, 0.055))
     on = obj("obj0", "red", "cup", 0.681, 0.258, (0.062, 0.063, 0.059), z=TABLE_Z + 0.055 + 0.027)
     assert effects.judge("place_rel", args, held, {"obj0", "obj2"}, snapshot([on, box])) is None
@@ -379,6 +380,30 @@ def test_a_cup_on_a_box_is_on_it_though_the_two_hide_where_they_touch() -> None:
     assert effects.judge("place_rel", args, held, {"obj0", "obj2"}, seen) == words(
         "{obj0} is not standing on anything I can see", seen
     )
+
+
+def test_a_cup_whose_foot_is_hidden_stands_on_the_table_below_its_top() -> None:
+    # seed 48: let go of on the table near its front edge, seen 8.6 cm tall with its foot 5 cm up (12 cm tall)
+    args = {"arm": "right", "destination": "table"}
+    held = obj("obj0", "red", "cup", 0.43, -0.24, (0.066, 0.067, 0.12), z=0.9, held_by="right")
+    hidden_foot = obj("obj0", "red", "cup", 0.433, -0.241, (0.066, 0.067, 0.086), z=TABLE_Z + 0.034)
+    assert effects.judge("place_abs", args, held, {"obj0"}, snapshot([hidden_foot])) is None
+    hanging = obj("obj0", "red", "cup", 0.433, -0.241, (0.066, 0.067, 0.12), z=TABLE_Z + 0.05)
+    seen = snapshot([hanging])
+    assert effects.judge("place_abs", args, held, {"obj0"}, seen) == words(
+        "{obj0} is not standing on anything I can see", seen
+    )
+
+
+def test_a_hand_still_close_over_what_it_let_go_of_may_hide_it() -> None:
+    # seed 48: the left arm reached across; a second look with the hand still over the cup saw it in the air
+    cup = obj("obj0", "red", "cup", 0.43, -0.24, CUP)
+    seen = snapshot([cup])
+    seen.robot = SimState(stamp=0.0, joints={}, ee={"left": [0.5, -0.2, 0.95, 1, 0, 0, 0]}, grippers={})
+    assert effects.hand_may_hide(cup, "left", seen)
+    seen.robot = SimState(stamp=0.0, joints={}, ee={"left": [0.5, 0.3, 0.95, 1, 0, 0, 0]}, grippers={})
+    assert not effects.hand_may_hide(cup, "left", seen)
+    assert effects.hand_may_hide(cup, "left", snapshot([msgspec.structs.replace(cup, visible=False)]))
 
 
 @pytest.mark.parametrize(
