@@ -9,6 +9,7 @@ the look and that watch live together here.
 from __future__ import annotations
 
 import threading
+import time
 
 from services.executor import wording
 from services.executor.procedures import StepFailed
@@ -17,6 +18,7 @@ from shared.bus import Bus, BusTimeout, RemoteError
 from shared.messages import PerceivedObject, RecordReply
 
 RECORD_TIMEOUT = 15.0
+CUT_SHORT_MARGIN = 2.0  # seconds: a request unanswered this long before its timeout was ended by its answerer going
 
 
 class Perception:
@@ -36,14 +38,22 @@ class Perception:
     def record(self) -> list[PerceivedObject]:
         """A fresh settled observation from perception, taken into the scene at once.
 
+        Unanswered, it says whether perception stopped while asked (its
+        token went, it is gone, or the request was ended early by its going)
+        or is merely not answering.
+
         A reply that does not fit its type (an object with a field out of
         range) is as good as perception failing: the step stops and says so.
         """
-        losses = self.losses
+        losses, asked = self.losses, time.monotonic()
         try:
             reply = self.bus.request(self.bus.keys.record, {}, reply=RecordReply, timeout=RECORD_TIMEOUT)
         except BusTimeout as exc:
-            if self.losses != losses or "perception" not in self.bus.alive_services(timeout=0.5):
+            # a request that ends unanswered well before its time lost the one who was to answer: the router
+            # closes it when that service goes, sometimes before its liveliness token is seen to go (or, the
+            # launcher being quick, after a new one is back)
+            cut_short = time.monotonic() - asked < RECORD_TIMEOUT - CUT_SHORT_MARGIN
+            if cut_short or self.losses != losses or "perception" not in self.bus.alive_services(timeout=0.5):
                 raise StepFailed(
                     "I couldn't finish looking at the table: the perception service stopped, so it was interrupted."
                 ) from exc
