@@ -31,4 +31,4 @@ test-slow: setup
 	$(PYTEST) -m slow; status=$$?; [ $$status -eq 0 ] || [ $$status -eq 5 ]
 
 bench: setup
-	@for what in bus nlu sim perception executor manipulation fuzz speech tasks; do echo "== hfpbd bench $$what"; $(BIN)/hfpbd bench $$what || exit 1; done
+	@for what in bus nlu sim perception executor manipulation skills fuzz speech speech-latency tasks; do echo "== hfpbd bench $$what"; $(BIN)/hfpbd bench $$what || exit 1; done
