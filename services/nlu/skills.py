@@ -85,11 +85,10 @@ def read(text: str, situation: Situation, history: History, step: Step) -> Resul
             "“Again” does the last command as it was, with the same hand. To use another hand, say the "
             "command with that hand, for example “pick it up with your left hand”.",
         )
-    rebinding = rebinds(said)
-    if rebinding is not None:
-        number = rebinding["number"]
+    if again is not None:  # "do it again with the blue cup": the action with other objects
+        number = again["number"]
         action = int(number) if number else situation.world.robot.action or 1
-        return _using(situation, action, f"do action {action} with", rebinding["rest"], history, step)
+        return _using(situation, action, f"do action {action} with", again["rest"], history, step)
     named = _named_skill(situation, said)
     if named is not None:
         name, rest = named
