@@ -17,6 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from services.executor import wording
 from shared import contract
 from shared.messages import NluResult
 
@@ -84,7 +85,7 @@ def check_compound(message: NluResult) -> list[Step]:
         try:
             args = check(item.procedure, item.args)
         except CommandError as exc:
-            raise CommandError(f"I can't do step {number} of that: {str(exc)[:1].lower()}{str(exc)[1:]}") from exc
+            raise CommandError(f"I can't do step {number} of that: {wording.continued(str(exc))}") from exc
         if item.procedure in ADMIN:
             raise CommandError(
                 f"I can't do step {number} of that: {item.procedure.replace('_', ' ')} has to be said on its own."

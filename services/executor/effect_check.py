@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from services.executor import effects
+from services.executor import effects, wording
 from services.executor import geometry as geo
 from services.executor.perception import Perception
 from services.executor.procedures import Procedures, StepFailed
@@ -66,7 +66,7 @@ class EffectCheck:
                     self.procedures.move_abs_dest(args["arm"])
                 self.perception.record()
             except StepFailed as exc:
-                return f"I couldn't check that step: {str(exc)[:1].lower()}{str(exc)[1:]}"
+                return f"I couldn't check that step: {wording.continued(str(exc))}"
             except Stopped:
                 return "I was stopped before I could check that step."
             snap = self.scene.snapshot()

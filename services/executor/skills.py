@@ -21,6 +21,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any
 
+from services.executor import wording
 from services.executor.commands import RECORDED, CommandError, check
 from services.executor.store import ActionStore, StoreError
 from services.nlu.language.phrasing import listed
@@ -189,19 +190,15 @@ def unrunnable(store: ActionStore, number: int, start: int = 1, chain: tuple[int
                 raise CommandError(f"{procedure!r} is not a step an action can have.")
             check(procedure, step.get("args"))
         except CommandError as exc:
-            return f"{where} is not a step I can run: {_lower(str(exc))}"
+            return f"{where} is not a step I can run: {wording.continued(str(exc))}"
         if procedure != "run_skill":
             continue
         try:
             inner = find(store, step["args"]["skill"])
         except SkillError as exc:
-            return f"{where} uses a skill I don't have: {_lower(str(exc))}"
+            return f"{where} uses a skill I don't have: {wording.continued(str(exc))}"
         if inner in (*chain, number):
             return f"{where} runs {called(store, inner)}, which would run itself again without end."
         if (why := unrunnable(store, inner, 1, (*chain, number))) is not None:
             return why
     return None
-
-
-def _lower(text: str) -> str:
-    return text[:1].lower() + text[1:]

@@ -183,3 +183,11 @@ def set_down_elsewhere(below_minus_released: Sequence[float]) -> str:
     if not parts:
         return ""
     return f"I couldn't put it down right below my hand, so I set it down {' and '.join(parts)}."
+
+
+def continued(sentence: str) -> str:
+    """A sentence carried on after a colon: its first letter lowered, except the pronoun "I" ("I can't …")."""
+    first_word = sentence.split(" ", 1)[0]
+    if first_word == "I" or first_word.startswith("I'"):
+        return sentence
+    return sentence[:1].lower() + sentence[1:]

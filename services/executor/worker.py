@@ -234,7 +234,7 @@ class Worker:
         text = wording.narration(
             step.procedure, step.args, step.phrases, lambda oid: refer(snap.objects, oid), held="it"
         )
-        return text[:1].lower() + text[1:].rstrip(".")
+        return wording.continued(text).rstrip(".")
 
     def _undo(self) -> None:
         """Take back the current action's last step: remove it, then bring the robot back to before it."""
@@ -260,7 +260,7 @@ class Worker:
         except StepFailed as exc:
             self.out.say(
                 f"I took step {len(steps)} out of action {number}, but I couldn't reverse it: "
-                f"{str(exc)[:1].lower()}{str(exc)[1:]}",
+                f"{wording.continued(str(exc))}",
                 "error",
             )
             return

@@ -306,7 +306,7 @@ def test_a_skill_that_runs_itself_or_a_missing_one_is_refused_before_a_replay(tm
         "Step 1 of \u201cround\u201d runs \u201cloop\u201d, which would run itself again without end."
     )
     assert str(skills.unrunnable(store, 3)).startswith(
-        "Step 1 of action 3 uses a skill I don't have: i don't know an action called \u201cfetch\u201d"
+        "Step 1 of action 3 uses a skill I don't have: I don't know an action called \u201cfetch\u201d"
     )
 
 

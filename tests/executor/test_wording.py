@@ -128,3 +128,17 @@ def test_an_object_perception_lost_is_named_by_its_kind_and_never_by_its_id() ->
 )
 def test_a_put_down_off_the_spot_below_says_where_it_went(below_minus_released: tuple, said: str) -> None:
     assert wording.set_down_elsewhere(below_minus_released) == said
+
+
+@pytest.mark.parametrize(
+    ("reason", "carried_on"),
+    [
+        ("I can't find a clear path to move my right hand to the side.", "I can't find a clear path"),
+        ("I'm holding nothing.", "I'm holding nothing"),
+        ("The plate is 2 cm beyond my right hand.", "the plate is 2 cm beyond"),
+        ("It would be past the edge.", "it would be past the edge"),
+    ],
+)
+def test_a_reason_carried_on_after_a_colon_keeps_the_pronoun_i_capital(reason: str, carried_on: str) -> None:
+    assert wording.continued(reason).startswith(carried_on)
+    assert f"I couldn't check that step: {wording.continued(reason)}".count(" i ") == 0
