@@ -5,11 +5,10 @@ a skill used, on a cup at the left: the recorded hand cannot get there, the
 other can. A person would just use the other hand, so the replay does, and
 says so. A stretch of steps moves to the other hand whole: from a pick-up to
 the placement that lets go of what it picked up, and only when the other
-hand is free and has no step of its own in between. Whether a hand reaches
-is asked of its planning model as the reach map does (IK only): a grasp for
-the pick-up, and for a relative placement the hand's way to that side of
-the landmark and the hover over the release, with the object held as one
-of those grasps holds it.
+hand is free and has no step of its own in between. Whether a hand can do
+the stretch is asked of the pick-up and place stages themselves: the grasp
+the pick-up would take, and whether the placement can lower the object from
+that grasp (nothing moves).
 """
 
 from __future__ import annotations
@@ -18,15 +17,13 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from services.executor import targets
-from services.executor.geometry import Box
-from services.executor.kinematics import ArmKinematics
-from services.executor.reach import can_pick, sync
+from services.executor.procedures.body import Body
+from services.executor.procedures.grasps import can_pick_for
+from services.executor.reach import sync
 from services.executor.scene import SceneSnapshot
 from shared.contract import BOTH, PLACES, other_arm
 
 LETS_GO = PLACES | {"place_back"}
-GRASPS_TRIED = 2  # grasps the object may be held by, for whether a hand reaches its release
 
 
 @dataclass(frozen=True)
@@ -38,33 +35,23 @@ class Swap:
     arm: str
 
 
-def reaches(kin: ArmKinematics, snap: SceneSnapshot, carried: str, relation: str | None, landmark: str | None) -> bool:
-    """Whether the empty hand of ``kin`` can pick ``carried`` up and (``relation``) get to that side of
-    ``landmark``, and hold the object over its release there as one of its first grasps would hold it (the
-    arm's length, as a placement that is out of reach says it)."""
+def reaches(
+    body: Body, arm: str, snap: SceneSnapshot, carried: str, relation: str | None, landmark: str | None
+) -> bool:
+    """Whether the empty ``arm`` can pick ``carried`` up with the grasp its pick-up would take for a placement
+    ``relation`` ``landmark`` (None: no placement after it), and then lower it there: the pick-up's and the
+    place stage's own checks, nothing moves."""
+    kin = body.arms[arm]
     sync(kin, snap, None)
-    obj = snap.objects[carried]
-    if not can_pick(kin, obj, snap.near_edge):
-        return False
-    if relation is None or landmark is None:
-        return True
-    box = Box.of(snap.objects[landmark])
-    if kin.first_reachable(targets.move_relation(relation, box, kin.fk(), None, snap.table_z)) is None:
-        return False
-    grasps = [g for g in targets.grasps(obj, snap.near_edge) if kin.ik(g.pregrasp) is not None][:GRASPS_TRIED]
-    for grasp in grasps:
-        held = targets.held_in_hand(carried, Box.of(obj), grasp.grasp, snap.table_z, seen_as=obj)
-        hovers = targets.place_relation(relation, box, grasp.grasp, held, snap.table_z)
-        if any(kin.ik(hover, check_collisions=False) is not None for hover, _ in hovers):
-            return True
-    return False
+    coming = {"relation": relation, "object": landmark} if relation is not None and landmark is not None else None
+    return can_pick_for(body, kin, snap, snap.objects[carried], coming)
 
 
 def swaps(
     steps: list[dict[str, Any]],
     start: int,
     found: Callable[[dict[str, Any]], str | None],
-    arms: Mapping[str, ArmKinematics],
+    body: Body,
     snap: SceneSnapshot,
     free: Mapping[str, bool],
 ) -> list[Swap]:
@@ -77,7 +64,7 @@ def swaps(
     for i in range(start, len(steps) + 1):
         step = steps[i - 1]
         arm = step["args"].get("arm")
-        if step["procedure"] != "pick_up" or arm not in arms or not step.get("landmark"):
+        if step["procedure"] != "pick_up" or arm not in body.arms or not step.get("landmark"):
             continue
         end = next(
             (
@@ -97,8 +84,8 @@ def swaps(
         relation = place["args"].get("relation") if landmark is not None else None
         if carried is None or carried not in snap.objects or (relation is not None and landmark not in snap.objects):
             continue
-        if not reaches(arms[arm], snap, carried, relation, landmark) and reaches(
-            arms[other], snap, carried, relation, landmark
+        if not reaches(body, arm, snap, carried, relation, landmark) and reaches(
+            body, other, snap, carried, relation, landmark
         ):
             out.append(Swap(i, end, other))
     return out

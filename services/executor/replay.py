@@ -110,7 +110,7 @@ class Replay:
             return False
         free = {arm: held is None for arm, held in self.procedures.held().items()}
         found = partial(self._reground, matched=matched)
-        swaps = other_hand.swaps(steps, start, found, self.procedures.arms, self.scene.snapshot(), free)
+        swaps = other_hand.swaps(steps, start, found, self.procedures, self.scene.snapshot(), free)
         hands = {i: swap for swap in swaps for i in range(swap.first, swap.last + 1)}
         for i in range(start, len(steps) + 1):
             if self.cancel.is_set():

@@ -21,6 +21,7 @@ from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics
 from services.executor.procedures.body import Body
 from services.executor.procedures.place import placeable
+from services.executor.procedures.spots import standing_on
 from services.executor.reach import sync
 from services.executor.scene import SceneSnapshot
 from services.executor.targets import EdgeGrasp
@@ -89,6 +90,31 @@ def reached_by_lines_first(kin: ArmKinematics, candidates: Iterator[Candidate]) 
         else:
             later.append(candidate)
     yield from later
+
+
+def stood_on(snap: SceneSnapshot, obj: PerceivedObject) -> tuple[list[str], float]:
+    """What ``obj`` stands on (as seen before a hand comes over it, whose outline then merges with the object's),
+    and the height it stands at: the table's, or the top of the highest of those."""
+    supports = standing_on(obj.id, Box.of(obj), snap)
+    return supports, max([snap.table_z, *(Box.of(snap.objects[oid]).top for oid in supports)])
+
+
+def can_pick_for(
+    body: Body, kin: ArmKinematics, snap: SceneSnapshot, obj: PerceivedObject, coming: dict[str, str] | None
+) -> bool:
+    """Whether the empty hand of ``kin`` (synced to ``snap``) can pick ``obj`` up with a grasp the ``coming``
+    placement can then be done with (None: any grasp); nothing moves.
+
+    The pick-up's own candidates in its own order, as many as it judges,
+    each judged by the place stage itself: a hand is trusted with a
+    pick-and-place only for the grasp the pick-up will take, not for some
+    other grasp that would have let the placement through.
+    """
+    candidates = reached_by_lines_first(kin, grasp_plans(kin, obj, snap.near_edge))
+    if coming is None:
+        return next(candidates, None) is not None
+    stood = stood_on(snap, obj)[1]
+    return any(suits(body, kin, snap, obj, stood, c, coming) for c in itertools.islice(candidates, SUITED_TRIES))
 
 
 def suited_first(

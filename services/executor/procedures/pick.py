@@ -20,7 +20,7 @@ from services.executor.geometry import Box
 from services.executor.grounding import descriptor
 from services.executor.kinematics import ArmKinematics, Trajectory
 from services.executor.procedures.body import CLOSE_WIDTH, OPEN_WIDTH, RETREAT, Body, Done, StepFailed, plan
-from services.executor.procedures.grasps import Candidate, grasp_plans, reached_by_lines_first, suited_first
+from services.executor.procedures.grasps import Candidate, grasp_plans, reached_by_lines_first, stood_on, suited_first
 from services.executor.procedures.spots import FLAT_MARGIN, standing_on, support_below
 from services.executor.reach import sync
 from services.executor.referring import refer
@@ -65,13 +65,11 @@ def pick_up(body: Body, arm: str, object: str, coming: dict[str, str] | None = N
             _out_of_reach(body, arm, kin, obj, words)
             or wording.cannot_pick(arm, words, _in_the_way(kin, snap, obj) or "I can't reach around it")
         )
-    # what it stands on, as seen before the hand came over it (from above, its outline merges with the object's)
-    supports = standing_on(object, Box.of(obj), snap)
-    stood_on = max([snap.table_z, *(Box.of(snap.objects[oid]).top for oid in supports)])
+    supports, stood = stood_on(snap, obj)
     reason = "it slipped out of my fingers"
     candidates, looked_again = reached_by_lines_first(kin, itertools.chain([first], plans)), False
     if coming is not None:
-        candidates = suited_first(body, kin, snap, obj, stood_on, candidates, coming)
+        candidates = suited_first(body, kin, snap, obj, stood, candidates, coming)
     for attempt in range(PICK_ATTEMPTS):
         if (candidate := next(candidates, None)) is None:
             break
@@ -107,13 +105,13 @@ def pick_up(body: Body, arm: str, object: str, coming: dict[str, str] | None = N
                 kin, obj, candidates = _look_again(body, arm, object)
                 fresh = body.snapshot()
                 supports = standing_on(object, Box.of(obj), fresh)
-                stood_on = max([stood_on, *(Box.of(fresh.objects[oid]).top for oid in supports)])
+                stood = max([stood, *(Box.of(fresh.objects[oid]).top for oid in supports)])
             continue
         kin.set_joints(snap.joints())
         tool = kin.fk()
         box = Box.of(obj)
         # what it stood on as seen before the hand came over it: under the hand, perception may lose it
-        support_top = max(support_below(object, box, snap), stood_on)
+        support_top = max(support_below(object, box, snap), stood)
         lifted_off = box if support_top > snap.table_z + FLAT_MARGIN else None
         body.set_held(arm, targets.held_in_hand(object, box, tool, support_top, lifted_off, seen_as=obj))
         kin, snap = body.ready(arm)
