@@ -54,6 +54,7 @@ from services.nlu.compound import SPOKEN_JOINS
 from services.speech.audio import dither
 from services.speech.grammar import SceneWords, build_jsgf, in_grammar, sentence_matcher, skill_words
 from services.speech.ngram import arpa, sample_sentences
+from services.speech.pronounce import guessed
 from services.speech.vocabulary import SpeechVocabulary
 
 log = logging.getLogger("hfpbd.speech")
@@ -197,6 +198,18 @@ class Recogniser:
                 return True
         return False
 
+    def _sayable_name(self, word: str) -> bool:
+        """Whether a word of a skill's name can be heard: in the dictionary, or pronounced by spelling rules
+        (:mod:`services.speech.pronounce`), added to the dictionary then."""
+        if self._pronounceable(word):
+            return True
+        phones = guessed(word)
+        if phones is None:
+            return False
+        self._decoder.add_word(word, phones, True)
+        log.info("the skill name's word %r is not in the speech dictionary; pronounced as %s", word, phones)
+        return True
+
     def _sound(self, phrase: str) -> str:
         return " ".join(self._decoder.lookup_word(word) or word for word in phrase.split())
 
@@ -205,7 +218,7 @@ class Recogniser:
             self.set_vocabulary(self.vocabulary, scene)
 
     def set_skills(self, names: Iterable[str]) -> None:
-        """Take the taught skills' names as verbs; a name with a word the dictionary lacks is left out (logged).
+        """Take the taught skills' names as verbs; a name with a word nothing can pronounce is left out (logged).
 
         The words around a skill ("do it again with", "every") must all be
         pronounceable, or no skill sentence is heard at all.
@@ -216,10 +229,10 @@ class Recogniser:
         sayable = set()
         for name in names:
             spoken = " ".join(name.lower().replace("-", " ").split())
-            if spoken and all(word.isalpha() and self._pronounceable(word) for word in spoken.split()):
+            if spoken and all(word.isalpha() and self._sayable_name(word) for word in spoken.split()):
                 sayable.add(spoken)
             else:
-                log.info("the skill name %r has a word the speech dictionary lacks: it can be typed, not said", name)
+                log.info("the skill name %r has a word no pronunciation was found for: it can be typed, not said", name)
         if frozenset(sayable) != self.skills:
             self.skills = frozenset(sayable)
             self.set_vocabulary(self.vocabulary, self.scene)
