@@ -41,6 +41,7 @@ import numpy as np
 from services.executor import geometry as geo
 from services.executor import torso
 from services.executor.kinematics import ArmKinematics, joint_names
+from services.executor.kinematics.scene import PlanningScene
 from services.executor.procedures import Procedures, StepFailed
 from services.executor.reach import reach_map
 from services.executor.robot import SHORT_MOTION, Outcome, Started
@@ -114,8 +115,7 @@ def bench_ik_against_mplib(queries: int) -> tuple[float, float, float]:
     """(ours ms per query, mplib Planner.IK ms per query, share of queries where both agree)."""
     kin = ArmKinematics("right")
     snap = synthetic_scene(1, np.random.default_rng(3)).snapshot()
-    kin.set_joints(snap.joints())
-    kin.set_obstacles({"table": snap.table.box()} if snap.table else {})
+    kin.use(PlanningScene(snap.joints(), {"table": snap.table.box()} if snap.table else {}))
     rng = np.random.default_rng(11)
     poses = []
     for _ in range(queries):

@@ -25,7 +25,8 @@ from services.executor import geometry as geo
 from services.executor import targets, torso
 from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics
-from services.executor.reach import can_pick, sync
+from services.executor.planning_scene import seen
+from services.executor.reach import can_pick
 from services.executor.scene import Scene, measured
 from services.sim.layout import TABLE_TOP_Z, TABLE_X, TABLE_Y, table_truth
 from shared.contract import ARMS
@@ -55,7 +56,7 @@ def _held(kin: ArmKinematics, kind: str) -> targets.Held | None:
     """The object as held after a pick-up at the middle of this arm's side of the table."""
     obj = _object(kind, 0.55, -0.15 if kin.arm == "right" else 0.15)
     snap = _snapshot(obj)
-    sync(kin, snap, None)
+    kin.use(seen(snap, kin.arm, None))
     kin.allow_touching("o", True)
     try:
         for grasp in targets.grasps(obj, snap.near_edge):
@@ -85,10 +86,10 @@ def grids(kin: ArmKinematics, kind: str, xs: np.ndarray, ys: np.ndarray) -> tupl
                 shade = 1.0 if height == ROBOT.working_torso else LOWER_ONLY
                 if not pick[i, j]:
                     snap = _snapshot(obj, torso=height)
-                    sync(kin, snap, None)
+                    kin.use(seen(snap, kin.arm, None))
                     pick[i, j] = shade * can_pick(kin, obj, snap.near_edge)
                 if held is not None and not place[i, j]:
-                    sync(kin, _snapshot(torso=height), None)
+                    kin.use(seen(_snapshot(torso=height), kin.arm, None))
                     moved = _moved(held, np.array([x - held.box.center[0], y - held.box.center[1], 0.0]))
                     below = geo.table_release_center(moved.box.center, moved.box.size, TABLE_TOP_Z)
                     releases = geo.carry_poses(moved.tool_pose, moved.box.center, [below], targets.CARRY_YAWS)

@@ -17,9 +17,9 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from services.executor.planning_scene import seen
 from services.executor.procedures.body import Body
 from services.executor.procedures.grasps import can_pick_for
-from services.executor.reach import sync
 from services.executor.scene import SceneSnapshot
 from shared.contract import BOTH, PLACES, other_arm
 
@@ -42,7 +42,7 @@ def reaches(
     ``relation`` ``landmark`` (None: no placement after it), and then lower it there: the pick-up's and the
     place stage's own checks, nothing moves."""
     kin = body.arms[arm]
-    sync(kin, snap, None)
+    kin.use(seen(snap, arm, None))
     coming = {"relation": relation, "object": landmark} if relation is not None and landmark is not None else None
     return can_pick_for(body, kin, snap, snap.objects[carried], coming)
 

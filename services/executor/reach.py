@@ -20,49 +20,13 @@ from services.executor import geometry as geo
 from services.executor import targets
 from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics
+from services.executor.planning_scene import seen
 from services.executor.scene import SceneSnapshot
 from services.executor.targets import Held
 from shared.contract import REACH_KEYS
 from shared.messages import PerceivedObject
 
-HELD_MARGIN = 0.03  # metres around the carried box within which a sighting marked held may lie
 SIDES = ("left_of", "right_of", "in_front_of", "behind")
-
-
-def sync(kin: ArmKinematics, snap: SceneSnapshot, held: Held | None) -> None:
-    """Bring one arm's planning model up to the measured joints, the objects and the held object."""
-    kin.set_joints(snap.joints())
-    kin.detach()
-    kin.set_obstacles(snap.obstacles(skip=_in_hand(kin.arm, snap, held)))
-    if held is not None:
-        kin.attach(held.object_id, held.box, kin.fk())
-
-
-def _in_hand(arm: str, snap: SceneSnapshot, held: Held | None) -> set[str]:
-    """Objects that are the held object itself: its id, or a sighting of it (see :func:`is_held_sighting`).
-
-    The carried box is attached to the gripper; perception's view of the
-    same cup (under its own id, or a fresh one when tracking lost it while
-    the hand moved) must not stand in the planning world as an obstacle
-    overlapping it, or every start state is "in collision".
-    """
-    if held is None:
-        return set()
-    return {held.object_id} | {oid for oid, obj in snap.objects.items() if is_held_sighting(obj, arm, held)}
-
-
-def is_held_sighting(obj: PerceivedObject, arm: str, held: Held) -> bool:
-    """Whether perception's object ``obj`` is the one ``arm`` holds: centred in the carried box, or marked
-    held by this hand *and* reaching up into the carried box over its footprint.
-
-    The mark alone is not enough: tracking marks the nearest object when a
-    hand starts holding, which can be the box a cup was lifted from.
-    """
-    box = Box.of(obj)
-    if np.all(np.abs(box.center - held.box.center) <= held.box.half):
-        return True
-    over = np.all(np.abs(box.center[:2] - held.box.center[:2]) <= held.box.half[:2] + HELD_MARGIN)
-    return obj.held_by == arm and bool(over) and box.top >= held.box.bottom
 
 
 Interruption = Callable[[], bool]
@@ -153,7 +117,7 @@ def reach_map(
     moves: dict[str, dict[str, bool]] = {}
     try:
         for arm, kin in arms.items():
-            sync(kin, snap, held.get(arm))
+            kin.use(seen(snap, arm, held.get(arm)))
             moves[arm] = can_move(kin, interrupted)
             for oid in snap.objects:
                 reach[oid][arm] = object_reach(kin, snap, oid, held.get(arm), interrupted)

@@ -22,6 +22,7 @@ import numpy as np
 from services.executor import reach, targets
 from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics
+from services.executor.planning_scene import seen
 from services.executor.scene import SceneSnapshot
 from services.executor.targets import Held
 from shared.contract import released_relation
@@ -77,13 +78,13 @@ def height_reaching(
             return Reaching(ROBOT.working_torso, None)
         return None
     kin = arms[arm]
-    reach.sync(kin, snap, held.get(arm))
+    kin.use(seen(snap, arm, held.get(arm)))
     if _first_pose(kin, snap, held.get(arm), procedure, args) is not None:
         return None
     for height in sorted(HEIGHTS, key=lambda h: abs(h - now)):
         if abs(height - now) < SAME:
             continue
-        reach.sync(kin, snap, held.get(arm))
+        kin.use(seen(snap, arm, held.get(arm)))
         kin.set_joints({ROBOT.torso_joint: height})
         arm_q = _first_pose(kin, snap, held.get(arm), procedure, args)
         if arm_q is None:
@@ -146,7 +147,7 @@ def _way_clear(
     """
     steps = max(2, int(np.ceil(abs(end - start) / CHECK_EVERY)) + 1)
     for arm, kin in arms.items():
-        reach.sync(kin, snap, held.get(arm))
+        kin.use(seen(snap, arm, held.get(arm)))
         for other, other_q in posed.items():
             kin.set_joints(dict(zip(ROBOT.arm_joint_names(other), other_q, strict=True)))
         for height in np.linspace(start, end, steps):

@@ -19,10 +19,11 @@ from services.executor.kinematics import (
     PLANNING_TRIES,
     ArmKinematics,
 )
+from services.executor.planning_scene import seen
 from services.executor.procedures import Procedures, StepFailed, place
 from services.executor.procedures.grasps import grasp_plans, reached_by_lines_first, suited_first, suits
 from services.executor.procedures.refusals import beyond
-from services.executor.reach import REACH_KEYS, reach_map, sync
+from services.executor.reach import REACH_KEYS, reach_map
 from services.executor.scene import Scene, measured, perceived
 from services.executor.targets import Held
 from services.sim.layout import TABLE_TOP_Z, table_truth
@@ -54,7 +55,7 @@ def scene_with(*objects: dict, pose: str = "untucked") -> Scene:
 def test_relation_poses_are_reached_exactly(arms: dict[str, ArmKinematics], relation: str) -> None:
     snap = scene_with(cup("c", 0.55, -0.10)).snapshot()
     kin = arms["right"]
-    sync(kin, snap, None)
+    kin.use(seen(snap, kin.arm, None))
     found = kin.first_reachable(geo.relation_candidates(relation, snap.box("c")))
     assert found is not None
     index, q = found
@@ -103,7 +104,7 @@ def test_a_held_object_is_carried_around_obstacles(arms: dict[str, ArmKinematics
     held = Held("held", Box(snap.box("held").center + [0, 0, 0.05], snap.box("held").size), kin.fk())
     scene.update_robot(measured({**snap.joints(), **dict(zip([kin.names[i] for i in kin.arm_idx], start))}))
     snap = scene.snapshot()
-    sync(kin, snap, held)
+    kin.use(seen(snap, kin.arm, held))
     goal = targets.move_relation("left_of", snap.box("wall"), kin.fk(), held, snap.table_z)[0]
     goal_q = kin.ik(goal)
     assert goal_q is not None
@@ -118,7 +119,7 @@ def test_a_held_object_is_carried_around_obstacles(arms: dict[str, ArmKinematics
 
 def test_moves_take_longer_the_further_they_go(arms: dict[str, ArmKinematics]) -> None:
     kin = arms["left"]
-    sync(kin, scene_with().snapshot(), None)
+    kin.use(seen(scene_with().snapshot(), kin.arm, None))
     short = kin.straight_line(geo.direction_target(kin.fk(), "down", 0.05))
     long = kin.straight_line(geo.direction_target(kin.fk(), "down", 0.20))
     assert short is not None and long is not None
@@ -137,7 +138,7 @@ def test_planning_gives_up_when_the_user_says_stop() -> None:
         "size": [0.20, 0.04, 0.18],
     }
     snap = scene_with(wall).snapshot()
-    sync(kin, snap, None)
+    kin.use(seen(snap, kin.arm, None))
     here = kin.ik(geo.make_pose([0.55, -0.25, TABLE_TOP_Z + 0.10], geo.facing([1.0, 0.0, 0.0])))
     there = kin.ik(geo.make_pose([0.55, 0.05, TABLE_TOP_Z + 0.10], geo.facing([1.0, 0.0, 0.0])))
     assert here is not None and there is not None
@@ -159,7 +160,7 @@ def test_reach_map_gives_way_to_a_command(arms: dict[str, ArmKinematics]) -> Non
 
 def test_the_model_fingers_are_set_for_a_block_only(arms: dict[str, ArmKinematics]) -> None:
     kin = arms["right"]
-    sync(kin, scene_with().snapshot(), None)
+    kin.use(seen(scene_with().snapshot(), kin.arm, None))
     before = kin.qpos.copy()
     with kin.fingers(0.08):
         opened = kin.qpos.copy()
@@ -178,7 +179,7 @@ def test_a_press_starts_with_a_stretch_clear_for_the_open_fingers(arms: dict[str
         "position": [0.58, 0.0, TABLE_TOP_Z + 0.09],
         "size": [0.20, 0.30, 0.18],
     }
-    sync(kin, scene_with(box).snapshot(), None)
+    kin.use(seen(scene_with(box).snapshot(), kin.arm, None))
     start = kin.ik(geo.make_pose([0.58, -0.23, TABLE_TOP_Z + 0.09], geo.facing([1.0, 0.0, 0.0])))
     assert start is not None
     kin.set_arm(start)
@@ -196,7 +197,7 @@ def test_a_press_starts_with_a_stretch_clear_for_the_open_fingers(arms: dict[str
 def test_a_hand_above_what_it_released_lifts_before_swinging_away(arms: dict[str, ArmKinematics]) -> None:
     """The joint-space lines to the side would sweep the fingers through the cup below: a lift first, no random planner."""
     kin = arms["right"]
-    sync(kin, scene_with(cup("c", 0.62, 0.256, size=(0.072, 0.072, 0.10))).snapshot(), None)
+    kin.use(seen(scene_with(cup("c", 0.62, 0.256, size=(0.072, 0.072, 0.10))).snapshot(), kin.arm, None))
     above = kin.ik(np.array([0.61, 0.259, TABLE_TOP_Z + 0.165, 0.989, 0.0, 0.0, -0.145]))
     assert above is not None
     kin.set_arm(above)
@@ -221,7 +222,7 @@ def test_a_cup_just_grasped_beside_the_plate_is_carried_away(arms: dict[str, Arm
     }
     scene = scene_with(plate, cup("red", 0.55, -0.12), cup("blue", 0.55, 0.12, color="blue"), pose="side")
     snap = scene.snapshot()
-    sync(kin, snap, None)
+    kin.use(seen(snap, kin.arm, None))
     grasp = targets.grasps(snap.objects["red"], snap.near_edge)[0]
     kin.allow_touching("red", True)
     grasp_q = kin.ik(grasp.grasp, seeds=[kin.ik(grasp.pregrasp)])
@@ -231,7 +232,7 @@ def test_a_cup_just_grasped_beside_the_plate_is_carried_away(arms: dict[str, Arm
     snap = scene.snapshot()
     kin.set_arm(grasp_q)
     held = targets.held_in_hand("red", snap.box("red"), kin.fk(), snap.table_z)
-    sync(kin, snap, held)
+    kin.use(seen(snap, kin.arm, held))
     assert {"plate", "table"} <= {name for pair in kin.collisions(kin.arm_q) for name in pair}
     goal = targets.move_relation("above", snap.box("blue"), kin.fk(), held, snap.table_z)
     found = kin.first_reachable(goal)
@@ -262,9 +263,9 @@ def test_perceptions_sighting_of_the_held_cup_is_no_obstacle(arms: dict[str, Arm
     scene.update_objects(perceived([sighting]))
     snap = scene.snapshot()
     assert snap.supported("again")
-    sync(kin, snap, None)
+    kin.use(seen(snap, kin.arm, None))
     assert kin.collisions(kin.arm_q) != []  # as an obstacle it would hold the hand fast
-    sync(kin, snap, held)
+    kin.use(seen(snap, kin.arm, held))
     assert kin.collisions(kin.arm_q) == []
 
 
@@ -284,9 +285,13 @@ def test_a_cup_out_of_one_hands_reach_is_refused_with_how_far_and_the_other_hand
 def test_a_straight_line_remembers_what_it_ran_into(arms: dict[str, ArmKinematics]) -> None:
     """What a failed placement can be blamed on: a tall cup right under the hand blocks a move down, by name."""
     kin = arms["left"]
-    sync(kin, scene_with().snapshot(), None)
+    kin.use(seen(scene_with().snapshot(), kin.arm, None))
     below = kin.fk()[:3]
-    sync(kin, scene_with(cup("mug", float(below[0]), float(below[1]), size=(0.08, 0.08, 0.20))).snapshot(), None)
+    kin.use(
+        seen(
+            scene_with(cup("mug", float(below[0]), float(below[1]), size=(0.08, 0.08, 0.20))).snapshot(), kin.arm, None
+        )
+    )
     line = kin.line(geo.direction_target(kin.fk(), "down", 0.20))
     assert line.path is None
     assert line.blocked_by == {"mug"}
@@ -305,7 +310,7 @@ def test_a_box_held_from_the_side_is_put_behind_a_cup_only_with_the_forearm_swun
     box["size"] = [0.066, 0.066, 0.059]
     scene = scene_with(box, cup("mug", 0.589, -0.071, size=(0.056, 0.056, 0.065)), pose="side")
     snap = scene.snapshot()
-    sync(kin, snap, None)
+    kin.use(seen(snap, kin.arm, None))
     grasp_q = lifted_q = None
     for grasp in targets.grasps(snap.objects["box"], snap.near_edge):
         pre_q = kin.ik(grasp.pregrasp)
@@ -324,7 +329,7 @@ def test_a_box_held_from_the_side_is_put_behind_a_cup_only_with_the_forearm_swun
     snap = scene.snapshot()
     procedures = Procedures(scene, None, arms, list)  # type: ignore[arg-type]
     held = procedures.refresh_held(at_grasp, snap, kin)
-    sync(kin, snap, held)
+    kin.use(seen(snap, kin.arm, held))
 
     def lowerable(yaws: tuple[float, ...]) -> tuple[int, set[str]]:
         pairs = targets.place_relation("behind", snap.box("mug"), kin.fk(), held, snap.table_z, yaws)
@@ -348,10 +353,10 @@ def test_a_place_out_of_one_hands_reach_says_how_far_and_that_the_other_hand_can
     plate["size"] = [0.16, 0.16, 0.015]
     scene = scene_with(plate, pose="side")
     snap = scene.snapshot()
-    sync(kin, snap, None)
+    kin.use(seen(snap, kin.arm, None))
     tool = kin.fk()
     held = Held("c", Box(tool[:3] + [0.0, 0.0, -0.01], np.array([0.07, 0.07, 0.10])), tool)
-    sync(kin, snap, held)
+    kin.use(seen(snap, kin.arm, held))
     procedures = Procedures(scene, None, arms, list)  # type: ignore[arg-type]
     words = beyond(procedures, kin, held, "on_top_of", snap.box("plate"), "the plate", snap.table_z, "right")
     assert words is not None
@@ -374,7 +379,7 @@ def test_a_pre_grasp_a_turn_of_the_forearm_away_is_reached_with_the_rolls_a_turn
     box = cup("box", 0.508, -0.165, color="green", size=(0.06, 0.06, 0.06)) | {"type": "box"}
     plate = cup("plate", 0.617, 0.035, color="white", size=(0.16, 0.16, 0.015)) | {"type": "plate"}
     snap = scene_with(cup("red", 0.453, 0.12), cup("blue", 0.464, 0.009, color="blue"), box, plate).snapshot()
-    sync(kin, snap, None)
+    kin.use(seen(snap, kin.arm, None))
     above = kin.first_reachable(targets.move_relation("above", snap.box("box"), kin.fk(), None, snap.table_z))
     assert above is not None
     kin.set_arm(above[1])

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -9,8 +11,9 @@ from services.executor import geometry as geo
 from services.executor import targets
 from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics
+from services.executor.kinematics.scene import Carried
+from services.executor.planning_scene import seen
 from services.executor.procedures.spots import back_where_lifted, on_the_table
-from services.executor.reach import sync
 from services.executor.scene import Scene, measured, perceived
 from services.executor.targets import Held
 from services.sim.layout import TABLE_TOP_Z, TABLE_X, table_truth
@@ -90,14 +93,14 @@ def test_a_turned_heading_reaches_where_the_grasp_heading_does_not() -> None:
         table_truth(),
     )
     scene.update_robot(measured({ROBOT.torso_joint: ROBOT.working_torso, **ROBOT.arm_pose_map("side")}))
-    sync(kin, scene.snapshot(), None)
+    kin.use(seen(scene.snapshot(), kin.arm, None))
     red_cup = PerceivedObject(id="red", type="cup", position=tuple(red.center), size=tuple(red.size))
     grasp = targets.grasps(red_cup, TABLE_X[0])[0]
     lifted = kin.ik(geo.shifted(grasp.grasp, [0.0, 0.0, 0.10]))
     assert lifted is not None
     kin.set_arm(lifted)
     held = Held("red", Box(red.center + [0.0, 0.0, 0.10], red.size), kin.fk())
-    kin.attach("red", held.box, held.tool_pose)
+    kin.use(replace(kin.scene, joints={}, carried=Carried("red", held.box, held.tool_pose)))
     pairs = targets.place_relation("behind", blue, held.tool_pose, held, TABLE_TOP_Z)
     reachable = [i for i, (hover, _) in enumerate(pairs) if kin.ik(hover) is not None]
     assert reachable, "no heading or release point behind the blue cup is reachable"

@@ -1,7 +1,9 @@
 """Inverse kinematics and collision-aware motion planning for one PR2 arm (mplib), in layers of one job each.
 
-* :mod:`.model`: the planning scene: joints, obstacles, what the hand
-  carries, collision checks.
+* :mod:`.scene`: the planning scene as a value (joints, obstacles, what
+  the hand carries), given to the model with ``use``.
+* :mod:`.model`: the collision world a scene is given to, and the
+  collision checks.
 * :mod:`.seeds` and :mod:`.ik`: seeded IK (a table of random
   configurations indexed by tool frame, solved from the nearest).
 * :mod:`.lines`: straight tool lines (approaches, descents, lifts,
@@ -11,8 +13,8 @@
 * :mod:`.timing`: time parameterisation by kind of move.
 
 :class:`ArmKinematics` is all of them on one arm's model, so a check made
-by one layer sees the state another set (the model is not thread-safe:
-one instance per thread).
+by one layer runs against the scene last used (the model is not
+thread-safe: one instance per thread).
 """
 
 from __future__ import annotations

@@ -9,9 +9,12 @@ which is pinned (IK bounds, planner fixed joint) so plans are pure 7-joint
 arm trajectories the simulator can follow (the torso moves on its own,
 between steps: ``services.executor.torso``).
 
-The model is the planning scene, and it is stateful: the joints it is set
-to, the obstacles, what it carries and what it may touch stay until they
-are set again (see :func:`services.executor.reach.sync`).
+The checks run against one :class:`~.scene.PlanningScene` at a time: the
+one last given to :meth:`ArmModel.use` (the joints, the obstacles, what the
+hand carries), or, for a block, one tried with :meth:`ArmModel.trying`.
+What the fingers may touch and where the arm is posed for a check are
+scoped to the block that asks (``allow_touching``, ``tolerating``,
+``posed``).
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ from mplib import Pose
 from mplib.collision_detection import fcl
 
 from services.executor.geometry import Box
+from services.executor.kinematics.scene import PlanningScene
 from services.executor.kinematics.seeds import SEED_COUNT, SeedTable
 from services.executor.kinematics.timing import Trajectory, limits_by_kind, timed
 from shared.robot import ROBOT
@@ -110,6 +114,7 @@ class ArmModel:
         self._noting: list[Met] = []  # the records of what collision checks met, innermost last
         self._other_arm_prefix = f"{PREFIX[next(a for a in PREFIX if a != arm)]}_"
         self.held: str | None = None
+        self.scene = PlanningScene()
         lo, hi = self.limits[self.arm_idx, 0].copy(), self.limits[self.arm_idx, 1].copy()
         for j in ROLL_JOINTS:
             lo[j], hi[j] = -np.pi, np.pi
@@ -159,8 +164,27 @@ class ArmModel:
         pose = self.model.get_link_pose(self.link)
         return np.concatenate([pose.p, pose.q])
 
-    # -- obstacles ----------------------------------------------------------------
-    def set_obstacles(self, boxes: dict[str, Box]) -> None:
+    # -- the scene ----------------------------------------------------------------
+    def use(self, scene: PlanningScene) -> None:
+        """Make ``scene`` the one every check and plan is made against, until another is used."""
+        self.set_joints(dict(scene.joints))
+        self._detach()
+        self._set_obstacles(dict(scene.obstacles))
+        if scene.carried is not None:
+            self._attach(scene.carried.object_id, scene.carried.box, scene.carried.tool_pose)
+        self.scene = scene
+
+    @contextmanager
+    def trying(self, scene: PlanningScene) -> Iterator[None]:
+        """``scene`` for the checks of the block (the world as a step would leave it), then the one before."""
+        before = self.scene
+        self.use(scene)
+        try:
+            yield
+        finally:
+            self.use(before)
+
+    def _set_obstacles(self, boxes: dict[str, Box]) -> None:
         """Replace the planning world's obstacles (name -> box), e.g. the table and the objects."""
         world = self.planner.planning_world
         for name in self._obstacles - set(boxes):
@@ -190,7 +214,7 @@ class ArmModel:
         """Let the gripper touch obstacle ``name`` (the object being grasped or released)."""
         self.planner.planning_world.get_allowed_collision_matrix().set_entry(name, self._gripper_links, allowed)
 
-    def attach(self, name: str, box: Box, tool_pose: np.ndarray) -> None:
+    def _attach(self, name: str, box: Box, tool_pose: np.ndarray) -> None:
         """Carry ``box`` in the gripper: it moves with the tool frame and must not hit anything.
 
         The carried body gets a name of its own (``held:<id>``), so the
@@ -198,7 +222,7 @@ class ArmModel:
         obstacle box once it is put down again.
         """
         if self.held:
-            self.detach()
+            self._detach()
         world = self.planner.planning_world
         if world.has_object(name):
             world.remove_object(name)
@@ -220,7 +244,7 @@ class ArmModel:
         """The planning world's name of the carried body (for contact permissions)."""
         return HELD_PREFIX + self.held if self.held else None
 
-    def detach(self) -> None:
+    def _detach(self) -> None:
         if self.held:
             self.planner.planning_world.detach_object(HELD_PREFIX + self.held, True)
             self.held = None

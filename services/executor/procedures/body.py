@@ -20,7 +20,7 @@ from services.executor import wording
 from services.executor.bimanual import first_clash, timed_together
 from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics, Trajectory
-from services.executor.reach import sync
+from services.executor.planning_scene import seen
 from services.executor.referring import refer
 from services.executor.robot import MotionError, SimRobot, Started, Stopped
 from services.executor.scene import Scene, SceneSnapshot
@@ -126,7 +126,7 @@ class Body:
         held = self.held()[arm]
         if held is not None:
             held = self.refresh_held(held, snap, kin)
-        sync(kin, snap, held)
+        kin.use(seen(snap, arm, held))
         return kin, snap
 
     def refresh_held(self, held: Held, snap: SceneSnapshot, kin: ArmKinematics) -> Held:

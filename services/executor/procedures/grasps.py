@@ -19,10 +19,10 @@ from services.executor import geometry as geo
 from services.executor import targets
 from services.executor.geometry import Box
 from services.executor.kinematics import ArmKinematics
+from services.executor.kinematics.scene import Carried, PlanningScene
 from services.executor.procedures.body import Body
 from services.executor.procedures.place import placeable
 from services.executor.procedures.spots import standing_on
-from services.executor.reach import sync
 from services.executor.scene import SceneSnapshot
 from services.executor.targets import EdgeGrasp
 from shared.messages import PerceivedObject
@@ -171,10 +171,6 @@ def suits(
     held = replace(grasped, box=Box(grasped.box.center + lift, grasped.box.size), tool_pose=grasp.lift)
     # the placement's IK starts from the arm as the lift left it, as it will then
     lift_q = kin.ik(grasp.lift, seeds=[grasp_q], check_collisions=False)
-    kin.set_obstacles(snap.obstacles(skip={obj.id}))
-    kin.attach(obj.id, held.box, held.tool_pose)
-    try:
-        with kin.posed(grasp_q if lift_q is None else lift_q):
-            return placeable(body, kin, snap, held, coming["relation"], landmark, grasp.lift)
-    finally:
-        sync(kin, snap, None)
+    lifted = PlanningScene(obstacles=snap.obstacles(skip={obj.id}), carried=Carried(obj.id, held.box, held.tool_pose))
+    with kin.trying(lifted), kin.posed(grasp_q if lift_q is None else lift_q):
+        return placeable(body, kin, snap, held, coming["relation"], landmark, grasp.lift)

@@ -19,10 +19,10 @@ from services.executor import reach, targets, wording
 from services.executor.geometry import Box
 from services.executor.grounding import descriptor
 from services.executor.kinematics import ArmKinematics, Trajectory
+from services.executor.planning_scene import seen
 from services.executor.procedures.body import CLOSE_WIDTH, OPEN_WIDTH, RETREAT, Body, Done, StepFailed, plan
 from services.executor.procedures.grasps import Candidate, grasp_plans, reached_by_lines_first, stood_on, suited_first
 from services.executor.procedures.spots import FLAT_MARGIN, standing_on, support_below
-from services.executor.reach import sync
 from services.executor.referring import refer
 from services.executor.scene import SceneSnapshot
 from services.executor.targets import EdgeGrasp, overhang, thin_and_wide
@@ -150,7 +150,7 @@ def _out_of_reach(body: Body, arm: str, kin: ArmKinematics, obj: PerceivedObject
     other_kin = body.arms.get(other)
     if other_kin is not None and body.held()[other] is None:
         snap = body.snapshot()
-        sync(other_kin, snap, None)
+        other_kin.use(seen(snap, other, None))
         if next(grasp_plans(other_kin, obj, body.snapshot().near_edge), None) is not None:
             return wording.sentence(f"{words} is {where}; my {other} hand can reach it")
     return wording.sentence(f"{words} is {where}")

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TypeVar
 
 import numpy as np
@@ -324,7 +324,7 @@ def lower_and_release(
     a cup, and perception may then place the plate up at the cup's bottom).
     """
     if landmark is not None:
-        kin.set_obstacles({**snap.obstacles(skip={held.object_id}), landmark[0]: landmark[1]})
+        kin.use(replace(kin.scene, obstacles={**snap.obstacles(skip={held.object_id}), landmark[0]: landmark[1]}))
     with kin.tolerating(kin.held_body or held.object_id, flat_below(held, release, snap)):
         descent = kin.line(release)
     if descent.path is None:

@@ -12,8 +12,8 @@ from collections.abc import Collection
 import numpy as np
 
 from services.executor import geometry as geo
-from services.executor import reach
 from services.executor.geometry import Box
+from services.executor.planning_scene import is_held_sighting
 from services.executor.procedures.body import Body
 from services.executor.scene import SceneSnapshot
 from services.executor.targets import Held
@@ -63,7 +63,7 @@ def spot_taken_by(
         for oid, obj in snap.objects.items()
         if oid != held.object_id
         and oid not in on
-        and not reach.is_held_sighting(obj, arm, held)
+        and not is_held_sighting(obj, arm, held)
         and np.all(
             np.abs(Box.of(obj).center[:2] - center[:2]) < Box.of(obj).half[:2] + held.box.half[:2] + geo.PLACE_SHIFT / 2
         )
