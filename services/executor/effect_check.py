@@ -72,18 +72,21 @@ class EffectCheck:
             snap = self.scene.snapshot()
             problem = effects.judge(procedure, args, moved, set(before.objects), snap, went)
             if problem is None:
+                if look:  # what a second look judged done after the first did not: for whoever reads the log
+                    log.info("%s took effect at the second look; objects seen: %s", procedure, _seen(snap))
                 return None
             log.info(
-                "%s did not take effect (%s); moved %s, objects seen: %s",
-                procedure,
-                problem,
-                moved.id,
-                {
-                    k: (np.round(o.position, 3).tolist(), np.round(o.size, 3).tolist(), o.held_by, o.visible)
-                    for k, o in snap.objects.items()
-                },
+                "%s did not take effect (%s); moved %s, objects seen: %s", procedure, problem, moved.id, _seen(snap)
             )
         return problem
+
+
+def _seen(snap: SceneSnapshot) -> dict[str, tuple[list[float], list[float], str | None, bool | None]]:
+    """Each object as seen: position, size, the hand holding it, whether in view (for the log)."""
+    return {
+        k: (np.round(o.position, 3).tolist(), np.round(o.size, 3).tolist(), o.held_by, o.visible)
+        for k, o in snap.objects.items()
+    }
 
 
 def _went(args: dict[str, Any], before: SceneSnapshot, after: SceneSnapshot) -> float | None:

@@ -36,6 +36,7 @@ PLACEMENTS = frozenset({"place_abs", "place_rel", "place_back"})
 ALONG_TABLE = frozenset({"left", "right", "forward", "backward"})  # directions a carried object is slid over the table
 SHORT = 0.5  # share of a carried move's distance the hand must go: less was stopped by something in the way
 TIPPED_SLACK = 0.01  # metres by which a tall object's height must beat its width to count as standing up
+LYING_TOP = 0.8  # share of its standing height: a top lower than this over the table is a tall object lying down
 OVER_MARGIN = 0.02  # metres outside a landmark's outline an object on top of it may seem to stand
 BESIDE_MAX = 0.15  # metres, edge to edge: farther than this is not beside any more
 BESIDE_OVERLAP = 0.03  # metres the two boxes as seen may overlap and still be side by side
@@ -77,7 +78,7 @@ def judge(
         return wording.sentence(f"I can't see {words} any more after putting it down")
     if now.held_by is not None:
         return wording.sentence(f"{words} is still in my {now.held_by} hand")
-    if _tipped(moved, now):
+    if _tipped(moved, now, snap.table_z):
         return wording.sentence(f"{words} has tipped over")
     if not _standing(now, moved, snap):
         return wording.sentence(f"{words} is not standing on anything I can see")
@@ -243,9 +244,18 @@ def _found_again(moved: PerceivedObject, before: set[str], snap: SceneSnapshot) 
     return min(alike, key=lambda o: float(np.linalg.norm(np.asarray(o.position, float)[:2] - there[:2])))
 
 
-def _tipped(before: PerceivedObject, now: PerceivedObject) -> bool:
-    """Whether an object that stood taller than wide (a cup) now lies wider than tall: on its side."""
-    return _upright(before) and float(max(now.size[:2])) > float(now.size[2]) + TIPPED_SLACK
+def _tipped(before: PerceivedObject, now: PerceivedObject, table_z: float) -> bool:
+    """Whether an object that stood taller than wide (a cup) now lies on its side: seen wider than tall, or
+    with its top lower than it reaches standing on the table.
+
+    The top is what the head sees best: a foot hidden behind the table's
+    front or another object makes a standing cup look short, never low.
+    """
+    if not _upright(before):
+        return False
+    top = float(now.position[2]) + float(now.size[2]) / 2
+    wide = float(max(now.size[:2])) > float(now.size[2]) + TIPPED_SLACK
+    return wide or top < table_z + LYING_TOP * float(before.size[2])
 
 
 def _upright(obj: PerceivedObject) -> bool:

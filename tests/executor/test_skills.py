@@ -395,6 +395,18 @@ def test_a_cup_whose_foot_is_hidden_stands_on_the_table_below_its_top() -> None:
     )
 
 
+def test_a_cup_lying_on_the_table_has_tipped_though_it_looks_about_as_wide_as_tall() -> None:
+    # fresh seed 477941: an 11.5 cm cup put down fell on its side and the replay went on; lying, its top is
+    # 6.8 cm over the table, lower than any standing 11.5 cm cup's, however wide it is seen
+    args = {"arm": "left", "destination": "table"}
+    held = obj("obj0", "red", "cup", 0.74, 0.35, (0.066, 0.063, 0.115), z=0.9, held_by="left")
+    lying = obj("obj0", "red", "cup", 0.75, 0.36, (0.070, 0.066, 0.068))
+    seen = snapshot([lying])
+    assert effects.judge("place_abs", args, held, {"obj0"}, seen) == words("{obj0} has tipped over", seen)
+    standing = obj("obj0", "red", "cup", 0.75, 0.36, (0.066, 0.063, 0.112))
+    assert effects.judge("place_abs", args, held, {"obj0"}, snapshot([standing])) is None
+
+
 def test_a_hand_still_close_over_what_it_let_go_of_may_hide_it() -> None:
     # seed 48: the left arm reached across; a second look with the hand still over the cup saw it in the air
     cup = obj("obj0", "red", "cup", 0.43, -0.24, CUP)
