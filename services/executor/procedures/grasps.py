@@ -102,7 +102,7 @@ def stood_on(snap: SceneSnapshot, obj: PerceivedObject) -> tuple[list[str], floa
 def can_pick_for(
     body: Body, kin: ArmKinematics, snap: SceneSnapshot, obj: PerceivedObject, coming: dict[str, str] | None
 ) -> bool:
-    """Whether the empty hand of ``kin`` (synced to ``snap``) can pick ``obj`` up with a grasp the ``coming``
+    """Whether the empty hand of ``kin`` (in the scene seen in ``snap``) can pick ``obj`` up with a grasp the ``coming``
     placement can then be done with (None: any grasp); nothing moves.
 
     The pick-up's own candidates in its own order, as many as it judges,
