@@ -52,7 +52,12 @@ def play(text: str, voice: str = "en-us", speed: int = 160) -> None:
     _run(_command(text, voice, speed, []))
 
 
-def _run(command: list[str]) -> None:
+def phonemes(word: str, voice: str = "en-us") -> str:
+    """espeak-ng's phoneme mnemonics for ``word``, separated by ``_`` (its letter-to-sound rules, nothing spoken)."""
+    return _run(_command(word, voice, 160, ["-q", "-x", "--sep=_"]))
+
+
+def _run(command: list[str]) -> str:
     try:
         result = subprocess.run(command, capture_output=True, text=True, timeout=TIMEOUT_S, stdin=subprocess.DEVNULL)
     except subprocess.TimeoutExpired:
@@ -64,3 +69,4 @@ def _run(command: list[str]) -> None:
     if result.returncode != 0 or errors:
         detail = (errors or result.stderr.strip().splitlines() or [f"exit code {result.returncode}"])[-1]
         raise EspeakError(f"{ESPEAK} failed: {detail}")
+    return result.stdout

@@ -13,9 +13,7 @@ this table does not know is left unpronounceable rather than guessed worse.
 
 from __future__ import annotations
 
-import subprocess
-
-from services.speech.espeak import ESPEAK, TIMEOUT_S, available
+from services.speech import espeak
 
 # espeak-ng's US English phoneme mnemonics -> CMU dictionary phones (a vowel with its r-colouring as two)
 PHONES: dict[str, tuple[str, ...]] = {
@@ -80,22 +78,12 @@ STRESS = "',;%="  # espeak-ng's stress and syllable marks: no phones
 
 def espeak_phonemes(word: str) -> list[str]:
     """espeak-ng's phonemes for ``word`` (US English), one mnemonic each; empty when espeak-ng is missing or fails."""
-    if not available():
-        return []
     try:
-        result = subprocess.run(
-            [ESPEAK, "-q", "-v", "en-us", "-x", "--sep=_", "--", word],
-            capture_output=True,
-            text=True,
-            timeout=TIMEOUT_S,
-            stdin=subprocess.DEVNULL,
-        )
-    except subprocess.TimeoutExpired:
-        return []
-    if result.returncode != 0:
+        out = espeak.phonemes(word)
+    except espeak.EspeakError:
         return []
     marks = str.maketrans("", "", STRESS)
-    return [p for p in (token.translate(marks) for token in result.stdout.strip().split("_")) if p]
+    return [p for p in (token.translate(marks) for token in out.strip().split("_")) if p]
 
 
 def guessed(word: str) -> str | None:

@@ -22,7 +22,7 @@ from services.executor.kinematics import ArmKinematics, Trajectory
 from services.executor.planning_scene import seen
 from services.executor.procedures.body import CLOSE_WIDTH, OPEN_WIDTH, RETREAT, Body, Done, StepFailed, plan
 from services.executor.procedures.grasps import Candidate, grasp_plans, reached_by_lines_first, stood_on, suited_first
-from services.executor.procedures.spots import FLAT_MARGIN, standing_on, support_below
+from services.executor.procedures.spots import FLAT_MARGIN, support_below
 from services.executor.referring import refer
 from services.executor.scene import SceneSnapshot
 from services.executor.targets import EdgeGrasp, overhang, thin_and_wide
@@ -103,9 +103,8 @@ def pick_up(body: Body, arm: str, object: str, coming: dict[str, str] | None = N
             if not looked_again:  # it is not where it was seen (a cup on a box is seen a few cm off): look again
                 looked_again = True
                 kin, obj, candidates = _look_again(body, arm, object)
-                fresh = body.snapshot()
-                supports = standing_on(object, Box.of(obj), fresh)
-                stood = max([stood, *(Box.of(fresh.objects[oid]).top for oid in supports)])
+                supports, stood_now = stood_on(body.snapshot(), obj)
+                stood = max(stood, stood_now)
             continue
         kin.set_joints(snap.joints())
         tool = kin.fk()
