@@ -80,7 +80,8 @@ class SpeechService:
         self._utterances = bus.publisher(bus.keys.utterance)
         self._say = bus.publisher(bus.keys.say)
         self._status = bus.publisher(bus.keys.speech("status"), cached=True)
-        self.decoded = 0
+        self._offered: np.ndarray | None = None  # the splitter's early offer of the utterance in progress
+        self._early: tuple[np.ndarray, list[Hypothesis] | None] | None = None  # an offer and what was heard in it
         self.grammar = "built-in"  # or "nlu": whose phrase list the grammar was made from
         # set once the NLU's vocabulary is in the grammar, or known not to be coming (the NLU did not answer)
         self.grammar_settled = threading.Event()
@@ -137,12 +138,23 @@ class SpeechService:
             if self.settings.trigger == "ptt":
                 return
             utterances = self._splitter.feed(pcm)
+            offer = self._offer(self._splitter.candidate)
+        if offer is not None:
+            self._tasks.put(partial(self._hear_early, offer))
         for utterance in utterances:
             self._tasks.put(partial(self._decode, utterance))
+
+    def _offer(self, candidate: np.ndarray | None) -> np.ndarray | None:
+        """The splitter's early offer if it is new (decoded ahead), remembered as the one offered; under the lock."""
+        if candidate is not None and self._offered is not None and len(candidate) == len(self._offered):
+            return None  # the same offer as before: its frames do not change while no speech comes
+        self._offered = candidate
+        return candidate
 
     def end_of_stream(self) -> None:
         with self._audio_lock:
             utterances = self._splitter.flush()
+            self._offered = None
         for utterance in utterances:
             self._tasks.put(partial(self._decode, utterance))
 
@@ -204,6 +216,7 @@ class SpeechService:
                 if self._talk is None:
                     self._talk = []
                     self._splitter = UtteranceSplitter()  # what was half-heard before the press is dropped
+                    self._offered = None
         else:
             release = threading.Timer(RELEASE_TAIL_S, self._release)
             release.daemon = True
@@ -239,8 +252,29 @@ class SpeechService:
             except Exception:
                 log.exception("speech task failed")
 
+    def _hear_early(self, pcm: np.ndarray) -> None:
+        """Decode an utterance the splitter offered before its end was sure, unless the offer was withdrawn since."""
+        with self._audio_lock:
+            current = self._offered is pcm
+        if current:
+            self._early = (pcm, self._hear(pcm))
+
     def _decode(self, pcm: np.ndarray) -> None:
-        """Decode one utterance unless it is no speech at all, which is dropped without a word.
+        """An utterance that ended: what was heard in it is said, from the early decoding when that had this audio."""
+        early, self._early = self._early, None
+        if early is not None and len(early[0]) == len(pcm) and np.array_equal(early[0], pcm):
+            hypotheses = early[1]
+        else:
+            hypotheses = self._hear(pcm)
+        if hypotheses is None:
+            return
+        if not hypotheses:
+            self._tell(NOT_HEARD, "info")
+            return
+        self._utterances.put(utterance_message(hypotheses))
+
+    def _hear(self, pcm: np.ndarray) -> list[Hypothesis] | None:
+        """The n-best heard in one utterance, or None when it is no speech at all, which is dropped without a word.
 
         Why silently: a cough or a door is not addressed to the robot, and a
         reply to each would be noise of its own.
@@ -249,19 +283,15 @@ class SpeechService:
         verdict = judge(pcm)
         if not verdict.speech:
             log.info("%.1f s of sound ignored: %s", len(pcm) / RATE, verdict.reason)
-            return
+            return None
         hypotheses = self.recogniser.decode(pcm)
-        self.decoded += 1
         log.info(
             "decoded %.1f s of audio in %.2f s: %s",
             len(pcm) / RATE,
             time.monotonic() - started,
             " | ".join(f"{h.text} ({h.score:.2f})" for h in hypotheses) or "nothing",
         )
-        if not hypotheses:
-            self._tell(NOT_HEARD, "info")
-            return
-        self._utterances.put(utterance_message(hypotheses))
+        return hypotheses
 
     # -- vocabulary and scene ---------------------------------------------------
     def _on_alive(self, service: str, alive: bool) -> None:
