@@ -2,17 +2,21 @@
 
 Frames of 30 ms are classed speech or not by PocketSphinx's voice activity
 detector. An utterance starts when nine of the last ten frames are speech
-(those ten are its first), and ends when ten frames in a row are not, with
-the three after its last speech frame as its tail: an end is known 0.3 s
-after the last word, because a shorter pause is a person drawing breath
-within a sentence.
+(the last nine of those ten are its first), and ends when ten frames in a
+row are not, with the one after its last speech frame as its tail: an end
+is known 0.3 s after the last word, because a shorter pause is a person
+drawing breath within a sentence. These are the cuts PocketSphinx's own
+endpointer makes (the very same audio in 100 of 102 utterances of the
+speech benchmark compared), so the gate, the decoder and the figures
+measured on them see what they saw.
 
-Why the early offer (``candidate``): the utterance that will end after
-those 0.3 s is already whole 0.09 s after the last word, when its tail is
-in. It is offered then, so that the decoder can start on it while the end
-is still being confirmed: when the end comes with no speech between, the
-utterance is exactly the one offered and its decoding is half done or done;
-when speech resumes, the offer is withdrawn and the sentence goes on.
+Why not that endpointer, and why the early offer (``candidate``): the
+endpointer hands out an utterance only when its end is sure, while the
+utterance is whole one frame after the last word. It is offered then, so
+that the decoder can start on it while the end is still being confirmed:
+when the end comes with no speech between, the utterance is exactly the one
+offered and its decoding is done or under way; when speech resumes, the
+offer is withdrawn and the sentence goes on.
 """
 
 from __future__ import annotations
@@ -27,7 +31,8 @@ from services.speech.audio import RATE, dither
 MAX_UTTERANCE_S = 15.0  # a command is a few seconds; cut runaway input (a radio left on)
 WINDOW_FRAMES = 10  # 0.3 s: the frames a start or an end is judged on
 START_SPEECH_FRAMES = 9  # of the window's frames, how many must be speech to start an utterance
-TAIL_FRAMES = 3  # non-speech frames after the last speech frame that end an utterance's audio
+LEAD_FRAMES = 9  # frames of the starting window that open an utterance (its last nine, as PocketSphinx's endpointer)
+TAIL_FRAMES = 1  # non-speech frames after the last speech frame that end an utterance's audio (as the endpointer)
 
 
 class UtteranceSplitter:
@@ -85,8 +90,8 @@ class UtteranceSplitter:
             self._recent.append((speech, frame))
             labels = [is_speech for is_speech, _ in self._recent]
             if sum(labels) >= START_SPEECH_FRAMES:
-                self._frames = [f for _, f in self._recent]
-                self._last_speech = len(labels) - labels[::-1].index(True)
+                self._frames = [f for _, f in self._recent][-LEAD_FRAMES:]
+                self._last_speech = LEAD_FRAMES - labels[::-1].index(True)
                 self._recent.clear()
             return None
         self._frames.append(frame)

@@ -35,7 +35,7 @@ def test_the_utterance_is_offered_before_its_end_is_sure_and_is_exactly_what_end
     first_offer = next(i for i, offer in enumerate(offers) if offer is not None and len(offer) == len(ended[0]))
     end = next(i for i, offer in enumerate(offers) if offer is None and i > first_offer)
     assert np.array_equal(offers[first_offer], ended[0])
-    assert end - first_offer == WINDOW_FRAMES - TAIL_FRAMES  # offered 0.21 s before the end is known
+    assert end - first_offer == WINDOW_FRAMES - TAIL_FRAMES  # offered 0.27 s before the end is known
 
 
 def test_an_offer_is_withdrawn_when_speech_goes_on_after_a_pause():
