@@ -151,9 +151,9 @@ def trial(bus: Bus, listener: Listener, condition: str, text: str, talker: Talke
         while to_utterance is None:  # an utterance heard in the noise before the command is not the command's
             at = listener.utterances.get(timeout=max(0.0, deadline - time.monotonic()))
             to_utterance = at - ended if at >= ended else None
-        while to_result is None:
+        while to_result is None:  # after the end of speech: the two keys' callbacks may run in either order
             at = listener.answers.get(timeout=max(0.0, deadline - time.monotonic()))
-            to_result = at - ended if at >= ended + to_utterance else None
+            to_result = at - ended if at >= ended else None
     except queue.Empty:
         pass
     return Trial(condition, text, talker.name, to_utterance, to_result)
