@@ -24,6 +24,7 @@ from services.nlu.weights import LANGUAGE
 
 Implied = tuple[tuple[str, str], ...]  # options a verb already says ("raise" = direction up)
 OBJECT = "{object}"  # where a spoken question names an object
+STOP = "stop"  # the procedure that halts the arms
 
 
 @dataclass(frozen=True)
@@ -56,6 +57,11 @@ class SpeechVocabulary:
         phrases += list(self.numbers.values())
         phrases += [p for ps in self.spoken.values() for p in ps]
         return {w for p in phrases for w in p.split() if w != OBJECT} | set(self.fillers)
+
+    def only_stop(self, sentence: str) -> bool:
+        """Whether ``sentence`` says nothing but stop ("stop", "halt please"): a stop phrase among filler words."""
+        said = " ".join(word for word in sentence.split() if word not in self.fillers)
+        return any(said in phrases for phrases in self.verbs.get(STOP, {}).values())
 
     def knows(self, phrase: str) -> bool:
         """Whether every word of ``phrase`` is a word of the NLU (kept or not by :meth:`core`)."""

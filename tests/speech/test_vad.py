@@ -12,6 +12,7 @@ from services.speech.audio import silence
 from services.speech.bench_latency import speech_end
 from services.speech.service import Settings, SpeechService
 from services.speech.vad import TAIL_FRAMES, WINDOW_FRAMES, UtteranceSplitter
+from services.speech.vocabulary import nlu_vocabulary
 from tests.waiting import eventually
 
 pytestmark = pytest.mark.skipif(not espeak.available(), reason="espeak-ng is not installed")
@@ -83,3 +84,39 @@ def test_the_service_decodes_an_utterance_once_before_its_end_is_sure(network):
 def audible(pcm: np.ndarray) -> np.ndarray:
     """``pcm`` without the synthesiser's own silence after the last word."""
     return pcm[: speech_end(pcm)]
+
+
+@pytest.mark.parametrize(
+    ("sentence", "stop"),
+    [
+        ("stop", True),
+        ("stop please", True),
+        ("robot halt now", True),
+        ("stop moving", True),
+        ("pick up the red cup", False),
+        ("stop the red cup", False),
+    ],
+)
+def test_a_sentence_that_says_only_stop_is_known(sentence, stop):
+    assert nlu_vocabulary().only_stop(sentence) is stop
+
+
+def test_a_stop_goes_out_before_the_end_of_its_utterance_is_sure_and_once(network):
+    service = SpeechService(network.hub, Settings(microphone="off"), speaker=None)
+    utterances: queue.Queue = queue.Queue()
+    network.hub.subscribe(network.hub.keys.utterance, utterances.put)
+    service.start()
+    try:
+        service.feed(np.concatenate([silence(0.5), espeak.synthesise("stop", "en-us", 150)]))
+        quiet = iter(np.split(silence(1.5), 50))
+        while service._splitter.candidate is None:
+            service.feed(next(quiet))
+        heard = utterances.get(timeout=30)
+        assert service._splitter.in_speech, "sent while the end of the utterance was not yet sure"
+        assert service.recogniser.vocabulary.only_stop(heard["text"])
+        for chunk in quiet:
+            service.feed(chunk)
+        service.feed(np.concatenate([espeak.synthesise("open your left hand", "en-us", 150), silence(1.0)]))
+        assert utterances.get(timeout=30)["text"] == "open your left hand", "the stop is not sent twice"
+    finally:
+        service.close()
