@@ -123,8 +123,14 @@ class Listener:
         self.recogniser = Recogniser(nlu_vocabulary(), per_meaning=per_meaning, mllr=mllr)
         self._models: dict[str, Model] = {}
 
-    def hear(self, pcm: np.ndarray, world: dict[str, Any], key: str) -> tuple[Choice | None, float]:
-        """The NLU's choice for one utterance (None when gated out or nothing heard) and the CPU seconds taken."""
+    def hear(
+        self, pcm: np.ndarray, world: dict[str, Any], key: str, only_stop: bool = False
+    ) -> tuple[Choice | None, float]:
+        """The NLU's choice for one utterance (None when gated out or nothing heard) and the CPU seconds taken.
+
+        ``only_stop``: an utterance offered early, which the service sends on
+        only when its first sentence says nothing but stop (else None).
+        """
         if key not in self._models:
             self._models[key] = Model(parse_world(world))
         model = self._models[key]
@@ -132,6 +138,8 @@ class Listener:
         started = time.process_time()
         hypotheses = self.recogniser.decode(pcm) if judge(pcm).speech else []
         cpu = time.process_time() - started
+        if only_stop and not (hypotheses and self.recogniser.vocabulary.only_stop(hypotheses[0].text)):
+            return None, cpu
         readings = [Reading(h.text, h.score, model.parse(h.text), h.first) for h in hypotheses if h.score > 0]
         return choose(readings), cpu
 
@@ -195,9 +203,13 @@ def run_non_speech(listener: Listener, minutes: float, seed: int) -> list[Heard]
             n += 1
             total += len(pcm) / RATE
             splitter = UtteranceSplitter()
-            utterances = []
+            utterances: list[np.ndarray] = []
+            offers: list[np.ndarray] = []
             for start in range(0, len(pcm), RATE // 10):
                 utterances += splitter.feed(pcm[start : start + RATE // 10])
+                offer = splitter.candidate
+                if offer is not None and not (offers and len(offers[-1]) == len(offer)):
+                    offers.append(offer)
             utterances += splitter.flush()
             seconds = len(pcm) / RATE
             for utterance in utterances:
@@ -205,7 +217,26 @@ def run_non_speech(listener: Listener, minutes: float, seed: int) -> list[Heard]
                 heard.append(Heard(kind, kind, None, choice, seconds / len(utterances), cpu))
             if not utterances:
                 heard.append(Heard(kind, kind, None, None, seconds, 0.0))
+            heard += early_stops(listener, world, [o for o in offers if not _among(o, utterances)], kind)
     return heard
+
+
+def early_stops(listener: Listener, world: dict[str, Any], withdrawn: list[np.ndarray], kind: str) -> list[Heard]:
+    """The stops the service would have sent from offers withdrawn later (the sound went on): each one heard.
+
+    An offer that became an utterance is heard as that utterance; one that did
+    not is decoded by the service only while it is idle, so this is at most.
+    """
+    heard = []
+    for offer in withdrawn:
+        choice, cpu = listener.hear(offer, world, NON_SPEECH_SCENE, only_stop=True)
+        if choice is not None:
+            heard.append(Heard(kind, kind, None, choice, 0.0, cpu))
+    return heard
+
+
+def _among(pcm: np.ndarray, utterances: list[np.ndarray]) -> bool:
+    return any(len(pcm) == len(u) and np.array_equal(pcm, u) for u in utterances)
 
 
 def grouped(heard: list[Heard], by: str) -> list[tuple[str, list[Heard]]]:
