@@ -129,7 +129,8 @@ class Listener:
         """The NLU's choice for one utterance (None when gated out or nothing heard) and the CPU seconds taken.
 
         ``only_stop``: an utterance offered early, which the service sends on
-        only when its first sentence says nothing but stop (else None).
+        only when sentences that say nothing but stop hold the share the NLU
+        acts on a stop at (else None).
         """
         if key not in self._models:
             self._models[key] = Model(parse_world(world))
@@ -138,7 +139,7 @@ class Listener:
         started = time.process_time()
         hypotheses = self.recogniser.decode(pcm) if judge(pcm).speech else []
         cpu = time.process_time() - started
-        if only_stop and not (hypotheses and self.recogniser.vocabulary.only_stop(hypotheses[0].text)):
+        if only_stop and not self.recogniser.heard_stop(hypotheses):
             return None, cpu
         readings = [Reading(h.text, h.score, model.parse(h.text), h.first) for h in hypotheses if h.score > 0]
         return choose(readings), cpu

@@ -55,6 +55,7 @@ import numpy as np
 from pocketsphinx import Decoder
 
 from services.nlu.compound import SPOKEN_JOINS
+from services.nlu.nbest import STOP_SHARE
 from services.speech.audio import dither
 from services.speech.automaton import minimal_grammar
 from services.speech.grammar import SceneWords, build_jsgf, in_grammar, sentence_matcher, skill_words
@@ -279,6 +280,10 @@ class Recogniser:
         return [
             replace(h, first=ranked_first[h.text]) for h in posteriors(ordered, scale, members, keep=set(ranked_first))
         ]
+
+    def heard_stop(self, hypotheses: list[Hypothesis]) -> bool:
+        """Whether sentences that say nothing but stop hold the share of ``hypotheses`` the NLU acts on a stop at."""
+        return sum(h.score for h in hypotheses if self.vocabulary.only_stop(h.text)) >= STOP_SHARE
 
     def _front_end(self, rate: int, audio: bytes) -> tuple[dict[str, float], dict[str, float]]:
         """Both passes at ``rate`` frames per second, each's sentences best first, log-likelihoods per 100 frames.

@@ -264,8 +264,8 @@ class SpeechService:
     def _hear_early(self, pcm: np.ndarray) -> None:
         """Decode an utterance the splitter offered before its end was sure, unless the offer was withdrawn since.
 
-        A stop heard in it goes out at once, without waiting for the end to be
-        sure: stopping when more words follow costs a repeat of them, while
+        A stop heard in it (by hypotheses holding the share the NLU acts on a
+        stop at) goes out at once, without waiting for the end to be sure: stopping when more words follow costs a repeat of them, while
         waiting 0.27 s more lets the arm move on. When the utterance then ends
         as offered, it is not sent again.
         """
@@ -275,7 +275,7 @@ class SpeechService:
             return
         hypotheses = self._hear(pcm)
         sent = False
-        if hypotheses and self.recogniser.vocabulary.only_stop(hypotheses[0].text):
+        if hypotheses and self.recogniser.heard_stop(hypotheses):
             log.info("a stop heard before the end of the utterance was sure: sent at once")
             self._utterances.put(utterance_message(hypotheses))
             sent = True
