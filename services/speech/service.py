@@ -265,9 +265,10 @@ class SpeechService:
         """Decode an utterance the splitter offered before its end was sure, unless the offer was withdrawn since.
 
         A stop heard in it (by hypotheses holding the share the NLU acts on a
-        stop at) goes out at once, without waiting for the end to be sure: stopping when more words follow costs a repeat of them, while
-        waiting 0.27 s more lets the arm move on. When the utterance then ends
-        as offered, it is not sent again.
+        stop at) goes out at once, without waiting for the end to be sure:
+        stopping when more words follow costs a repeat of them, while waiting
+        0.27 s more lets the arm move on. When the utterance then ends as
+        offered, it is not sent again.
         """
         with self._audio_lock:
             current = self._offered is pcm
