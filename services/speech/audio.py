@@ -73,3 +73,8 @@ def silence(seconds: float) -> np.ndarray:
 
 def seconds(pcm: np.ndarray) -> float:
     return len(pcm) / RATE
+
+
+def same_audio(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two utterances are the very same samples (an early offer and the utterance that ended)."""
+    return len(a) == len(b) and bool(np.array_equal(a, b))

@@ -51,7 +51,7 @@ from services.nlu.results import Answer
 from services.nlu.world import parse_world
 from services.speech import espeak, sounds
 from services.speech.adapt import AdaptationError, find_tools
-from services.speech.audio import RATE, silence
+from services.speech.audio import RATE, same_audio, silence
 from services.speech.corpus import HELD_OUT_SPEEDS, HELD_OUT_VOICES, SCENES, STATES, VOICES, Item, corpus
 from services.speech.gate import judge
 from services.speech.grammar import SceneWords
@@ -218,7 +218,9 @@ def run_non_speech(listener: Listener, minutes: float, seed: int) -> list[Heard]
                 heard.append(Heard(kind, kind, None, choice, seconds / len(utterances), cpu))
             if not utterances:
                 heard.append(Heard(kind, kind, None, None, seconds, 0.0))
-            heard += early_stops(listener, world, [o for o in offers if not _among(o, utterances)], kind)
+            heard += early_stops(
+                listener, world, [o for o in offers if not any(same_audio(o, u) for u in utterances)], kind
+            )
     return heard
 
 
@@ -234,10 +236,6 @@ def early_stops(listener: Listener, world: dict[str, Any], withdrawn: list[np.nd
         if choice is not None:
             heard.append(Heard(kind, kind, None, choice, 0.0, cpu))
     return heard
-
-
-def _among(pcm: np.ndarray, utterances: list[np.ndarray]) -> bool:
-    return any(len(pcm) == len(u) and np.array_equal(pcm, u) for u in utterances)
 
 
 def grouped(heard: list[Heard], by: str) -> list[tuple[str, list[Heard]]]:

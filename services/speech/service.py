@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from services.speech.audio import RATE, AudioError, read_wav, resample, silence
+from services.speech.audio import RATE, AudioError, read_wav, resample, same_audio, silence
 from services.speech.gate import judge
 from services.speech.grammar import SceneWords
 from services.speech.microphone import Microphone, MicrophoneUnavailable
@@ -285,7 +285,7 @@ class SpeechService:
     def _decode(self, pcm: np.ndarray) -> None:
         """An utterance that ended: what was heard in it is said, from the early decoding when that had this audio."""
         early, self._early = self._early, None
-        if early is not None and len(early.pcm) == len(pcm) and np.array_equal(early.pcm, pcm):
+        if early is not None and same_audio(early.pcm, pcm):
             if early.sent:
                 return
             hypotheses = early.hypotheses
